@@ -1,0 +1,40 @@
+"""Exception hierarchy of intervalobs.
+
+Every error raised on purpose by the library derives from :class:`IntervalObserverError`, and its
+message is one line naming the argument, the expected value and the actual value.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "AssumptionError",
+    "BoundsError",
+    "DataError",
+    "DesignError",
+    "DimensionError",
+    "IntervalObserverError",
+]
+
+
+class IntervalObserverError(Exception):
+    """Base class of every error raised on purpose by intervalobs."""
+
+
+class DimensionError(IntervalObserverError, ValueError):
+    """An array has the wrong shape or the dimensions of a model do not agree."""
+
+
+class BoundsError(IntervalObserverError, ValueError):
+    """An interval is empty (lower > upper) or has non-finite ends."""
+
+
+class AssumptionError(IntervalObserverError, ValueError):
+    """A hypothesis of the method fails (the message names which one)."""
+
+
+class DesignError(IntervalObserverError, RuntimeError):
+    """A design problem (LMI, LP, pole placement) is infeasible or its result fails verification."""
+
+
+class DataError(IntervalObserverError, ValueError):
+    """Measurements or inputs contain NaN/inf or do not match the time vector."""

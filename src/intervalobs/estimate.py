@@ -1,0 +1,205 @@
+"""The result of running an observer: time-stamped bounds of the state (and of unknown inputs)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import BoundsError, DataError, DimensionError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["ENCLOSURE_TOL", "EnclosureReport", "Estimate", "enclosure_report"]
+
+FloatArray = NDArray[np.float64]
+
+ENCLOSURE_TOL = 1e-8
+"""Relative tolerance ``(lower - x) / (1 + |x|)`` under which a sample counts as enclosed.
+
+It only decides the *fraction*; ``max_violation`` reports the raw amount, tolerance-free. The same
+rule is used by ``shared/tools/check_reproduction.py``.
+"""
+
+
+@dataclass(frozen=True)
+class EnclosureReport:
+    """How well a set of bounds contains the truth.
+
+    Attributes
+    ----------
+    fraction : float
+        Fraction of (time ≥ transient, component[, run]) samples enclosed (see ``ENCLOSURE_TOL``).
+    max_violation : float
+        Largest amount by which the truth leaves the bounds (0.0 when it never does).
+    first_violation_time : float or None
+        Earliest time (≥ transient) with a sample outside the bounds, or None.
+    """
+
+    fraction: float
+    max_violation: float
+    first_violation_time: float | None
+
+    def as_dict(self) -> dict[str, float]:
+        """The report in the ``summary.json`` form: ``fraction`` and ``max_violation``."""
+        return {"fraction": self.fraction, "max_violation": self.max_violation}
+
+
+def enclosure_report(
+    t: ArrayLike, lower: ArrayLike, truth: ArrayLike, upper: ArrayLike, transient: float = 0.0
+) -> EnclosureReport:
+    """Compare bounds with the truth after ``transient``; time is the axis before the last.
+
+    Samples whose bounds are not finite count as not enclosed (an undefined bound guarantees nothing).
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+        Times.
+    lower, truth, upper : array_like, shape (..., T, n)
+        Bounds and true values (leading run axes allowed).
+    transient : float
+        Samples before this time are ignored.
+
+    Returns
+    -------
+    EnclosureReport
+    """
+    tt = np.asarray(t, dtype=float)
+    lo, x, hi = (np.asarray(a, dtype=float) for a in (lower, truth, upper))
+    if not (lo.shape == x.shape == hi.shape) or lo.ndim < 2 or lo.shape[-2] != tt.size:
+        raise DimensionError(
+            f"truth: expected the shape of the bounds {lo.shape} with {tt.size} time steps, got {x.shape}"
+        )
+    after = tt >= transient
+    lo, x, hi = lo[..., after, :], x[..., after, :], hi[..., after, :]
+    if x.size == 0:
+        return EnclosureReport(1.0, 0.0, None)
+    amount = np.maximum(lo - x, x - hi)
+    amount = np.where(np.isfinite(amount), amount, np.inf)
+    outside = amount / (1.0 + np.abs(x)) > ENCLOSURE_TOL
+    time_axis_bad = np.any(outside, axis=tuple(i for i in range(outside.ndim) if i != outside.ndim - 2))
+    first = float(tt[after][np.argmax(time_axis_bad)]) if time_axis_bad.any() else None
+    return EnclosureReport(float(1.0 - outside.mean()), float(max(amount.max(), 0.0)), first)
+
+
+@dataclass
+class Estimate:
+    """Bounds produced by an observer.
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+        Sample times.
+    lower, upper : array_like, shape (T, n) or (M, T, n)
+        State bounds; a leading axis holds Monte Carlo runs.
+    input_lower, input_upper : array_like, optional
+        Unknown-input bounds, shape (T, q) or (M, T, q); NaN where no bound is available yet
+        (e.g. a delayed estimate).
+    meta : dict
+        Method name, gains, transient time (key ``"transient_s"``) and other design facts.
+    """
+
+    t: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    input_lower: FloatArray | None = None
+    input_upper: FloatArray | None = None
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=float)
+        self.lower = np.asarray(self.lower, dtype=float)
+        self.upper = np.asarray(self.upper, dtype=float)
+        if self.lower.shape != self.upper.shape or self.lower.ndim not in (2, 3):
+            raise DimensionError(
+                f"Estimate: expected lower and upper of one shape (T, n) or (M, T, n), "
+                f"got {self.lower.shape} and {self.upper.shape}"
+            )
+        if self.lower.shape[-2] != self.t.size:
+            raise DimensionError(f"Estimate: expected {self.t.size} time steps in lower, got {self.lower.shape[-2]}")
+        if np.any(self.lower > self.upper):
+            raise BoundsError("Estimate: lower > upper somewhere: the bounds are empty")
+        if (self.input_lower is None) != (self.input_upper is None):
+            raise DimensionError("Estimate: give both input_lower and input_upper or neither")
+        if self.input_lower is not None and self.input_upper is not None:
+            self.input_lower = np.asarray(self.input_lower, dtype=float)
+            self.input_upper = np.asarray(self.input_upper, dtype=float)
+            if self.input_lower.shape != self.input_upper.shape or self.input_lower.shape[:-1] != self.lower.shape[:-1]:
+                raise DimensionError(
+                    f"Estimate: input bounds must have shape {self.lower.shape[:-1]} + (q,), "
+                    f"got {self.input_lower.shape} and {self.input_upper.shape}"
+                )
+
+    @property
+    def transient(self) -> float:
+        """Time after which the method claims enclosure (``meta['transient_s']``, default the first time)."""
+        return float(self.meta.get("transient_s", self.t[0]))
+
+    def enclosure(self, x: ArrayLike, transient: float | None = None) -> EnclosureReport:
+        """Check that the state bounds contain the true state ``x`` (same shape as ``lower``).
+
+        Parameters
+        ----------
+        x : array_like, shape (T, n) or (M, T, n)
+            True state.
+        transient : float, optional
+            Ignore samples before this time (default: the method's own transient).
+
+        Returns
+        -------
+        EnclosureReport
+        """
+        return enclosure_report(self.t, self.lower, x, self.upper, self.transient if transient is None else transient)
+
+    def input_enclosure(self, d: ArrayLike, transient: float | None = None) -> EnclosureReport:
+        """Check that the unknown-input bounds contain the true input ``d``; NaN bounds are skipped."""
+        if self.input_lower is None or self.input_upper is None:
+            raise DataError("Estimate.input_enclosure: this estimate has no input bounds")
+        start = self.transient if transient is None else transient
+        known = np.all(np.isfinite(self.input_lower) & np.isfinite(self.input_upper), axis=-1)
+        while known.ndim > 1:
+            known = np.all(known, axis=0)
+        first_known = self.t[known][0] if known.any() else np.inf
+        return enclosure_report(self.t, self.input_lower, d, self.input_upper, max(start, first_known))
+
+    def width(self) -> FloatArray:
+        """State widths ``upper - lower``, same shape as ``lower``."""
+        return self.upper - self.lower
+
+    def save(self, path: str | Path) -> None:
+        """Write the estimate to an ``.npz`` file (meta is kept as JSON)."""
+        import json
+
+        arrays: dict[str, Any] = {"t": self.t, "lower": self.lower, "upper": self.upper}
+        if self.input_lower is not None:
+            arrays.update(input_lower=self.input_lower, input_upper=self.input_upper)
+        arrays["meta"] = np.array(json.dumps(self.meta, default=_jsonable))
+        np.savez_compressed(path, **arrays)
+
+    @classmethod
+    def load(cls, path: str | Path) -> Estimate:
+        """Read an estimate written by :meth:`save`."""
+        import json
+
+        with np.load(path) as data:
+            inputs = {k: data[k] for k in ("input_lower", "input_upper") if k in data.files}
+            return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **inputs)
+
+    def plot(self, truth: ArrayLike | None = None, labels: list[str] | None = None) -> Figure:
+        """Plot each state's bounds (and the truth); see :func:`intervalobs.plotting.plot_estimate`."""
+        from .plotting import plot_estimate
+
+        return plot_estimate(self, truth=truth, labels=labels)
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return str(value)
