@@ -117,9 +117,7 @@ def interval_matvec_bounds(
     return products.min(axis=0).sum(axis=-1), products.max(axis=0).sum(axis=-1)
 
 
-def inflate(
-    lower: ArrayLike, upper: ArrayLike, margin: float = ROUNDING_MARGIN
-) -> tuple[FloatArray, FloatArray]:
+def inflate(lower: ArrayLike, upper: ArrayLike, margin: float = ROUNDING_MARGIN) -> tuple[FloatArray, FloatArray]:
     """Widen an interval outward by a relative margin to absorb floating-point rounding.
 
     Parameters

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoundsError, DataError, DimensionError
 
-__all__ = ["as_box", "as_matrix", "as_time", "as_vector", "check_no_kwargs", "as_signal"]
+__all__ = ["as_box", "as_matrix", "as_signal", "as_time", "as_vector", "check_no_kwargs"]
 
 FloatArray = NDArray[np.float64]
 
@@ -59,9 +59,7 @@ def as_matrix(
             arr = arr.reshape(-1, 1)
         elif rows == 1 or rows is None or cols in (None, arr.size):
             arr = arr.reshape(1, -1)
-    if arr.ndim != 2 or (rows is not None and arr.shape[0] != rows) or (
-        cols is not None and arr.shape[1] != cols
-    ):
+    if arr.ndim != 2 or (rows is not None and arr.shape[0] != rows) or (cols is not None and arr.shape[1] != cols):
         want = "×".join("any" if d is None else str(d) for d in shape)
         raise DimensionError(f"{name}: expected shape {want}, got {np.shape(value)}")
     if finite and not np.all(np.isfinite(arr)):

@@ -117,4 +117,5 @@ def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: dic
     """Write ``summary.json`` and ``trajectories.npz`` into ``out_dir`` (created if needed)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").write_text(json.dumps(to_json(summary), indent=2) + "\n")
-    np.savez_compressed(out_dir / "trajectories.npz", **{k: np.asarray(v) for k, v in trajectories.items()})
+    arrays: dict[str, Any] = {k: np.asarray(v) for k, v in trajectories.items()}
+    np.savez_compressed(out_dir / "trajectories.npz", **arrays)

@@ -1,0 +1,41 @@
+"""intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
+
+from .errors import (
+    AssumptionError,
+    BoundsError,
+    DataError,
+    DesignError,
+    DimensionError,
+    IntervalObserverError,
+)
+from .estimate import EnclosureReport, Estimate
+from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
+from .observers import IntervalObserver, Observer, ObserverState
+from .simulate import Simulation, simulate
+from .systems import Bounds, LTISystem
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AssumptionError",
+    "Bounds",
+    "BoundsError",
+    "Box",
+    "DataError",
+    "DesignError",
+    "DimensionError",
+    "EnclosureReport",
+    "Estimate",
+    "IntervalObserver",
+    "IntervalObserverError",
+    "LTISystem",
+    "Observer",
+    "ObserverState",
+    "Simulation",
+    "__version__",
+    "interval_matvec_bounds",
+    "matvec_bounds",
+    "neg",
+    "pos",
+    "simulate",
+]

@@ -1,0 +1,1 @@
+"""Design tools: sound sampling, cooperative (framer) gains, and the method-specific designs."""

@@ -1,0 +1,1 @@
+"""The papers' systems (and our own demonstration system), as plain data and functions."""

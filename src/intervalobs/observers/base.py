@@ -1,0 +1,81 @@
+"""The protocol every observer follows: ``init``/``step`` online, ``run`` on a whole record.
+
+``init`` returns the state at the first sample (its box is the prior box of ``x(t_0)``);
+``step(state, y_k, u_k)`` consumes the measurement and input at ``t_k`` and returns the state at
+``t_{k+1}``; ``run(t, y, u)`` returns an :class:`~intervalobs.estimate.Estimate` whose row ``k`` is the
+box of ``x(t_k)`` given ``y_0 … y_{k-1}``, and gives the same numbers as repeated ``step`` calls.
+A leading axis of ``y`` and ``u`` holds Monte Carlo runs and is carried through without a loop.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..estimate import Estimate
+from ..validation import as_signal, as_time
+
+__all__ = ["Observer", "ObserverState"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass
+class ObserverState:
+    """The state of an observer between two samples.
+
+    Attributes
+    ----------
+    lower, upper : numpy.ndarray, shape (n,) or (M, n)
+        Current state box.
+    input_lower, input_upper : numpy.ndarray or None
+        Current unknown-input box, for observers that estimate inputs.
+    internal : dict
+        Method-specific arrays (e.g. the box in observer coordinates).
+    """
+
+    lower: FloatArray
+    upper: FloatArray
+    input_lower: FloatArray | None = None
+    input_upper: FloatArray | None = None
+    internal: dict[str, Any] = field(default_factory=dict)
+
+
+class Observer(ABC):
+    """Base class of all observers.
+
+    Subclasses set ``n`` (states), ``p`` (outputs), ``m`` (known inputs) and implement :meth:`init`,
+    :meth:`step` and :meth:`run`. :meth:`_signals` validates a record once, at the boundary.
+    """
+
+    n: int
+    p: int
+    m: int
+
+    @abstractmethod
+    def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
+        """State at the first sample, from the prior box of ``x(t_0)`` (default: the design bounds)."""
+
+    @abstractmethod
+    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+        """Consume ``y_k`` (and ``u_k``) and return the state at the next sample."""
+
+    @abstractmethod
+    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
+        """Bounds over a whole record; ``y`` is (T, p) or (M, T, p)."""
+
+    def _signals(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Validate ``t``, ``y``, ``u``; return them with ``u`` broadcast to ``y``'s leading axes."""
+        times = as_time("t", t)
+        ys = as_signal("y", y, times.size, self.p)
+        if u is None:
+            us = np.zeros((*ys.shape[:-1], self.m))
+        else:
+            us = as_signal("u", u, times.size, self.m)
+            if us.ndim < ys.ndim:
+                us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
+        return times, ys, us

@@ -1,0 +1,217 @@
+"""Truth simulation with admissible noise: the reference every enclosure test is judged against.
+
+Continuous-time systems are simulated *exactly* for piecewise-constant noise: the noise ``w`` is held
+over sub-steps of ``h / substeps`` (so it switches inside the observer's sampling intervals), the known
+input ``u`` over whole sampling intervals (zero-order hold, as the observers assume), and each
+sub-step uses the matrix exponential of the augmented system. Discrete-time systems are iterated.
+Measurements are taken at the sample times with their own noise ``v``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import expm
+
+from .errors import DataError
+from .systems.lti import Bounds, LTISystem
+from .validation import as_signal, as_time
+
+__all__ = ["NOISE_KINDS", "Simulation", "noise_signal", "simulate"]
+
+FloatArray = NDArray[np.float64]
+
+NOISE_KINDS = ("uniform", "extreme", "sine", "constant")
+"""Built-in noise kinds; ``"extreme"`` jumps between the two bounds at random times (bang-bang)."""
+
+_SWITCH_PROBABILITY = 0.1
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A simulated record, time-first (a leading axis holds runs when ``runs`` was given).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+    x : numpy.ndarray, shape (..., T, n)
+        True state at the sample times.
+    y : numpy.ndarray, shape (..., T, p)
+        Measurements.
+    u : numpy.ndarray, shape (T, m)
+        Known input.
+    w : numpy.ndarray, shape (..., T * substeps, nw)
+        Process noise (on the fine grid in continuous time).
+    v : numpy.ndarray, shape (..., T, nv)
+        Measurement noise.
+    dA : numpy.ndarray, shape (..., n, n)
+        The constant uncertainty drawn for each run.
+    """
+
+    t: FloatArray
+    x: FloatArray
+    y: FloatArray
+    u: FloatArray
+    w: FloatArray
+    v: FloatArray
+    dA: FloatArray
+
+
+def noise_signal(
+    kind: str,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    steps: int,
+    rng: np.random.Generator,
+    runs: int | None = None,
+) -> FloatArray:
+    """A noise signal inside ``[lower, upper]``, shape ``(steps, k)`` or ``(runs, steps, k)``.
+
+    Parameters
+    ----------
+    kind : str
+        ``"uniform"`` (independent samples), ``"extreme"`` (each component at one of its bounds,
+        switching with probability 0.1 per step), ``"sine"`` (full-amplitude sinusoid of random period
+        between 5 and 200 steps and random phase) or ``"constant"`` (a random constant).
+    lower, upper : array_like, shape (k,)
+        Bounds of each component.
+    steps : int
+        Number of samples.
+    rng : numpy.random.Generator
+        Random source.
+    runs : int, optional
+        Number of independent runs (leading axis).
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    lo = np.asarray(lower, dtype=float)
+    hi = np.asarray(upper, dtype=float)
+    shape = (1 if runs is None else runs, steps, lo.size)
+    if kind == "uniform":
+        unit = rng.uniform(size=shape)
+    elif kind == "extreme":
+        first = rng.integers(0, 2, size=(shape[0], 1, shape[2]))
+        flips = rng.uniform(size=(shape[0], steps - 1, shape[2])) < _SWITCH_PROBABILITY
+        unit = (first + np.concatenate([np.zeros_like(first), np.cumsum(flips, axis=1)], axis=1)) % 2
+    elif kind == "sine":
+        period = rng.uniform(5, 200, size=(shape[0], 1, shape[2]))
+        phase = rng.uniform(0, 2 * np.pi, size=(shape[0], 1, shape[2]))
+        unit = 0.5 + 0.5 * np.sin(2 * np.pi * np.arange(steps)[None, :, None] / period + phase)
+    elif kind == "constant":
+        unit = np.broadcast_to(rng.uniform(size=(shape[0], 1, shape[2])), shape)
+    else:
+        raise DataError(f"noise: expected one of {NOISE_KINDS} or a dict of arrays, got {kind!r}")
+    signal = lo + (hi - lo) * unit
+    return signal[0] if runs is None else signal
+
+
+def _draw_box(kind: str, lower: FloatArray, upper: FloatArray, rng: np.random.Generator, runs: int) -> FloatArray:
+    """A point per run in the box: a random vertex for extreme noise, uniform otherwise."""
+    unit = (
+        rng.integers(0, 2, size=(runs, *lower.shape)) if kind == "extreme" else rng.uniform(size=(runs, *lower.shape))
+    )
+    return np.asarray(lower + (upper - lower) * unit)
+
+
+def simulate(
+    system: LTISystem,
+    bounds: Bounds,
+    t: ArrayLike,
+    u: ArrayLike | None = None,
+    noise: str | dict[str, ArrayLike] = "extreme",
+    seed: int = 0,
+    runs: int | None = None,
+    substeps: int = 10,
+) -> Simulation:
+    """Simulate the true system with admissible noise, initial state and ``ΔA``.
+
+    Parameters
+    ----------
+    system : LTISystem
+        The model.
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``; each run draws ``x0`` and a constant ``ΔA`` in their boxes
+        (vertices for ``"extreme"`` noise).
+    t : array_like, shape (T,)
+        Sample times; uniformly spaced for continuous time. For discrete time only the length counts.
+    u : array_like, shape (T, m), optional
+        Known input (held between samples in continuous time).
+    noise : str or dict
+        A kind from ``NOISE_KINDS``, or ``{"w": array, "v": array}`` with user signals of shape
+        ``(T * substeps, nw)`` (continuous) or ``(T, nw)`` (discrete), and ``(T, nv)``.
+    seed : int
+        Seed of the random generator; results are deterministic.
+    runs : int, optional
+        Number of Monte Carlo runs (adds a leading axis to every signal).
+    substeps : int
+        Noise switches per sampling interval in continuous time.
+
+    Returns
+    -------
+    Simulation
+    """
+    times = as_time("t", t)
+    full = bounds.for_system(system)
+    assert full.w is not None and full.v is not None
+    steps = times.size
+    rng = np.random.default_rng(seed)
+    count = 1 if runs is None else int(runs)
+    us = np.zeros((steps, system.m)) if u is None else as_signal("u", u, steps, system.m)
+    if us.ndim != 2:
+        raise DataError(f"u: expected shape ({steps}, {system.m}) shared by all runs, got {us.shape}")
+    fine = substeps if system.continuous else 1
+    if system.continuous and steps > 1:
+        h = float(times[1] - times[0])
+        if np.max(np.abs(np.diff(times) - h)) > 1e-9 * h:
+            raise DataError("t: expected uniformly spaced sample times for a continuous-time system")
+    else:
+        h = 1.0
+    if isinstance(noise, dict):
+        w = as_signal("noise['w']", noise["w"], steps * fine, system.nw)
+        v = as_signal("noise['v']", noise["v"], steps, system.nv)
+        w = np.broadcast_to(w, (count, *w.shape[-2:]))
+        v = np.broadcast_to(v, (count, *v.shape[-2:]))
+        kind = "uniform"
+    else:
+        kind = noise
+        w = noise_signal(kind, full.w[0], full.w[1], steps * fine, rng, count)
+        v = noise_signal(kind, full.v[0], full.v[1], steps, rng, count)
+    x0 = _draw_box(kind, *full.x0, rng, count)
+    if system.dA is None:
+        d_a = np.zeros((count, system.n, system.n))
+    else:
+        d_a = _draw_box(kind, *system.dA, rng, count)
+    n, m, nw = system.n, system.m, system.nw
+    a_true = system.A + d_a
+    if system.continuous:
+        size = n + m + nw
+        aug = np.zeros((count, size, size))
+        aug[:, :n, :n], aug[:, :n, n : n + m], aug[:, :n, n + m :] = a_true, system.B, system.E
+        exact = np.stack([expm(a * (h / fine)) for a in aug])
+        phi, gamma_u, gamma_w = exact[:, :n, :n], exact[:, :n, n : n + m], exact[:, :n, n + m :]
+    else:
+        phi, gamma_u, gamma_w = (
+            a_true,
+            np.broadcast_to(system.B, (count, n, m)),
+            np.broadcast_to(system.E, (count, n, nw)),
+        )
+    x = np.empty((count, steps, n))
+    state = x0
+    for k in range(steps):
+        x[:, k] = state
+        if k + 1 == steps:
+            break
+        for j in range(fine):
+            state = (
+                np.einsum("rij,rj->ri", phi, state)
+                + gamma_u @ us[k]
+                + np.einsum("rij,rj->ri", gamma_w, w[:, k * fine + j])
+            )
+    y = x @ system.C.T + v @ system.F.T
+    if runs is None:
+        return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0])
+    return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a)

@@ -1,0 +1,205 @@
+r"""Linear time-invariant models with interval uncertainty, and the bounds of their unknowns.
+
+.. math::
+
+    \dot x = (A + \Delta A)x + Bu + Ew,\qquad y = Cx + Fv \qquad (\text{continuous time, } dt = None)
+
+    x_{k+1} = (A + \Delta A)x_k + Bu_k + Ew_k,\qquad y_k = Cx_k + Fv_k \qquad (\text{discrete time})
+
+with :math:`\underline{\Delta A} \le \Delta A \le \overline{\Delta A}` constant and unknown,
+:math:`w`, :math:`v` unknown signals in boxes and :math:`x(0)` in a box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import BoundsError, DimensionError
+from ..validation import as_box, as_matrix
+
+__all__ = ["Bounds", "LTISystem"]
+
+FloatArray = NDArray[np.float64]
+BoxPair = tuple[FloatArray, FloatArray]
+
+
+class LTISystem:
+    """A linear time-invariant system with optional elementwise interval uncertainty on ``A``.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Nominal state matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    B : array_like, shape (n, m), optional
+        Known-input matrix (default: no input, m = 0).
+    E : array_like, shape (n, nw), optional
+        Process-noise matrix (default: the identity, nw = n).
+    F : array_like, shape (p, nv), optional
+        Measurement-noise matrix (default: the identity, nv = p).
+    dt : float, optional
+        Sampling period of a discrete-time system; ``None`` (default) for continuous time.
+    dA : tuple of array_like, optional
+        ``(lower, upper)`` elementwise bounds of the unknown constant ``ΔA``, each (n, n); must
+        contain zero (``A`` is the nominal matrix).
+
+    Attributes
+    ----------
+    n, m, p, nw, nv : int
+        Numbers of states, known inputs, outputs, process-noise and measurement-noise channels.
+    continuous : bool
+        True when ``dt`` is None.
+    """
+
+    def __init__(
+        self,
+        A: ArrayLike,
+        C: ArrayLike,
+        B: ArrayLike | None = None,
+        E: ArrayLike | None = None,
+        F: ArrayLike | None = None,
+        dt: float | None = None,
+        dA: tuple[ArrayLike, ArrayLike] | None = None,
+    ) -> None:
+        self.A = as_matrix("A", A)
+        n = self.A.shape[0]
+        if self.A.shape != (n, n):
+            raise DimensionError(f"A: expected a square matrix, got shape {self.A.shape}")
+        self.C = as_matrix("C", C, (None, n))
+        self.B = np.zeros((n, 0)) if B is None else as_matrix("B", B, (n, None))
+        self.E = np.eye(n) if E is None else as_matrix("E", E, (n, None))
+        self.F = np.eye(self.C.shape[0]) if F is None else as_matrix("F", F, (self.C.shape[0], None))
+        if dt is not None and not (np.isfinite(dt) and dt > 0):
+            raise BoundsError(f"dt: expected a positive sampling period or None, got {dt!r}")
+        self.dt = None if dt is None else float(dt)
+        self.dA: BoxPair | None = None
+        if dA is not None:
+            lo = as_matrix("dA lower", dA[0], (n, n))
+            hi = as_matrix("dA upper", dA[1], (n, n))
+            if np.any(lo > hi):
+                raise BoundsError("dA: expected lower <= upper elementwise, got lower > upper")
+            if np.any(lo > 0) or np.any(hi < 0):
+                raise BoundsError("dA: expected bounds that contain 0 (A is the nominal matrix)")
+            self.dA = (lo, hi)
+
+    @property
+    def n(self) -> int:
+        """Number of states."""
+        return int(self.A.shape[0])
+
+    @property
+    def m(self) -> int:
+        """Number of known inputs."""
+        return int(self.B.shape[1])
+
+    @property
+    def p(self) -> int:
+        """Number of outputs."""
+        return int(self.C.shape[0])
+
+    @property
+    def nw(self) -> int:
+        """Number of process-noise channels."""
+        return int(self.E.shape[1])
+
+    @property
+    def nv(self) -> int:
+        """Number of measurement-noise channels."""
+        return int(self.F.shape[1])
+
+    @property
+    def continuous(self) -> bool:
+        """True for a continuous-time system."""
+        return self.dt is None
+
+    @classmethod
+    def from_control(cls, sys: Any, **kwargs: Any) -> LTISystem:
+        """Build from a python-control ``StateSpace`` (its A, B, C; D must be zero).
+
+        Parameters
+        ----------
+        sys : control.StateSpace
+            The model; ``sys.dt`` of 0 or None means continuous time.
+        **kwargs
+            ``E``, ``F``, ``dA`` as in the constructor.
+
+        Returns
+        -------
+        LTISystem
+        """
+        unknown = set(kwargs) - {"E", "F", "dA"}
+        if unknown:
+            raise TypeError(f"LTISystem.from_control: unexpected keyword argument {sorted(unknown)[0]!r}")
+        for attr in ("A", "B", "C", "D"):
+            if not hasattr(sys, attr):
+                raise DimensionError(f"sys: expected a python-control StateSpace, got {type(sys).__name__}")
+        if np.any(np.asarray(sys.D) != 0):
+            raise DimensionError("sys: expected D = 0 (no direct feedthrough), got a nonzero D")
+        dt = None if sys.dt in (0, None) else (None if sys.dt is True else float(sys.dt))
+        if sys.dt is True:
+            raise BoundsError("sys.dt: expected a numeric sampling period for a discrete-time system, got True")
+        B = np.asarray(sys.B, dtype=float)
+        return cls(sys.A, sys.C, B=B if B.size else None, dt=dt, **kwargs)
+
+    def __repr__(self) -> str:
+        kind = "continuous" if self.continuous else f"discrete, dt={self.dt:g}"
+        extra = ", interval dA" if self.dA is not None else ""
+        return f"LTISystem(n={self.n}, m={self.m}, p={self.p}, {kind}{extra})"
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Boxes of the unknowns: the initial state and the noises.
+
+    Parameters
+    ----------
+    x0 : tuple of array_like
+        ``(lower, upper)`` of the initial state.
+    w : tuple of array_like, optional
+        ``(lower, upper)`` of the process noise (default: zero noise).
+    v : tuple of array_like, optional
+        ``(lower, upper)`` of the measurement noise (default: zero noise).
+    """
+
+    x0: BoxPair
+    w: BoxPair | None = None
+    v: BoxPair | None = None
+
+    def __init__(
+        self,
+        x0: tuple[ArrayLike, ArrayLike],
+        w: tuple[ArrayLike, ArrayLike] | None = None,
+        v: tuple[ArrayLike, ArrayLike] | None = None,
+    ) -> None:
+        object.__setattr__(self, "x0", as_box("x0", x0))
+        object.__setattr__(self, "w", None if w is None else as_box("w", w))
+        object.__setattr__(self, "v", None if v is None else as_box("v", v))
+
+    def for_system(self, system: LTISystem) -> Bounds:
+        """Check the sizes against ``system`` and fill absent noise boxes with zeros.
+
+        Parameters
+        ----------
+        system : LTISystem
+            The model these bounds belong to.
+
+        Returns
+        -------
+        Bounds
+            With ``w`` and ``v`` always present.
+        """
+        for name, box, size in (
+            ("x0", self.x0, system.n),
+            ("w", self.w, system.nw),
+            ("v", self.v, system.nv),
+        ):
+            if box is not None and box[0].size != size:
+                raise DimensionError(f"bounds.{name}: expected length {size} for this system, got {box[0].size}")
+        zeros_w = (np.zeros(system.nw), np.zeros(system.nw))
+        zeros_v = (np.zeros(system.nv), np.zeros(system.nv))
+        return Bounds(self.x0, self.w if self.w is not None else zeros_w, self.v if self.v is not None else zeros_v)
