@@ -63,7 +63,7 @@ def main() -> None:
     t = np.arange(STEPS, dtype=float)
     for n in (2, 5, 10, 20):
         system, bounds = system_of_size(n)
-        observer = IntervalObserver.design(system, bounds)
+        observer = IntervalObserver.design(system, bounds, method="framer")
         y = np.random.default_rng(0).normal(size=(STEPS, 2))
         loop_time = best_of(lambda o=observer, y=y: plain_loop(o, y))
         run_time = best_of(lambda o=observer, y=y: o.run(t, y))
@@ -86,7 +86,7 @@ def main() -> None:
         kind = "interval dA (per-step recursion)" if uncertain else "point A (modal recursion)"
         print(f"(b) Monte Carlo batching, n = 5, {steps} steps, {kind}")
         system, bounds = system_of_size(5, uncertain)
-        observer = IntervalObserver.design(system, bounds)
+        observer = IntervalObserver.design(system, bounds, method="framer")
         base = None
         for runs in (1, 100, 1000):
             y = np.random.default_rng(1).normal(size=(runs, steps, 2))

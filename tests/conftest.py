@@ -15,7 +15,7 @@ def random_system(seed: int, n: int, p: int, continuous: bool, uncertain: bool) 
         shift = np.max(np.linalg.eigvals(A).real) + (rng.uniform(0.2, 1.0) if uncertain else rng.uniform(-0.5, 1.0))
         A = A - shift * np.eye(n)
     else:
-        A = A / np.max(np.abs(np.linalg.eigvals(A))) * (rng.uniform(0.5, 0.95) if uncertain else rng.uniform(0.5, 1.1))
+        A = A / np.max(np.abs(np.linalg.eigvals(A))) * (rng.uniform(0.5, 0.95) if uncertain else rng.uniform(0.5, 1.02))
     C = rng.normal(size=(p, n))
     dA = (-0.02 * np.abs(A), 0.02 * np.abs(A)) if uncertain else None
     system = LTISystem(A, C, dt=None if continuous else 1.0, dA=dA)

@@ -24,15 +24,16 @@ CASES = [
 ]
 
 
+@pytest.mark.parametrize("method", ["tube", "framer"])
 @pytest.mark.parametrize(
     "seed,n,p,continuous,uncertain",
     CASES,
     ids=[f"n{c[1]}-p{c[2]}-{'ct' if c[3] else 'dt'}{'-dA' if c[4] else ''}" for c in CASES],
 )
-def test_random_systems_are_designed_and_enclosed_under_extreme_noise(seed, n, p, continuous, uncertain):
+def test_random_systems_are_designed_and_enclosed_under_extreme_noise(seed, n, p, continuous, uncertain, method):
     system, bounds = random_system(seed, n, p, continuous, uncertain)
     h = 0.05 if continuous else None
-    observer = IntervalObserver.design(system, bounds, h=h)
+    observer = IntervalObserver.design(system, bounds, h=h, method=method)
     assert observer.spectral_radius < 1
     t = np.arange(300) * (h or 1.0)
     for noise_seed in range(3):
@@ -87,7 +88,7 @@ def test_undetectable_pair_is_refused():
 def test_unstable_given_gain_is_refused():
     system = LTISystem([[1.2, 0.0], [0.0, 0.5]], [[1.0, 1.0]], dt=1.0)
     with pytest.raises(DesignError, match="spectral radius"):
-        IntervalObserver(system, Bounds(([-1, -1], [1, 1])), L=[[0.0], [0.0]])
+        IntervalObserver(system, Bounds(([-1, -1], [1, 1])), L=[[0.0], [0.0]], method="framer")
 
 
 def test_bad_records_are_refused_with_the_argument_name():
@@ -107,3 +108,28 @@ def test_bad_records_are_refused_with_the_argument_name():
         observer.run(t[::-1], y)
     with pytest.raises(TypeError, match="unexpected keyword argument 'gain'"):
         IntervalObserver.design(system, bounds, h=0.05, gain=1)
+
+
+@pytest.mark.parametrize("uncertain", [False, True], ids=["point", "dA"])
+def test_tube_is_never_wider_than_the_framer_with_the_same_gain(uncertain):
+    # a damped rotation: |M|^i overestimates |M^i|, so the framer is strictly wider than the tube
+    angle = 0.8
+    A = 0.6 * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    dA = (-0.01 * np.ones((2, 2)), 0.01 * np.ones((2, 2))) if uncertain else None
+    system = LTISystem(A, [[1.0, 0.0]], dt=1.0, dA=dA)
+    bounds = Bounds(([-1, -1], [1, 1]), w=([-0.1, -0.1], [0.1, 0.1]), v=([-0.05], [0.05]))
+    gain = [[0.0], [0.0]]
+    tube = IntervalObserver(system, bounds, gain)
+    framer = IntervalObserver(system, bounds, gain, method="framer")
+    t = np.arange(200.0)
+    sim = simulate(system, bounds, t, seed=3, runs=3)
+    tube_est, framer_est = tube.run(t, sim.y), framer.run(t, sim.y)
+    assert tube_est.enclosure(sim.x).max_violation == 0.0
+    assert np.all(tube_est.width() <= framer_est.width() * (1 + 1e-9))
+    assert tube_est.width()[:, 100:].mean() < 0.9 * framer_est.width()[:, 100:].mean()
+
+
+def test_tube_with_an_unstable_gain_is_refused():
+    system = LTISystem([[1.2, 0.0], [0.0, 0.5]], [[1.0, 1.0]], dt=1.0)
+    with pytest.raises(DesignError, match="Schur stable"):
+        IntervalObserver(system, Bounds(([-1, -1], [1, 1])), L=[[0.0], [0.0]])

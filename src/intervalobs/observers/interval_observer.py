@@ -1,20 +1,32 @@
-r"""The general-purpose interval observer (framer) for LTI systems with interval uncertainty.
+r"""The general-purpose interval observer for LTI systems with interval uncertainty.
 
-On the sound sampled model :math:`x_{k+1} \in (\Phi \pm \delta\Phi)x_k + (\Gamma \pm \delta\Gamma)u_k
-+ [c \pm r]` (:mod:`intervalobs.design.discretization`; a discrete-time system is its own sampled
-model) and in coordinates :math:`z = Tx`, with :math:`M = T(\Phi - LC)T^{-1}`, the box
-:math:`[z_c \pm z_r]` is propagated as
+Both methods run on the sound sampled model :math:`x_{k+1} \in (\Phi \pm \delta\Phi)x_k +
+(\Gamma \pm \delta\Gamma)u_k + [c \pm r]` (:mod:`intervalobs.design.discretization`; a discrete-time
+system is its own sampled model) and propagate a box :math:`[\hat x \pm \rho]` whose centre is a
+Luenberger estimate, in coordinates :math:`z = Tx` with :math:`M = T(\Phi - LC)T^{-1}`:
 
-.. math::
+.. math:: z_c^+ = M z_c + TLy_k + T\Gamma u_k + T(c - LF v_c).
 
-    z_c^+ &= M z_c + TLy_k + T\Gamma u_k + T(c - LF v_c), \\
-    z_r^+ &= |M| z_r + |T|\big(r + |LF| v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
+They differ in the radius.
 
-with :math:`x_c = T^{-1}z_c`, :math:`x_r = |T^{-1}|z_r`. This is the framer
-:math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots` of seed 002 (39)–(40) written in
-centre–radius form, valid for any sign pattern of :math:`M`, with the interval term
-:math:`\delta\Phi\,x` bounded exactly (seed 002, Lemma A.1). Each step follows from the inclusion of
-the previous one, so the bounds hold for every admissible noise realisation, inside the steps too.
+``method="tube"`` (default, :math:`T = I`): the exact error tube of :mod:`intervalobs.design.tube`,
+
+.. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
+          \ell = \min(k+1, J),\quad d_k = r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|\hat x_k| + \rho_k),
+
+which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain.
+
+``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
+of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
+
+.. math:: z_r^+ = |M| z_r + |T|\big(r + |LF| v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
+
+with :math:`x_c = T^{-1}z_c`, :math:`x_r = |T^{-1}|z_r`; the interval term :math:`\delta\Phi\,x` is
+bounded exactly (seed 002, Lemma A.1). It needs a stable width system
+:math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
+
+Each step follows from the inclusion of the previous one, so both hold for every admissible noise
+realisation, inside the sampling intervals too.
 """
 
 from __future__ import annotations
@@ -24,8 +36,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design.cooperative import FramerDesign, design_framer, framer_matrices
+from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable
 from ..design.discretization import SampledModel, sampled_model
+from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
 from ..errors import DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN
@@ -34,9 +47,12 @@ from ..systems.lti import Bounds, LTISystem
 from ..validation import as_box, as_matrix, as_vector, check_no_kwargs
 from .base import Observer, ObserverState
 
-__all__ = ["IntervalObserver"]
+__all__ = ["METHODS", "IntervalObserver"]
 
 FloatArray = NDArray[np.float64]
+
+METHODS = ("tube", "framer")
+"""Radius propagation methods of :class:`IntervalObserver`."""
 
 
 class IntervalObserver(Observer):
@@ -51,14 +67,17 @@ class IntervalObserver(Observer):
     L : array_like, shape (n, p)
         Gain of the sampled model.
     T : array_like, shape (n, n), optional
-        Coordinate change ``z = T x`` (default identity).
+        Coordinate change ``z = T x`` of the framer (default identity; not used by the tube).
     h : float, optional
         Sampling period; required for a continuous-time system (measurements arrive every ``h``).
+    method : {"tube", "framer"}
+        Radius propagation (see the module docstring).
 
     Raises
     ------
     DesignError
-        When the width system ``|T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|`` is not stable (spectral radius ≥ 1).
+        When the radius recursion is not bounded with this gain: ``ρ(|M^J| + GδΦ) ≥ 1`` for the
+        tube, ``ρ(|T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|) ≥ 1`` for the framer.
     """
 
     def __init__(
@@ -68,12 +87,18 @@ class IntervalObserver(Observer):
         L: ArrayLike,
         T: ArrayLike | None = None,
         h: float | None = None,
+        method: str = "tube",
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
             raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
+        if method == "tube" and T is not None:
+            raise DimensionError("T: a coordinate change is only used by method='framer', got T with method='tube'")
         self.system = system
+        self.method = method
         self.bounds = bounds.for_system(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.model: SampledModel = sampled_model(system, self.bounds, h)
@@ -86,17 +111,10 @@ class IntervalObserver(Observer):
             )
         self.T_inv = np.linalg.inv(self.T)
         width_matrix, self.M = framer_matrices(self.model, system.C, self.L, self.T)
-        self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width_matrix))))
-        if not self.spectral_radius < 1:
-            raise DesignError(
-                f"L, T: expected a stable width system, got spectral radius {self.spectral_radius:.6g} >= 1 "
-                "of |T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|; use IntervalObserver.design to find a gain"
-            )
         assert self.bounds.v is not None
         v_center = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
         v_radius = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
         F = system.F
-        self._abs_M = np.abs(self.M)
         self._abs_T = np.abs(self.T)
         self._abs_T_inv = np.abs(self.T_inv)
         self._TL = self.T @ self.L
@@ -106,19 +124,47 @@ class IntervalObserver(Observer):
         self._K_phi = self._abs_T @ self.model.dPhi
         self._K_gamma = self._abs_T @ self.model.dGamma
         self._center_recursion = LinearRecursion(self.M)
-        self._radius_recursion = LinearRecursion(self._abs_M)
         self._radius_cache = np.empty((0, self.n))
+        if method == "framer":
+            self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width_matrix))))
+            if not self.spectral_radius < 1:
+                raise DesignError(
+                    f"L, T: expected a stable width system, got spectral radius {self.spectral_radius:.6g} >= 1 "
+                    "of |T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|; use IntervalObserver.design to find a gain"
+                )
+            self._abs_M = np.abs(self.M)
+            self._radius_recursion = LinearRecursion(self._abs_M)
+            amplification = max(self._center_recursion.error_factor, self._radius_recursion.error_factor)
+            contraction = self.spectral_radius
+        else:
+            horizon = tube_horizon(self.M)
+            if horizon is None:
+                raise DesignError(
+                    "L: expected Φ - LC to be Schur stable (and to contract within 4000 steps), "
+                    f"got spectral radius {np.max(np.abs(np.linalg.eigvals(self.M))):.6g}"
+                )
+            self.horizon = horizon
+            self.spectral_radius, _ = tube_stability(self.model, self.M, self._radius_input, horizon)
+            if not self.spectral_radius < 1:
+                raise DesignError(
+                    f"L: expected a bounded error tube, got ρ(|M^J| + GδΦ) = {self.spectral_radius:.6g} >= 1; "
+                    "reduce dA or use IntervalObserver.design"
+                )
+            self._abs_powers = abs_powers(self.M, horizon + 1)
+            amplification = self._center_recursion.error_factor
+            contraction = float(np.max(np.abs(np.linalg.eigvals(self.M))))
         # Worst-case linear accumulation of rounding through a recursion contracting at rate ρ, amplified
         # at most by the conditioning of the fast evaluation.
-        amplification = max(self._center_recursion.error_factor, self._radius_recursion.error_factor)
-        self.margin = max(
-            ROUNDING_MARGIN, 8 * self.n * np.finfo(float).eps * amplification / (1 - self.spectral_radius)
-        )
-        self.design_result: FramerDesign | None = None
+        self.margin = max(ROUNDING_MARGIN, 8 * self.n * np.finfo(float).eps * amplification / (1 - contraction))
+        self.design_result: FramerDesign | TubeDesign | None = None
 
     @classmethod
     def design(cls, system: LTISystem, bounds: Bounds, h: float | None = None, **options: Any) -> IntervalObserver:
-        """Find a gain and coordinates automatically and build the observer.
+        """Find a gain (and, for the framer, coordinates) automatically and build the observer.
+
+        The tube (default) compares steady-state Kalman gains of the sampled model and the framer's
+        LP gains by their steady error tube; the framer searches coordinates and gains by LP
+        (:func:`~intervalobs.design.cooperative.design_framer`). Every result is verified by eigenvalues.
 
         Parameters
         ----------
@@ -129,29 +175,52 @@ class IntervalObserver(Observer):
         h : float, optional
             Sampling period (continuous time only).
         **options
-            ``candidates``: dict of named coordinate changes ``T`` to try instead of the defaults
-            (identity, real modal basis, pole-placed eigenvectors).
+            ``method``: ``"tube"`` (default) or ``"framer"``; ``candidates``: dict of named coordinate
+            changes ``T`` for the framer search instead of the defaults (identity, real modal basis,
+            pole-placed eigenvectors).
 
         Returns
         -------
         IntervalObserver
-            With ``design_result`` holding the verified :class:`~intervalobs.design.cooperative.FramerDesign`.
+            With ``design_result`` holding the verified design.
 
         Raises
         ------
         DesignError
-            When ``(A, C)`` is not detectable or no tried coordinates give a stable width system.
+            When ``(A, C)`` is not detectable or no tried gain gives a bounded radius.
         """
-        check_no_kwargs("IntervalObserver.design", options, ("candidates",))
+        check_no_kwargs("IntervalObserver.design", options, ("candidates", "method"))
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        method = options.get("method", "tube")
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
         full = bounds.for_system(system)
         model = sampled_model(system, full, h)
         assert full.v is not None
         v_radius = 0.5 * (full.v[1] - full.v[0])
-        result = design_framer(model, system.C, system.F, v_radius, options.get("candidates"))
-        observer = cls(system, bounds, result.L, result.T, h)
-        observer.design_result = result
+        if not is_detectable(model, system.C):
+            raise DesignError("system: the pair (A, C) is not detectable, so no interval observer gain exists")
+        framer: FramerDesign | None = None
+        try:
+            framer = design_framer(model, system.C, system.F, v_radius, options.get("candidates"))
+        except DesignError:
+            if method == "framer":
+                raise
+        if method == "framer":
+            assert framer is not None
+            observer = cls(system, bounds, framer.L, framer.T, h, method="framer")
+            observer.design_result = framer
+            return observer
+        extra = {} if framer is None else {f"framer-{framer.coordinates}": framer.L}
+        tube = design_tube_gain(model, system.C, system.F, v_radius, extra)
+        if tube is None:
+            raise DesignError(
+                "IntervalObserver.design: no candidate gain gives a bounded error tube; "
+                "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
+            )
+        observer = cls(system, bounds, tube.L, None, h, method="tube")
+        observer.design_result = tube
         return observer
 
     # -- protocol ------------------------------------------------------------------------------
@@ -173,8 +242,13 @@ class IntervalObserver(Observer):
             lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
         z_c = self.T @ (0.5 * (lo + hi))
         z_r = self._abs_T @ (0.5 * (hi - lo))
+        internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r}
+        if self.method == "tube":
+            internal.update(
+                k=0, rho_queue=np.repeat(z_r[None, :], self.horizon, axis=0), d_history=np.zeros((self.horizon, self.n))
+            )
         lower, upper = self._x_box(z_c, z_r)
-        return ObserverState(lower, upper, internal={"z_center": z_c, "z_radius": z_r})
+        return ObserverState(lower, upper, internal=internal)
 
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
         """Propagate the box from ``t_k`` to ``t_{k+1}`` with ``y_k`` and ``u_k``.
@@ -196,10 +270,9 @@ class IntervalObserver(Observer):
         if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
             raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
         uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
-        z_c, z_r = state.internal["z_center"], state.internal["z_radius"]
-        z_c, z_r = self._advance(z_c, z_r, yk, uk)
-        lower, upper = self._x_box(z_c, z_r)
-        return ObserverState(lower, upper, internal={"z_center": z_c, "z_radius": z_r})
+        internal = self._advance(state.internal, yk, uk)
+        lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
+        return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record.
@@ -226,39 +299,67 @@ class IntervalObserver(Observer):
                     f"got spacings in [{spacing.min():g}, {spacing.max():g}]"
                 )
         state = self.init()
-        z_c0, z_r0 = state.internal["z_center"], state.internal["z_radius"]
         if self.model.uncertain:
             z_c = np.empty((*ys.shape[:-1], self.n))
             z_r = np.empty_like(z_c)
-            c, r = np.broadcast_to(z_c0, z_c[..., 0, :].shape), np.broadcast_to(z_r0, z_c[..., 0, :].shape)
+            internal = {
+                key: np.broadcast_to(value, (*ys.shape[:-2], *np.shape(value))) if key != "k" else value
+                for key, value in state.internal.items()
+            }
             for k in range(times.size):
-                z_c[..., k, :], z_r[..., k, :] = c, r
+                z_c[..., k, :], z_r[..., k, :] = internal["z_center"], internal["z_radius"]
                 if k + 1 < times.size:
-                    c, r = self._advance(c, r, ys[..., k, :], us[..., k, :])
+                    internal = self._advance(internal, ys[..., k, :], us[..., k, :])
         else:
             drive = ys[..., :-1, :] @ self._TL.T + us[..., :-1, :] @ self._TGamma.T + self._offset
-            z_c = self._center_recursion(z_c0, drive)
+            z_c = self._center_recursion(state.internal["z_center"], drive)
             z_r = np.broadcast_to(self._default_radius(times.size), z_c.shape)
         lower, upper = self._x_box(z_c, z_r)
         return Estimate(times, lower, upper, meta=self.meta())
 
     # -- internals -------------------------------------------------------------------------------
     def _default_radius(self, steps: int) -> FloatArray:
-        """Radii from the design's initial box: data-independent, so computed once and cached."""
+        """Radii from the design's initial box for a point model: data-independent, computed once."""
         if self._radius_cache.shape[0] < steps:
-            z_r0 = self._abs_T @ (0.5 * (self.bounds.x0[1] - self.bounds.x0[0]))
-            constant = np.broadcast_to(self._radius_input, (steps - 1, self.n))
-            self._radius_cache = self._radius_recursion(z_r0, constant)
+            state = self.init()
+            if self.method == "framer":
+                constant = np.broadcast_to(self._radius_input, (steps - 1, self.n))
+                self._radius_cache = self._radius_recursion(state.internal["z_radius"], constant)
+            else:
+                radii = np.empty((steps, self.n))
+                internal = state.internal
+                zero_y, zero_u = np.zeros(self.p), np.zeros(self.m)
+                for k in range(steps):
+                    radii[k] = internal["z_radius"]
+                    if k + 1 < steps:
+                        internal = self._advance(internal, zero_y, zero_u)
+                self._radius_cache = radii
         return self._radius_cache[:steps]
 
-    def _advance(self, z_c: FloatArray, z_r: FloatArray, y: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
-        radius_input = self._radius_input
+    def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
+        """Radius of the box of everything unknown that enters one step (in z-coordinates)."""
+        radius = self._radius_input
         if self.model.uncertain:
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
-            radius_input = radius_input + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T
+            radius = radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T
+        return np.asarray(radius)
+
+    def _advance(self, internal: dict[str, Any], y: FloatArray, u: FloatArray) -> dict[str, Any]:
+        z_c, z_r = internal["z_center"], internal["z_radius"]
+        disturbance = self._disturbance_radius(z_c, z_r, u)
         new_c = z_c @ self.M.T + y @ self._TL.T + u @ self._TGamma.T + self._offset
-        new_r = z_r @ self._abs_M.T + radius_input
-        return new_c, new_r
+        if self.method == "framer":
+            return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance}
+        k = internal["k"]
+        queue, history = internal["rho_queue"], internal["d_history"]
+        disturbance = np.broadcast_to(disturbance, z_r.shape)
+        history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
+        lag = min(k + 1, self.horizon)
+        new_r = queue[..., 0, :] @ self._abs_powers[lag].T + np.einsum(
+            "ijl,...il->...j", self._abs_powers[: self.horizon], history
+        )
+        queue = np.concatenate([queue[..., 1:, :], new_r[..., None, :]], axis=-2)
+        return {"z_center": new_c, "z_radius": new_r, "k": k + 1, "rho_queue": queue, "d_history": history}
 
     def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
         x_c = z_c @ self.T_inv.T
@@ -267,16 +368,22 @@ class IntervalObserver(Observer):
         return x_c - x_r - pad, x_c + x_r + pad
 
     def meta(self) -> dict[str, Any]:
-        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+        """
         info: dict[str, Any] = {
-            "method": "IntervalObserver",
+            "method": f"IntervalObserver/{self.method}",
             "L": self.L.tolist(),
             "T": self.T.tolist(),
             "spectral_radius": self.spectral_radius,
             "h": self.h,
             "transient_s": 0.0,
         }
+        if self.method == "tube":
+            info["horizon"] = self.horizon
         if self.design_result is not None:
-            info["coordinates"] = self.design_result.coordinates
             info["steady_width"] = (2 * self.design_result.steady_radius).tolist()
         return info
