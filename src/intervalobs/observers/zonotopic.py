@@ -1,0 +1,341 @@
+r"""Seed 002's zonotopic set-based observer (Prop. 3.1) and integrated observer (Theorem 5.3).
+
+Model (seed 002, (1)): :math:`x_{k+1} = (A_0 + \Delta A(\theta))x_k + Bu_k + E_\omega\omega_k`,
+:math:`y_k = Cx_k + E_\upsilon\upsilon_k`, with :math:`\Delta A(\theta)` constant in the box ``system.dA``
+and the noises in the boxes of ``bounds``. Substituting :math:`LCx_k = Ly_k - LE_\upsilon\upsilon_k`,
+
+.. math:: x_{k+1} = A^*(\theta)x_k + Bu_k + Ly_k + E_\omega\omega_k - LE_\upsilon\upsilon_k,\qquad
+          A^*(\theta) = A_0 + \Delta A(\theta) - LC,
+
+holds *exactly* for the true state, for every admissible θ, ω, υ. Both observers here enclose the set
+of such states:
+
+* :class:`ZonotopicObserver` propagates a zonotope :math:`\langle c_k, R_k\rangle` with the
+  interval-matrix inclusion of Properties 3–4 (made sound, see
+  :func:`intervalobs.zonotope.interval_matrix_image`) and Combastel's reduction (Property 2):
+  Prop. 3.1, (7).
+* :class:`IntegratedObserver` is the integrated scheme (63)–(65): the centre follows the Luenberger
+  recursion (63) and the segments (the radius) the interval recursion (64), with the uncertainty
+  bounded soundly: :math:`|M|` instead of :math:`M` for the segments (any sign of
+  :math:`M = A_0 - LC`) and Lemma A.1 for :math:`\Delta A(\theta)x` instead of the approximation of
+  Lemma A.2. In this sound form it *is* the centre–radius framer of
+  :class:`~intervalobs.observers.interval_observer.IntervalObserver` (so the recursion is reused),
+  which is also the sound version of the interval observer (39)–(40) with one gain: Corollary 5.4
+  (the schemes coincide) holds exactly. What the class adds is the gain design of Theorem 5.3
+  (LMI (19) with (65), diagonal ``P``) and the explicit fallback when monotonicity is impossible.
+
+Both treat θ as if it could vary from step to step (the set-based "time-varying" approach); that is
+sound for a constant θ too.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..design.discretization import sampled_model
+from ..design.hinf import GainDesign, hinf_gain
+from ..errors import AssumptionError, DataError, DesignError
+from ..estimate import Estimate
+from ..interval import inflate
+from ..systems.lti import Bounds, LTISystem
+from ..validation import as_box, as_matrix, check_no_kwargs
+from ..zonotope import hull_radius, interval_matrix_image, reduce_order
+from .base import Observer, ObserverState
+from .interval_observer import IntervalObserver
+
+__all__ = ["IntegratedObserver", "ZonotopicObserver"]
+
+FloatArray = NDArray[np.float64]
+
+_EPS = float(np.finfo(float).eps)
+_TINY = float(np.finfo(float).tiny)
+
+
+class ZonotopicObserver(Observer):
+    r"""Zonotopic set-based observer of seed 002, Proposition 3.1 (sound interval-matrix inclusion).
+
+    With :math:`A^* = A_0 + \Delta A - LC` an interval matrix (midpoint :math:`M`, radius :math:`D`),
+
+    .. math::
+
+        c_{k+1} &= M c_k + Bu_k + Ly_k + E_\omega\omega_c - LE_\upsilon\upsilon_c, \\
+        R_{k+1} &= [\,M\check R_k,\ \mathrm{diag}(D(|c_k| + |\check R_k|\mathbf 1)),\
+                   E_\omega\mathrm{diag}(\omega_r),\ -LE_\upsilon\mathrm{diag}(\upsilon_r)\,],
+
+    :math:`\check R_k = \downarrow_q R_k` ((7a)–(7b)); the diagonal block replaces the printed
+    ``⋄(A*Ř)`` / ``diam(A*)/2 c`` terms by their sound form. The state bounds are the interval hull
+    (57): :math:`c_k \pm |R_k|\mathbf 1`. Each step also adds the floating-point error bound of its own
+    dot products to the diagonal block, so the enclosure does not depend on a contraction argument.
+
+    Stability certificate: the hull radius :math:`h_k = |R_k|\mathbf 1` obeys
+    :math:`h_{k+1} \le (|M| + D)h_k + D|c_k| + \text{noise}`, and :math:`c_k` is a Luenberger
+    estimate, so :math:`\rho(|M| + D) < 1` bounds the widths (``certified``). It is sufficient only:
+    the zonotope's exact linear map :math:`M\check R` can contract when :math:`|M|` does not.
+    With the same gain the zonotope's hull is never wider than the interval framer's.
+
+    Parameters
+    ----------
+    system : LTISystem
+        Discrete-time model (``dA`` optional).
+    bounds : Bounds
+        Boxes of ``x0``, ``w`` (ω) and ``v`` (υ).
+    L : array_like, shape (n, p)
+        Observer gain.
+    order : int, optional
+        Reduction order ``q`` (generators kept); default ``5 n``.
+    allow_unstable : bool
+        Accept a gain with :math:`\rho(M) \ge 1` (the bounds stay sound but diverge); only for
+        showing the paper's failure modes.
+
+    Raises
+    ------
+    AssumptionError
+        For a continuous-time system.
+    DesignError
+        When :math:`\rho(A_0 + \mathrm{mid}\,\Delta A - LC) \ge 1` and not ``allow_unstable``.
+    """
+
+    def __init__(
+        self,
+        system: LTISystem,
+        bounds: Bounds,
+        L: ArrayLike,
+        order: int | None = None,
+        allow_unstable: bool = False,
+    ) -> None:
+        if not isinstance(system, LTISystem):
+            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        if not isinstance(bounds, Bounds):
+            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+        if system.continuous:
+            raise AssumptionError("system: the zonotopic observer of seed 002 is discrete time, got dt=None")
+        self.system = system
+        self.bounds = bounds.for_system(system)
+        self.n, self.p, self.m = system.n, system.p, system.m
+        self.L = as_matrix("L", L, (self.n, self.p))
+        self.order = 5 * self.n if order is None else int(order)
+        if self.order < self.n:
+            raise DesignError(f"order: expected at least n = {self.n}, got {self.order}")
+        model = sampled_model(system, self.bounds)
+        self.M = model.Phi - self.L @ system.C
+        self.D = model.dPhi
+        self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(self.M))))
+        if self.spectral_radius >= 1 and not allow_unstable:
+            raise DesignError(
+                f"L: expected rho(A0 + mid dA - LC) < 1, got {self.spectral_radius:.6g}; the zonotopes would diverge"
+            )
+        width = np.abs(self.M) + self.D
+        self.width_spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width))))
+        self.certified = self.width_spectral_radius < 1
+        assert self.bounds.w is not None and self.bounds.v is not None
+        w_c = 0.5 * (self.bounds.w[0] + self.bounds.w[1])
+        w_r = 0.5 * (self.bounds.w[1] - self.bounds.w[0])
+        v_c = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
+        v_r = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
+        LF = self.L @ system.F
+        self._B = model.Gamma
+        self._offset = system.E @ w_c - LF @ v_c
+        noise = np.hstack([system.E * w_r, -LF * v_r])
+        self._noise = noise[:, np.any(noise != 0, axis=0)]
+        self._a_lower = self.M - self.D
+        self._a_upper = self.M + self.D
+        self._abs_a = np.abs(self.M) + self.D
+        self._dot_length = self.n + self.p + self.m + self.order + self._noise.shape[1] + 2
+
+    def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
+        """The initial zonotope: the box of ``x(0)`` (default ``bounds.x0``), Assumption 3.2.
+
+        Parameters
+        ----------
+        x0_lower, x0_upper : array_like, shape (n,), optional
+
+        Returns
+        -------
+        ObserverState
+            ``internal`` holds ``center`` (n,) and ``generators`` (n, n).
+        """
+        if x0_lower is None or x0_upper is None:
+            lo, hi = self.bounds.x0
+        else:
+            lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
+        center = 0.5 * (lo + hi)
+        generators = np.diag(0.5 * (hi - lo))
+        return ObserverState(lo.copy(), hi.copy(), internal={"center": center, "generators": generators})
+
+    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+        """Propagate the zonotope from ``k`` to ``k+1`` with ``y_k`` and ``u_k`` ((7a)–(7b)).
+
+        Parameters
+        ----------
+        state : ObserverState
+            State at ``k`` (``internal['center']`` (..., n), ``internal['generators']`` (..., n, r)).
+        y : array_like, shape (p,) or (M, p)
+        u : array_like, shape (m,) or (M, m), optional
+
+        Returns
+        -------
+        ObserverState
+        """
+        yk = np.asarray(y, dtype=float)
+        if yk.ndim == 0:
+            yk = yk.reshape(1)
+        if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
+            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
+        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        c, g = self._advance(state.internal["center"], state.internal["generators"], yk, uk)
+        lower, upper = self._hull(c, g)
+        return ObserverState(lower, upper, internal={"center": c, "generators": g})
+
+    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
+        """Bounds over a whole record (the interval hull of each zonotope).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+        y : array_like, shape (T, p) or (M, T, p)
+            Measurements; a leading axis holds Monte Carlo runs (vectorised).
+        u : array_like, shape (T, m) or (M, T, m), optional
+
+        Returns
+        -------
+        Estimate
+        """
+        times, ys, us = self._signals(t, y, u)
+        state = self.init()
+        lead = ys.shape[:-2]
+        c = np.broadcast_to(state.internal["center"], (*lead, self.n))
+        g = np.broadcast_to(state.internal["generators"], (*lead, self.n, self.n))
+        lower = np.empty((*lead, times.size, self.n))
+        upper = np.empty_like(lower)
+        lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
+        for k in range(times.size - 1):
+            c, g = self._advance(c, g, ys[..., k, :], us[..., k, :])
+            lower[..., k + 1, :], upper[..., k + 1, :] = self._hull(c, g)
+        return Estimate(times, lower, upper, meta=self.meta())
+
+    def meta(self) -> dict[str, Any]:
+        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        return {
+            "method": "ZonotopicObserver (seed 002, Prop. 3.1)",
+            "L": self.L.tolist(),
+            "order": self.order,
+            "spectral_radius": self.spectral_radius,
+            "width_spectral_radius": self.width_spectral_radius,
+            "certified": self.certified,
+            "transient_s": 0.0,
+        }
+
+    def _advance(
+        self, c: FloatArray, g: FloatArray, y: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        reduced = reduce_order(g, self.order)
+        q = reduced.shape[-1]
+        new_c, new_g = interval_matrix_image(self._a_lower, self._a_upper, c, reduced)
+        new_c = new_c + y @ self.L.T + u @ self._B.T + self._offset
+        # floating-point error of this step's dot products, added to the diagonal (box) block
+        scale = (np.abs(c) + hull_radius(reduced)) @ self._abs_a.T + np.abs(y) @ np.abs(self.L).T
+        scale = scale + np.abs(u) @ np.abs(self._B).T + np.abs(self._offset) + hull_radius(new_g)
+        pad = 2 * self._dot_length * _EPS * scale + _TINY
+        box = new_g[..., q:] + pad[..., :, None] * np.eye(self.n)
+        noise = np.broadcast_to(self._noise, (*new_c.shape[:-1], *self._noise.shape))
+        new_g = np.concatenate([new_g[..., :q], box, noise], axis=-1)
+        return new_c, new_g
+
+    def _hull(self, c: FloatArray, g: FloatArray) -> tuple[FloatArray, FloatArray]:
+        r = hull_radius(g)
+        return inflate(c - r, c + r)
+
+
+class IntegratedObserver(IntervalObserver):
+    r"""Integrated interval observer of seed 002, Theorem 5.3, made sound.
+
+    Centre (63) and segments (64) are propagated separately:
+
+    .. math::
+
+        c_{k+1} &= Mc_k + Bu_k + Ly_k + E_\omega\omega_c - LE_\upsilon\upsilon_c,\\
+        r_{k+1} &= |M|r_k + |E_\omega|\omega_r + |LE_\upsilon|\upsilon_r + D(|c_k| + r_k),
+
+    :math:`x_{\sup/\inf} = c \pm r`, with :math:`M = A_0 + \mathrm{mid}\,\Delta A - LC` and ``D`` the
+    radius of ``ΔA`` (Lemma A.1 in centre–radius form). For :math:`M \ge 0` this is (64) literally;
+    for any sign it stays sound. The recursion is that of
+    :class:`~intervalobs.observers.interval_observer.IntervalObserver` with ``T = I`` (inherited);
+    stability is certified by :math:`\rho(|M| + D) < 1` (checked on construction).
+
+    Parameters
+    ----------
+    system : LTISystem
+        Discrete-time model.
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``.
+    L : array_like, shape (n, p)
+        Gain; :meth:`design` computes it from LMI (19) + (65).
+    """
+
+    def __init__(self, system: LTISystem, bounds: Bounds, L: ArrayLike) -> None:
+        if isinstance(system, LTISystem) and system.continuous:
+            raise AssumptionError("system: the integrated observer of seed 002 is discrete time, got dt=None")
+        super().__init__(system, bounds, L)
+        self.gain_design: GainDesign | None = None
+        self.fallback: str | None = None
+
+    @classmethod
+    def design(  # type: ignore[override]
+        cls,
+        system: LTISystem,
+        bounds: Bounds,
+        h: float | None = None,
+        **options: Any,
+    ) -> IntegratedObserver:
+        """Gain from the H∞ LMI (19) with the monotonicity LMI (65) (diagonal ``P``), then the observer.
+
+        Parameters
+        ----------
+        system : LTISystem
+            Discrete-time model.
+        bounds : Bounds
+            Boxes of ``x0``, ``w``, ``v``.
+        h : None
+            Unused (discrete time); present for signature compatibility.
+        **options
+            ``E_theta`` (array, default identity): direction matrix of Lemma A.2 used in (19).
+            ``fallback`` (``"raise"`` default, or ``"hinf"``): when :math:`A_0 - LC \\ge 0` is
+            impossible, raise :class:`AssumptionError` or use the gain of (19) alone (the observer stays
+            sound; ``fallback`` records why).
+
+        Returns
+        -------
+        IntegratedObserver
+        """
+        check_no_kwargs("IntegratedObserver.design", options, ("E_theta", "fallback"))
+        if not isinstance(system, LTISystem):
+            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        fallback: Literal["raise", "hinf"] = options.get("fallback", "raise")
+        if fallback not in ("raise", "hinf"):
+            raise DesignError(f"fallback: expected 'raise' or 'hinf', got {fallback!r}")
+        args = (system.A, system.C, system.E, system.F, options.get("E_theta"))
+        reason: str | None = None
+        try:
+            result = hinf_gain(*args, monotone=True)
+        except AssumptionError as exc:
+            if fallback == "raise":
+                raise
+            reason = f"(65) dropped, gain from (19) alone: {exc}"
+            result = hinf_gain(*args, monotone=False)
+        observer = cls(system, bounds, result.gain)
+        observer.gain_design = result
+        observer.fallback = reason
+        return observer
+
+    def meta(self) -> dict[str, Any]:
+        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        info = super().meta()
+        info["method"] = "IntegratedObserver (seed 002, Thm 5.3)"
+        if self.gain_design is not None:
+            info["gain_design"] = self.gain_design.as_dict()
+        if self.fallback is not None:
+            info["fallback"] = self.fallback
+        return info
