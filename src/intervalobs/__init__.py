@@ -1,5 +1,6 @@
 """intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
 
+from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from .errors import (
     AssumptionError,
     BoundsError,
@@ -11,8 +12,10 @@ from .errors import (
 from .estimate import EnclosureReport, Estimate
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import IntervalObserver, Observer, ObserverState
+from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
 from .systems import Bounds, LTISystem
+from .zonotope import Zonotope
 
 __version__ = "0.1.0"
 
@@ -39,3 +42,6 @@ __all__ = [
     "pos",
     "simulate",
 ]
+
+# seed 002
+__all__ += ["GainDesign", "IntegratedObserver", "Zonotope", "ZonotopicObserver", "hinf_gain", "zonotope_size_gain"]

@@ -33,6 +33,7 @@ is evaluated on a frequency grid, and for monotone designs :math:`A_0 - LC \ge 0
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -46,6 +47,7 @@ from ..validation import as_matrix
 
 __all__ = [
     "GainDesign",
+    "gain_properties",
     "hinf_gain",
     "hinf_norm",
     "monotone_gain_exists",
@@ -249,11 +251,11 @@ def hinf_gain(
     status = _solve(problem, solver, name)
     pv = np.asarray(p_var.value, dtype=float)
     mv = np.asarray(m_var.value, dtype=float)
-    g = float(gamma.value)
+    g = float(np.asarray(gamma.value))
     check = _hinf_lmi_value(pv, mv, g, a, c, ew, ev, et)
     worst = float(np.linalg.eigvalsh(0.5 * (check + check.T)).max())
     if worst >= _VERIFY_TOL * max(1.0, g) or np.linalg.eigvalsh(0.5 * (pv + pv.T)).min() <= 0:
-        raise DesignError(f"{name}: solver {solver} returned {status} but the LMI check fails (max eig {worst:.2e})")
+        raise DesignError(f"{name}: the solver returned {status} but the LMI check fails (max eig {worst:.2e})")
     gain = np.linalg.solve(pv, mv)
     extra: dict[str, Any] = {"lmi_max_eig": worst, "E_theta": et.tolist()}
     if diagonal:
@@ -341,7 +343,7 @@ def zonotope_size_gain(
     lhs = np.block([[rho * wv, np.zeros((n, d.shape[0]))], [np.zeros((d.shape[0], n)), d]]) - rm.T @ wv @ rm
     least = float(np.linalg.eigvalsh(0.5 * (lhs + lhs.T)).min())
     if least <= -_VERIFY_TOL * max(1.0, float(np.abs(lhs).max())):
-        raise DesignError(f"(26): solver {solver} returned {status} but the LMI check fails (min eig {least:.2e})")
+        raise DesignError(f"(26): the solver returned {status} but the LMI check fails (min eig {least:.2e})")
     extra = {"rho": rho, "epsilon": float(objective.value), "lmi_min_eig": least, "E_theta": et.tolist()}
     return _verified(a, c, ew, ev, et, gain, f"(26), rho={rho:g}", None, status, extra)
 
@@ -380,7 +382,13 @@ def _hinf_lmi(
 
 
 def _hinf_lmi_value(
-    p: FloatArray, m: FloatArray, gamma: float, a: FloatArray, c: FloatArray, ew: FloatArray, ev: FloatArray,
+    p: FloatArray,
+    m: FloatArray,
+    gamma: float,
+    a: FloatArray,
+    c: FloatArray,
+    ew: FloatArray,
+    ev: FloatArray,
     et: FloatArray,
 ) -> FloatArray:
     n, nt, nw, nv = a.shape[0], et.shape[1], ew.shape[1], ev.shape[1]
@@ -399,7 +407,9 @@ def _solve(problem: cp.Problem, solver: str, name: str) -> str:
     last = "not solved"
     for s in tried:
         try:
-            problem.solve(solver=s)
+            with warnings.catch_warnings():  # an inaccurate status is judged by our own verification
+                warnings.simplefilter("ignore", UserWarning)
+                problem.solve(solver=s)
         except cp.error.SolverError:
             last = f"{s}: solver error"
             continue
@@ -456,6 +466,7 @@ def _verified(
     status: str,
     extra: dict[str, Any],
 ) -> GainDesign:
+    gain = gain + 0.0  # no negative zeros in reports
     closed = a - gain @ c
     rho = float(np.max(np.abs(np.linalg.eigvals(closed))))
     if rho >= 1.0:
@@ -475,3 +486,42 @@ def _verified(
         status=status,
         extra=extra,
     )
+
+
+def gain_properties(A: ArrayLike, C: ArrayLike, L: ArrayLike, dA_radius: ArrayLike | None = None) -> dict[str, Any]:
+    r"""What a gain does to :math:`M = A - LC`: sign pattern and the spectral radii an observer needs.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Nominal (midpoint) state matrix.
+    C : array_like, shape (p, n)
+    L : array_like, shape (n, p) or (n,) for one output
+    dA_radius : array_like, shape (n, n), optional
+        Elementwise radius ``D`` of the interval uncertainty of ``A``.
+
+    Returns
+    -------
+    dict
+        ``gain``, ``min_entry`` and ``monotone`` (:math:`M \ge 0`), ``spectral_radius``
+        (:math:`\rho(M)`, Luenberger / zonotope centre), ``abs_spectral_radius`` (:math:`\rho(|M|)`,
+        interval framer without ΔA) and ``width_spectral_radius`` (:math:`\rho(|M| + D)`, the sound
+        framer's certificate with ΔA; ``< 1`` means certified).
+    """
+    a = as_matrix("A", A)
+    c = as_matrix("C", C, (None, a.shape[0]))
+    gain = as_matrix("L", L, (a.shape[0], c.shape[0]))
+    d = np.zeros_like(a) if dA_radius is None else as_matrix("dA_radius", dA_radius, a.shape)
+    closed = a - gain @ c
+
+    def rho(x: FloatArray) -> float:
+        return float(np.max(np.abs(np.linalg.eigvals(x))))
+
+    return {
+        "gain": gain.ravel().tolist(),
+        "min_entry": float(closed.min()),
+        "monotone": bool(closed.min() >= 0),
+        "spectral_radius": rho(closed),
+        "abs_spectral_radius": rho(np.abs(closed)),
+        "width_spectral_radius": rho(np.abs(closed) + d),
+    }

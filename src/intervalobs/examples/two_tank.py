@@ -60,7 +60,7 @@ def bounds() -> Bounds:
 
 def time_grid() -> NDArray[np.float64]:
     """Sample times 0, 1, …, 1199 s."""
-    return np.arange(STEPS) * SAMPLING_PERIOD
+    return np.arange(STEPS, dtype=float) * SAMPLING_PERIOD
 
 
 def input_signal(t: NDArray[np.float64]) -> NDArray[np.float64]:

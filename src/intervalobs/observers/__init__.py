@@ -2,5 +2,6 @@
 
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
+from .zonotopic import IntegratedObserver, ZonotopicObserver
 
-__all__ = ["IntervalObserver", "Observer", "ObserverState"]
+__all__ = ["IntegratedObserver", "IntervalObserver", "Observer", "ObserverState", "ZonotopicObserver"]

@@ -228,9 +228,7 @@ class ZonotopicObserver(Observer):
             "transient_s": 0.0,
         }
 
-    def _advance(
-        self, c: FloatArray, g: FloatArray, y: FloatArray, u: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
+    def _advance(self, c: FloatArray, g: FloatArray, y: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         reduced = reduce_order(g, self.order)
         q = reduced.shape[-1]
         new_c, new_g = interval_matrix_image(self._a_lower, self._a_upper, c, reduced)
@@ -283,7 +281,7 @@ class IntegratedObserver(IntervalObserver):
         self.fallback: str | None = None
 
     @classmethod
-    def design(  # type: ignore[override]
+    def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
