@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -68,7 +69,7 @@ def plot_estimate(
 
 
 def plot_widths(
-    t: ArrayLike, widths: dict[str, ArrayLike], reference: dict[str, float] | None = None, log: bool = True
+    t: ArrayLike, widths: Mapping[str, ArrayLike], reference: Mapping[str, float] | None = None, log: bool = True
 ) -> Figure:
     """Total width (sum over components) of several estimates against time.
 

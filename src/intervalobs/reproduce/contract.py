@@ -7,7 +7,7 @@ Every reproduction builds its summary with :func:`base_summary` and writes it wi
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -113,7 +113,7 @@ def base_summary(
     return summary
 
 
-def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: dict[str, ArrayLike]) -> None:
+def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: Mapping[str, ArrayLike]) -> None:
     """Write ``summary.json`` and ``trajectories.npz`` into ``out_dir`` (created if needed)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").write_text(json.dumps(to_json(summary), indent=2) + "\n")

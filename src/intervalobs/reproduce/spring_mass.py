@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from ..design.cooperative import FramerDesign
+from ..design.tube import TubeDesign
 from ..examples import spring_mass
 from ..observers import IntervalObserver
 from ..plotting import plot_estimate, plot_widths, save_figure
@@ -41,20 +43,21 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         x_upper=estimate.upper,
         transient_s=0.0,
     )
-    assert observer.design_result is not None and framer.design_result is not None
+    tube_design, framer_design = observer.design_result, framer.design_result
+    assert isinstance(tube_design, TubeDesign) and isinstance(framer_design, FramerDesign)
     summary["design"] = {
         "tube": {
             "L": observer.L,
-            "gain": observer.design_result.candidate,
+            "gain": tube_design.candidate,
             "horizon": observer.horizon,
             "stability_radius": observer.spectral_radius,
-            "steady_width_noise_only": 2 * observer.design_result.steady_radius,
+            "steady_width_noise_only": 2 * tube_design.steady_radius,
         },
         "framer": {
             "L": framer.L,
             "T": framer.T,
             "spectral_radius": framer.spectral_radius,
-            "steady_width_noise_only": 2 * framer.design_result.steady_radius,
+            "steady_width_noise_only": 2 * framer_design.steady_radius,
             "state_mean_width": framer_estimate.width().mean(axis=0),
         },
     }
