@@ -68,7 +68,7 @@ def test_integrated_equals_interval_framer_corollary_5_4() -> None:
     u = _input("68", t)
     sim = simulate(system, bounds, t, u=u, seed=5)
     integrated = IntegratedObserver.design(system, bounds)
-    framer = IntervalObserver(system, bounds, integrated.L)
+    framer = IntervalObserver(system, bounds, integrated.L, method="framer")
     a, b = integrated.run(t, sim.y, u), framer.run(t, sim.y, u)
     np.testing.assert_allclose(a.lower, b.lower, rtol=0, atol=1e-12)
     np.testing.assert_allclose(a.upper, b.upper, rtol=0, atol=1e-12)
@@ -83,7 +83,7 @@ def test_zonotope_hull_never_wider_than_framer_with_same_gain(case: str) -> None
     sim = simulate(system, bounds, t, u=u, seed=6)
     gain = _gain(system)
     zono = ZonotopicObserver(system, bounds, gain).run(t, sim.y, u)
-    framer = IntervalObserver(system, bounds, gain).run(t, sim.y, u)
+    framer = IntervalObserver(system, bounds, gain, method="framer").run(t, sim.y, u)
     slack = 1e-9 * (1 + np.abs(framer.upper))
     assert np.all(zono.upper <= framer.upper + slack) and np.all(zono.lower >= framer.lower - slack)
 
@@ -94,7 +94,7 @@ def test_certificates_include_delta_a() -> None:
     observer = ZonotopicObserver(system, bounds, printed)
     assert observer.spectral_radius < 1 and not observer.certified
     with pytest.raises(DesignError, match="stable width system"):
-        IntervalObserver(system, bounds, printed)
+        IntervalObserver(system, bounds, printed, method="framer")
     good = ZonotopicObserver(system, bounds, hinf_gain(system.A, system.C, system.E, system.F, monotone=True).gain)
     assert good.certified and good.width_spectral_radius < 1
 

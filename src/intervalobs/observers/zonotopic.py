@@ -276,7 +276,7 @@ class IntegratedObserver(IntervalObserver):
     def __init__(self, system: LTISystem, bounds: Bounds, L: ArrayLike) -> None:
         if isinstance(system, LTISystem) and system.continuous:
             raise AssumptionError("system: the integrated observer of seed 002 is discrete time, got dt=None")
-        super().__init__(system, bounds, L)
+        super().__init__(system, bounds, L, method="framer")
         self.gain_design: GainDesign | None = None
         self.fallback: str | None = None
 

@@ -36,7 +36,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     summary = base_summary(
         example=NAME,
         seed_file="-",
-        observer="IntervalObserver",
+        observer="IntervalObserver/tube",
         t=t,
         x=sim.x,
         x_lower=estimate.lower,

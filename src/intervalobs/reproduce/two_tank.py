@@ -50,7 +50,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     observers: dict[str, Observer] = {
         "zonotopic": ZonotopicObserver(system, bounds, gains["(26)"].gain),
         "zonotopic_hinf": ZonotopicObserver(system, bounds, gains["(19)"].gain),
-        "interval": IntervalObserver(system, bounds, gains["(54)-(55)"].gain),
+        "interval": IntervalObserver(system, bounds, gains["(54)-(55)"].gain, method="framer"),
         "integrated": IntegratedObserver.design(system, bounds),
     }
     design_time = time.perf_counter() - start
