@@ -4,8 +4,10 @@ Observers compared (all sound; the recommended bounds are the interval observer'
 
 * ``zonotopic`` — Prop. 3.1 with the gain of the zonotope-size LMI (26) (ρ = 0.9) on (68), of the H∞
   LMI (19) on (70);
-* ``interval`` — the sound framer (39)–(40) (:class:`IntervalObserver`) with the monotone H∞ gain
+* ``interval`` — the sound framer (39)–(40) (:class:`IntervalObserver`, ``method="framer"``) with the monotone H∞ gain
   (54)–(55) on (68); on (70) monotonicity is impossible, so the (19) gain;
+* ``tube`` — for comparison, the project's general :class:`IntervalObserver` (exact error tube,
+  ``method="tube"``) with the same gain as ``interval``;
 * ``integrated`` — Theorem 5.3 (:class:`IntegratedObserver`), gain (19) + (65); on (70) with the
   explicit fallback to (19).
 
@@ -64,6 +66,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "interval": IntervalObserver(sys68, bounds, gains68["(54)-(55)"].gain, method="framer"),
         "integrated": IntegratedObserver.design(sys68, bounds),
         "zonotopic_same_gain": ZonotopicObserver(sys68, bounds, gains68["(54)-(55)"].gain),
+        "tube": IntervalObserver(sys68, bounds, gains68["(54)-(55)"].gain),
     }
     timing["design"] += time.perf_counter() - start
     sim68 = simulate(sys68, bounds, t, u=u, noise="extreme", seed=seed)
@@ -82,6 +85,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "width_ratio_interval_over_zonotopic": _ratio(widths68["interval"], widths68["zonotopic"]),
         "width_ratio_integrated_over_zonotopic": _ratio(widths68["integrated"], widths68["zonotopic"]),
         "width_ratio_zonotopic_same_gain_over_interval": _ratio(widths68["zonotopic_same_gain"], widths68["interval"]),
+        "width_ratio_tube_over_interval": _ratio(widths68["tube"], widths68["interval"]),
         "enclosure_monte_carlo": monte_carlo_enclosure(observers68, sys68, bounds, t, u, seed + 1000, MONTE_CARLO_RUNS),
     }
 
@@ -104,6 +108,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "zonotopic": ZonotopicObserver(sys70, bounds, gains70["(19)"].gain),
         "interval": IntervalObserver(sys70, bounds, gains70["(19)"].gain, method="framer"),
         "integrated": integrated70,
+        "tube": IntervalObserver(sys70, bounds, gains70["(19)"].gain),
     }
     timing["design"] += time.perf_counter() - start
     sim70 = simulate(sys70, bounds, t, u=u, noise="extreme", seed=seed)
@@ -131,6 +136,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "observers": _observer_facts(observers70),
         "mean_width": widths70,
         "enclosure": {name: est.enclosure(sim70.x).as_dict() for name, est in est70.items()},
+        "width_ratio_zonotopic_over_interval": _ratio(widths70["zonotopic"], widths70["interval"]),
+        "width_ratio_tube_over_interval": _ratio(widths70["tube"], widths70["interval"]),
         "enclosure_monte_carlo": monte_carlo_enclosure(observers70, sys70, bounds, t, u, seed + 2000, MONTE_CARLO_RUNS),
         "naive": {name: _naive_facts(lo, hi, sim70.x) for name, (lo, hi) in naive70.items()},
     }
@@ -163,7 +170,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     summary["runtime_s"] = timing
     write_reproduction(out_dir, summary, trajectories)
     if plots:
-        shown68 = {k: (e.lower, e.upper) for k, e in est68.items() if k != "zonotopic_same_gain"}
+        shown68 = {k: (e.lower, e.upper) for k, e in est68.items() if k in ("zonotopic", "interval", "integrated")}
         figures["fig2_system68.png"] = plot_comparison(
             t, sim68.x, shown68, LABELS, "(68), monotone: zonotopic (26) vs interval (54)-(55) vs integrated"
         )
