@@ -5,7 +5,7 @@ r"""Seed 002, Section 6.1: the 3-state numerical example, (68) (monotone) and (7
 :math:`\theta_{ij} \in [-0.01, 0.01]` on every entry of ``A``, :math:`E_\omega = 0.08 I`,
 :math:`E_\upsilon = 0.2`, :math:`|\omega|, |\upsilon| \le 1`, ``u = sin t`` on :math:`[0, 3\pi]` with 200
 samples. Not printed, chosen here: the samples ``t = linspace(0, 3π, 200)`` (Δt = 3π/199), the initial
-box :math:`x_0 \in [-0.5, 0.5]^3`, and the true θ (drawn per run by the simulation, a vertex of the box
+box :math:`x_0 \in [-1, 1]^3`, and the true θ (drawn per run by the simulation, a vertex of the box
 under extreme noise).
 """
 
@@ -44,8 +44,8 @@ THETA = 0.01
 """Half-width of every θ_ij."""
 STEPS = 200
 T_FINAL = 3 * np.pi
-X0_RADIUS = 0.5
-"""Half-width of the chosen initial box (not printed)."""
+X0_RADIUS = 1.0
+"""Half-width of the chosen initial box (not printed): x0 ∈ [−1, 1]³."""
 
 PRINTED_GAINS: dict[str, dict[str, list[float]]] = {
     "68": {
@@ -80,7 +80,7 @@ def system(variant: str = "68") -> LTISystem:
 
 
 def bounds() -> Bounds:
-    """Initial box ±0.5 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (Assumption 3.1)."""
+    """Initial box ±1 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (Assumption 3.1)."""
     return Bounds(
         x0=(-X0_RADIUS * np.ones(3), X0_RADIUS * np.ones(3)),
         w=(-np.ones(3), np.ones(3)),
