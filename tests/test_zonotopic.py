@@ -120,3 +120,24 @@ def test_errors() -> None:
         IntegratedObserver(continuous, box, np.ones((2, 1)))
     with pytest.raises(DesignError, match="order"):
         ZonotopicObserver(system, bounds, _gain(system), order=2)
+
+
+def test_without_parameter_uncertainty_zonotope_is_exact_linear_propagation() -> None:
+    """With dA = None and no reduction the zonotope is the exact reachable set of the error system."""
+    base = numerical3.system("70")
+    system = LTISystem(base.A, base.C, B=base.B, E=base.E, F=base.F, dt=base.dt)
+    bounds = numerical3.bounds()
+    t = numerical3.time_grid()[:30]
+    u = numerical3.input_signal(t)
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=7, runs=5)
+    gain = _gain(system)
+    observer = ZonotopicObserver(system, bounds, gain, order=10_000)
+    est = observer.run(t, sim.y, u)
+    assert est.enclosure(sim.x).max_violation == 0.0
+    # the hull of the exact error set: sum over k of |M^k G| rows, plus the initial box
+    m = base.A - gain @ base.C
+    g = np.hstack([base.E, -gain @ base.F])
+    radius = np.abs(np.linalg.matrix_power(m, 29)).sum(axis=1)
+    for k in range(29):
+        radius = radius + np.abs(np.linalg.matrix_power(m, k) @ g).sum(axis=1)
+    np.testing.assert_allclose(0.5 * (est.upper[0, -1] - est.lower[0, -1]), radius, rtol=1e-9)

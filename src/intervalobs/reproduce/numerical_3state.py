@@ -199,7 +199,7 @@ def _observer_facts(observers: dict[str, Observer]) -> dict[str, dict[str, Any]]
         facts[name] = {
             "method": info["method"],
             "L": np.ravel(info["L"]).tolist(),
-            "spectral_radius_width_system": info.get("width_spectral_radius", info.get("spectral_radius")),
+            "certificate_spectral_radius": info.get("width_spectral_radius", info.get("spectral_radius")),
             "certified": bool(info.get("certified", info.get("spectral_radius", 2.0) < 1)),
         }
         if isinstance(obs, ZonotopicObserver):
