@@ -28,7 +28,7 @@ test-slow: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 -m slow
 
 bench: $(STAMP)
-	$(BIN)/python benchmarks/run.py
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python benchmarks/run.py
 
 clean:
 	rm -rf $(VENV) results build *.egg-info

@@ -93,17 +93,22 @@ class LinearRecursion:
         return out
 
     def _modal(self, z0: FloatArray, g: FloatArray) -> FloatArray:
-        vinv = self._vecs_inv.real if self._real else self._vecs_inv
-        modes_g = g @ vinv.T
-        modes_0 = z0 @ vinv.T
+        # Real matrix products only (NumPy's mixed real/complex products do not use BLAS).
+        vinv, vecs = self._vecs_inv, self._vecs
+        if self._real:
+            modes_g: NDArray[np.generic] = g @ vinv.real.T
+            modes_0: NDArray[np.generic] = z0 @ vinv.real.T
+        else:
+            modes_g = g @ vinv.real.T + 1j * (g @ vinv.imag.T)
+            modes_0 = z0 @ vinv.real.T + 1j * (z0 @ vinv.imag.T)
         modes = np.empty(modes_g.shape, dtype=modes_g.dtype)
         for i, lam in enumerate(self._eigenvalues):
             lam_i = lam.real if self._real else lam
             zi = (lam_i * modes_0[..., i])[..., None]
             modes[..., i], _ = lfilter([1.0], [1.0, -lam_i], modes_g[..., i], axis=-1, zi=zi)
-        vecs = self._vecs.real if self._real else self._vecs
-        result = modes @ vecs.T
-        return np.asarray(result.real if np.iscomplexobj(result) else result)
+        if self._real:
+            return np.asarray(modes.real @ vecs.real.T)
+        return np.asarray(modes.real @ vecs.real.T - modes.imag @ vecs.imag.T)
 
     def _blocked(self, z0: FloatArray, g: FloatArray, lead: tuple[int, ...], steps: int) -> FloatArray:
         n, k = self.m.shape[0], self.block
