@@ -141,3 +141,16 @@ def test_without_parameter_uncertainty_zonotope_is_exact_linear_propagation() ->
     for k in range(29):
         radius = radius + np.abs(np.linalg.matrix_power(m, k) @ g).sum(axis=1)
     np.testing.assert_allclose(0.5 * (est.upper[0, -1] - est.lower[0, -1]), radius, rtol=1e-9)
+
+
+def test_zonotopic_design_classmethod() -> None:
+    system, bounds, _ = CASES["68"]
+    observer = ZonotopicObserver.design(system, bounds, rho=0.9)
+    assert observer.gain_design is not None and observer.gain_design.lmi.startswith("(26)")
+    assert observer.meta()["gain_design"]["gain"] == observer.L.ravel().tolist()
+    hinf = ZonotopicObserver.design(system, bounds, lmi="(19)", order=4)
+    assert hinf.order == 4 and hinf.certified
+    with pytest.raises(DesignError, match="lmi"):
+        ZonotopicObserver.design(system, bounds, lmi="(99)")
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        ZonotopicObserver.design(system, bounds, gamma=2.0)

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.discretization import sampled_model
-from ..design.hinf import GainDesign, hinf_gain
+from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import inflate
@@ -144,6 +144,42 @@ class ZonotopicObserver(Observer):
         self._a_upper = self.M + self.D
         self._abs_a = np.abs(self.M) + self.D
         self._dot_length = self.n + self.p + self.m + self.order + self._noise.shape[1] + 2
+        self.gain_design: GainDesign | None = None
+
+    @classmethod
+    def design(cls, system: LTISystem, bounds: Bounds, **options: Any) -> ZonotopicObserver:
+        """Gain from the zonotope-size LMI (26) (Theorem 3.5) or the H∞ LMI (19), then the observer.
+
+        Parameters
+        ----------
+        system : LTISystem
+            Discrete-time model.
+        bounds : Bounds
+            Boxes of ``x0``, ``w``, ``v``.
+        **options
+            ``lmi`` (``"(26)"`` default, or ``"(19)"``), ``rho`` (contraction factor of (26), default
+            0.9), ``E_theta`` (direction matrix of Lemma A.2, default identity), ``order`` (reduction
+            order, default ``5 n``).
+
+        Returns
+        -------
+        ZonotopicObserver
+            With ``gain_design`` holding the verified :class:`~intervalobs.design.hinf.GainDesign`.
+        """
+        check_no_kwargs("ZonotopicObserver.design", options, ("lmi", "rho", "E_theta", "order"))
+        if not isinstance(system, LTISystem):
+            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        lmi = options.get("lmi", "(26)")
+        args = (system.A, system.C, system.E, system.F, options.get("E_theta"))
+        if lmi == "(26)":
+            result = zonotope_size_gain(*args, rho=float(options.get("rho", 0.9)))
+        elif lmi == "(19)":
+            result = hinf_gain(*args)
+        else:
+            raise DesignError(f"lmi: expected '(26)' or '(19)', got {lmi!r}")
+        observer = cls(system, bounds, result.gain, order=options.get("order"))
+        observer.gain_design = result
+        return observer
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The initial zonotope: the box of ``x(0)`` (default ``bounds.x0``), Assumption 3.2.
@@ -218,7 +254,7 @@ class ZonotopicObserver(Observer):
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
-        return {
+        info: dict[str, Any] = {
             "method": "ZonotopicObserver (seed 002, Prop. 3.1)",
             "L": self.L.tolist(),
             "order": self.order,
@@ -227,6 +263,9 @@ class ZonotopicObserver(Observer):
             "certified": self.certified,
             "transient_s": 0.0,
         }
+        if self.gain_design is not None:
+            info["gain_design"] = self.gain_design.as_dict()
+        return info
 
     def _advance(self, c: FloatArray, g: FloatArray, y: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         reduced = reduce_order(g, self.order)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design.hinf import gain_properties
+from ..design.hinf import GainDesign, gain_properties
 from ..estimate import Estimate, enclosure_report
 from ..interval import interval_matvec_bounds, matvec_bounds
 from ..observers.base import Observer
@@ -82,6 +82,21 @@ def printed_gain_table(system: LTISystem, printed: dict[str, list[float]]) -> di
         name: gain_properties(system.A, system.C, np.reshape(g, (system.n, system.p)), radius)
         for name, g in printed.items()
     }
+
+
+def versus_paper(printed: dict[str, list[float]], ours: dict[str, tuple[GainDesign, str]]) -> dict[str, dict[str, Any]]:
+    """Each printed gain next to the gain we compute for the same role, with the reason they differ."""
+    table: dict[str, dict[str, Any]] = {}
+    for name, (design, reason) in ours.items():
+        paper = np.asarray(printed[name], dtype=float)
+        table[name] = {
+            "paper": paper.tolist(),
+            "ours": design.gain.ravel().tolist(),
+            "lmi": design.lmi,
+            "max_abs_difference": float(np.max(np.abs(design.gain.ravel() - paper))),
+            "reason": reason,
+        }
+    return table
 
 
 def mean_width(estimate: Estimate) -> list[float]:

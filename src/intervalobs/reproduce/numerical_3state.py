@@ -33,7 +33,14 @@ from ..observers.base import Observer
 from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
-from ._seed002 import mean_width, monte_carlo_enclosure, naive_framer, plot_comparison, printed_gain_table
+from ._seed002 import (
+    mean_width,
+    monte_carlo_enclosure,
+    naive_framer,
+    plot_comparison,
+    printed_gain_table,
+    versus_paper,
+)
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "numerical-3state"
@@ -148,6 +155,40 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "true_theta": "a vertex of the θ box per run (extreme noise), fixed over time",
         "reduction_order": observers68["zonotopic"].order,  # type: ignore[attr-defined]
         "rho_(26)": 0.9,
+    }
+    integrated70_design = integrated70.gain_design
+    assert integrated70_design is not None
+    design["versus_paper"] = {
+        "system_68": versus_paper(
+            numerical3.PRINTED_GAINS["68"],
+            {
+                "set_based_thm3.4+3.5": (
+                    gains68["(26)"],
+                    "(26) alone, normalised by W >= I, rho = 0.9; the paper does not say how (19) and (26), "
+                    "with different P and W, give one gain, nor its rho",
+                ),
+                "interval_(54)-(55)": (gains68["(54)-(55)"], "reproduced: -γI blocks, E_θ = I, diagonal P"),
+            },
+        ),
+        "system_70": versus_paper(
+            printed70,
+            {
+                "set_based_(19)": (
+                    gains70["(19)"],
+                    "printed gain makes A0 - LC unstable (rho 2.07); ours: (19) with -γI, E_θ = I",
+                ),
+                "interval_(54a)-(55a)": (
+                    gains70["(19)"],
+                    "(54a) is the same LMI as (19); E_θ and γ not printed; the printed gain is not what (19) "
+                    "gives with E_θ = I",
+                ),
+                "integrated_(19)+(65)": (
+                    integrated70_design,
+                    "(65) is infeasible for (70) (C = [0 0 1] cannot remove the -0.1), the printed gain keeps "
+                    "-0.1; ours: explicit fallback to (19)",
+                ),
+            },
+        ),
     }
     paper = {
         "system_68": printed_gain_table(sys68, numerical3.PRINTED_GAINS["68"]),

@@ -27,7 +27,14 @@ from ..observers.base import Observer
 from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
-from ._seed002 import mean_width, monte_carlo_enclosure, naive_framer, plot_comparison, printed_gain_table
+from ._seed002 import (
+    mean_width,
+    monte_carlo_enclosure,
+    naive_framer,
+    plot_comparison,
+    printed_gain_table,
+    versus_paper,
+)
 from .contract import Example, base_summary, write_reproduction
 from .numerical_3state import SEED_FILE, _naive_facts, _observer_facts, _ratio
 
@@ -94,6 +101,30 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "rho_(26)": 0.99,
         },
     }
+    design["versus_paper"] = versus_paper(
+        printed,
+        {
+            "set_based_(19)": (
+                gains["(19)"],
+                "(19) with -γI and E_θ = I; E_θ and γ not printed; both ours and the printed gain give "
+                "rho(|A0 - LC|) = 1.0000 (no stable framer)",
+            ),
+            "interval_(54a)-(55a)": (gains["(19)"], "(54a) is the same LMI as (19); E_θ not printed"),
+            "interval_(54)-(55)": (
+                gains["(54)-(55)"],
+                "diagonal P makes A0 - LC >= 0 hold; the printed [0.001 0.9803] leaves -0.001 in A0 - LC",
+            ),
+            "set_based_thm3.4+3.5": (
+                gains["(26)"],
+                "(26) alone, normalised by W >= I, rho = 0.99; the combination with (19) is not stated; the "
+                "printed gain leaves -0.01 in A0 - LC",
+            ),
+            "integrated_(19)+(65)": (
+                gains["(54)-(55)"],
+                "(19) + (65) is the same LMI as (54)-(55); diagonal P; printed gain leaves -0.001",
+            ),
+        },
+    )
     summary = base_summary(
         example=NAME,
         seed_file=SEED_FILE,
