@@ -326,15 +326,27 @@ class IntervalObserver(Observer):
                 constant = np.broadcast_to(self._radius_input, (steps - 1, self.n))
                 self._radius_cache = self._radius_recursion(state.internal["z_radius"], constant)
             else:
-                radii = np.empty((steps, self.n))
-                internal = state.internal
-                zero_y, zero_u = np.zeros(self.p), np.zeros(self.m)
-                for k in range(steps):
-                    radii[k] = internal["z_radius"]
-                    if k + 1 < steps:
-                        internal = self._advance(internal, zero_y, zero_u)
-                self._radius_cache = radii
+                self._radius_cache = self._point_tube_radius(state.internal["z_radius"], steps)
         return self._radius_cache[:steps]
+
+    def _point_tube_radius(self, rho0: FloatArray, steps: int) -> FloatArray:
+        """Tube radii for a constant disturbance radius, vectorised: the same recursion as ``_advance``.
+
+        For ``k ≤ J``: ``ρ_k = |M^k|ρ₀ + Σ_{i<k}|M^i|d``; after that ``ρ_k = |M^J|ρ_{k-J} + Σ_{i<J}|M^i|d``,
+        evaluated a block of ``J`` steps at a time.
+        """
+        horizon = self.horizon
+        d = self._radius_input
+        radii = np.empty((max(steps, horizon + 1), self.n))
+        terms = self._abs_powers[:horizon] @ d
+        radii[0] = rho0
+        radii[1 : horizon + 1] = self._abs_powers[1:] @ rho0 + np.cumsum(terms, axis=0)
+        constant = terms.sum(axis=0)
+        lagged = self._abs_powers[horizon].T
+        for start in range(horizon + 1, steps, horizon):
+            stop = min(start + horizon, steps)
+            radii[start:stop] = radii[start - horizon : stop - horizon] @ lagged + constant
+        return radii[:steps]
 
     def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
         """Radius of the box of everything unknown that enters one step (in z-coordinates)."""
