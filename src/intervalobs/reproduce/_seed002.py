@@ -84,6 +84,17 @@ def printed_gain_table(system: LTISystem, printed: dict[str, list[float]]) -> di
     }
 
 
+def gain_entries(system: LTISystem, gains: dict[str, GainDesign]) -> dict[str, dict[str, Any]]:
+    """Each designed gain as a dict, with ρ(|A0 - LC| + D), the sound framer's certificate including ΔA."""
+    assert system.dA is not None
+    radius = 0.5 * (system.dA[1] - system.dA[0])
+    return {
+        name: design.as_dict()
+        | {"width_spectral_radius": gain_properties(system.A, system.C, design.gain, radius)["width_spectral_radius"]}
+        for name, design in gains.items()
+    }
+
+
 def versus_paper(printed: dict[str, list[float]], ours: dict[str, tuple[GainDesign, str]]) -> dict[str, dict[str, Any]]:
     """Each printed gain next to the gain we compute for the same role, with the reason they differ."""
     table: dict[str, dict[str, Any]] = {}

@@ -34,6 +34,7 @@ from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
 from ._seed002 import (
+    gain_entries,
     mean_width,
     monte_carlo_enclosure,
     naive_framer,
@@ -86,7 +87,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         trajectories[f"{name}_x_lower"], trajectories[f"{name}_x_upper"] = est.lower, est.upper
     widths68 = {name: mean_width(est) for name, est in est68.items()}
     design["system_68"] = {
-        "gains": {k: g.as_dict() for k, g in gains68.items()},
+        "gains": gain_entries(sys68, gains68),
         "observers": _observer_facts(observers68),
         "mean_width": widths68,
         "width_ratio_interval_over_zonotopic": _ratio(widths68["interval"], widths68["zonotopic"]),
@@ -137,7 +138,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         trajectories[f"sys70_{key}_lower"], trajectories[f"sys70_{key}_upper"] = lo, hi
     widths70 = {name: mean_width(est) for name, est in est70.items()}
     design["system_70"] = {
-        "gains": {k: g.as_dict() for k, g in gains70.items()},
+        "gains": gain_entries(sys70, gains70),
         "monotone_design": monotone_note,
         "integrated_fallback": integrated70.fallback,
         "observers": _observer_facts(observers70),

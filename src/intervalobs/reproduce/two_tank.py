@@ -28,6 +28,7 @@ from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
 from ._seed002 import (
+    gain_entries,
     mean_width,
     monte_carlo_enclosure,
     naive_framer,
@@ -82,7 +83,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         trajectories[f"{key}_x_lower"], trajectories[f"{key}_x_upper"] = lo, hi
     widths = {name: mean_width(est) for name, est in estimates.items()}
     design: dict[str, Any] = {
-        "gains": {k: g.as_dict() for k, g in gains.items()},
+        "gains": gain_entries(system, gains),
         "observers": _observer_facts(observers),
         "mean_width": widths,
         "width_ratio_interval_over_zonotopic": _ratio(widths["interval"], widths["zonotopic"]),
