@@ -30,7 +30,7 @@ rule is used by ``shared/tools/check_reproduction.py``.
 class EnclosureReport:
     """How well a set of bounds contains the truth.
 
-    Attributes
+    Parameters
     ----------
     fraction : float
         Fraction of (time ≥ transient, component[, run]) samples enclosed (see ``ENCLOSURE_TOL``).
@@ -45,7 +45,13 @@ class EnclosureReport:
     first_violation_time: float | None
 
     def as_dict(self) -> dict[str, float]:
-        """The report in the ``summary.json`` form: ``fraction`` and ``max_violation``."""
+        """The report in the ``summary.json`` form: ``fraction`` and ``max_violation``.
+
+        Returns
+        -------
+        dict of str to float
+            ``{"fraction": ..., "max_violation": ...}``.
+        """
         return {"fraction": self.fraction, "max_violation": self.max_violation}
 
 
@@ -157,7 +163,25 @@ class Estimate:
         return enclosure_report(self.t, self.lower, x, self.upper, self.transient if transient is None else transient)
 
     def input_enclosure(self, d: ArrayLike, transient: float | None = None) -> EnclosureReport:
-        """Check that the unknown-input bounds contain the true input ``d``; NaN bounds are skipped."""
+        """Check that the unknown-input bounds contain the true input ``d``; NaN bounds are skipped.
+
+        Parameters
+        ----------
+        d : array_like, shape (T, q) or (M, T, q)
+            True unknown input.
+        transient : float, optional
+            Ignore samples before this time (default: the method's own transient, or the first time
+            at which every input bound is finite if that is later).
+
+        Returns
+        -------
+        EnclosureReport
+
+        Raises
+        ------
+        DataError
+            When the estimate has no input bounds.
+        """
         if self.input_lower is None or self.input_upper is None:
             raise DataError("Estimate.input_enclosure: this estimate has no input bounds")
         start = self.transient if transient is None else transient
@@ -168,11 +192,23 @@ class Estimate:
         return enclosure_report(self.t, self.input_lower, d, self.input_upper, max(start, first_known))
 
     def width(self) -> FloatArray:
-        """State widths ``upper - lower``, same shape as ``lower``."""
+        """State widths ``upper - lower``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``lower``: (T, n) or (M, T, n).
+        """
         return self.upper - self.lower
 
     def save(self, path: str | Path) -> None:
-        """Write the estimate to an ``.npz`` file (meta is kept as JSON)."""
+        """Write the estimate to an ``.npz`` file (meta is kept as JSON).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Destination file (NumPy appends ``.npz`` when missing).
+        """
         import json
 
         arrays: dict[str, Any] = {"t": self.t, "lower": self.lower, "upper": self.upper}
@@ -183,7 +219,17 @@ class Estimate:
 
     @classmethod
     def load(cls, path: str | Path) -> Estimate:
-        """Read an estimate written by :meth:`save`."""
+        """Read an estimate written by :meth:`save`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            An ``.npz`` file written by :meth:`save`.
+
+        Returns
+        -------
+        Estimate
+        """
         import json
 
         with np.load(path) as data:
@@ -191,7 +237,19 @@ class Estimate:
             return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **inputs)
 
     def plot(self, truth: ArrayLike | None = None, labels: list[str] | None = None) -> Figure:
-        """Plot each state's bounds (and the truth); see :func:`intervalobs.plotting.plot_estimate`."""
+        """Plot each state's bounds (and the truth); see :func:`intervalobs.plotting.plot_estimate`.
+
+        Parameters
+        ----------
+        truth : array_like, shape (T, n), optional
+            True state, drawn as a line.
+        labels : list of str, optional
+            Panel titles.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
         from .plotting import plot_estimate
 
         return plot_estimate(self, truth=truth, labels=labels)

@@ -10,18 +10,19 @@ which is the exact interval hull of :math:`\{Ax\}` (seed 003, Proposition 2 / Le
 
 Every function works on arrays with leading axes (time, Monte Carlo runs): vectors are ``(..., n)``.
 
-Floating-point rounding
------------------------
-Sums and products are computed in ordinary round-to-nearest arithmetic, whose error per operation is
-at most one unit in the last place. Instead of switching the rounding mode (which NumPy cannot do) or
-carrying a full interval-arithmetic type through the hot loops (``crival`` was evaluated: correct, but
-each elementary operation allocates a new interval object and the recursion becomes several times
-slower), observers widen their *outputs* outward by :func:`inflate`: a relative margin of
-``ROUNDING_MARGIN`` (1e-12, i.e. about 4500 ulp) of the magnitude involved, plus the smallest normal
-number. The rounding error of an n-term dot product is at most ``n·u·Σ|a_i x_i|`` (u = 1.1e-16), and a
-contractive recursion accumulates at most ``1/(1-ρ)`` of it, so the margin covers recursions with
-``n/(1-ρ) < 4500``; design routines round their own constants (e.g. noise-integral bounds) upward with
-the same margin. This is documented in docs/design.md.
+Notes
+-----
+**Floating-point rounding.** Sums and products are computed in ordinary round-to-nearest arithmetic,
+whose error per operation is at most one unit in the last place. Instead of switching the rounding
+mode (which NumPy cannot do) or carrying a full interval-arithmetic type through the hot loops
+(``crival`` was evaluated: correct, but each elementary operation allocates a new interval object
+and the recursion becomes several times slower), observers widen their *outputs* outward by
+:func:`inflate`: a relative margin of ``ROUNDING_MARGIN`` (1e-12, i.e. about 4500 ulp) of the
+magnitude involved, plus the smallest normal number. The rounding error of an n-term dot product is
+at most ``n·u·Σ|a_i x_i|`` (u = 1.1e-16), and a contractive recursion accumulates at most
+``1/(1-ρ)`` of it, so the margin covers recursions with ``n/(1-ρ) < 4500``; design routines round
+their own constants (e.g. noise-integral bounds) upward with the same margin. This is documented in
+docs/design.md.
 """
 
 from __future__ import annotations
@@ -52,12 +53,34 @@ _TINY = np.finfo(float).tiny
 
 
 def pos(a: ArrayLike) -> FloatArray:
-    """Positive part :math:`A^+ = \\max(A, 0)` (elementwise)."""
+    """Positive part :math:`A^+ = \\max(A, 0)` (elementwise).
+
+    Parameters
+    ----------
+    a : array_like
+        Matrix or vector (any shape).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max(a, 0)``, same shape, nonnegative.
+    """
     return np.maximum(np.asarray(a, dtype=float), 0.0)
 
 
 def neg(a: ArrayLike) -> FloatArray:
-    """Negative part :math:`A^- = \\max(-A, 0)` (elementwise), so that ``A = pos(A) - neg(A)``."""
+    """Negative part :math:`A^- = \\max(-A, 0)` (elementwise), so that ``A = pos(A) - neg(A)``.
+
+    Parameters
+    ----------
+    a : array_like
+        Matrix or vector (any shape).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``max(-a, 0)``, same shape, nonnegative.
+    """
     return np.maximum(-np.asarray(a, dtype=float), 0.0)
 
 
@@ -179,7 +202,18 @@ class Box:
         return self.upper - self.lower
 
     def vertices(self) -> FloatArray:
-        """All ``2**n`` vertices of a single box, shape ``(2**n, n)``."""
+        """All ``2**n`` vertices of a single box.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2**n, n)
+            One vertex per row; row ``k`` takes ``upper[i]`` where bit ``i`` of ``k`` is set.
+
+        Raises
+        ------
+        DimensionError
+            When the box has leading axes (only a single 1-D box has vertices).
+        """
         if self.lower.ndim != 1:
             raise DimensionError(f"Box.vertices: expected a single box (1-D), got shape {self.lower.shape}")
         n = self.lower.size
@@ -187,6 +221,16 @@ class Box:
         return np.where(corners == 1, self.upper, self.lower)
 
     def contains(self, x: ArrayLike) -> NDArray[np.bool_]:
-        """Whether each point lies in the box (last axis reduced)."""
+        """Whether each point lies in the box (last axis reduced).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., n)
+            Points; leading axes broadcast against the box's.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (...)
+        """
         xa = np.asarray(x, dtype=float)
         return np.all((self.lower <= xa) & (xa <= self.upper), axis=-1)

@@ -105,7 +105,15 @@ def plot_widths(
 
 
 def save_figure(fig: Figure, path: str | Path) -> None:
-    """Save ``fig`` as a PNG at 120 dpi and close it."""
+    """Save ``fig`` as a PNG at 120 dpi and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards, so that batch runs do not accumulate open figures).
+    path : str or pathlib.Path
+        Destination file.
+    """
     import matplotlib.pyplot as plt
 
     fig.savefig(path, dpi=120)

@@ -33,9 +33,10 @@ _SWITCH_PROBABILITY = 0.1
 class Simulation:
     """A simulated record, time-first (a leading axis holds runs when ``runs`` was given).
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray, shape (T,)
+        Sample times.
     x : numpy.ndarray, shape (..., T, n)
         True state at the sample times.
     y : numpy.ndarray, shape (..., T, p)

@@ -68,7 +68,30 @@ def as_matrix(
 
 
 def as_vector(name: str, value: ArrayLike, size: int | None = None, finite: bool = True) -> FloatArray:
-    """Convert ``value`` to a 1-D float array of length ``size`` (a scalar is broadcast)."""
+    """Convert ``value`` to a 1-D float array of length ``size`` (a scalar is broadcast).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : array_like
+        The user's value.
+    size : int, optional
+        Expected length (any length when None).
+    finite : bool
+        Reject NaN and inf entries.
+
+    Returns
+    -------
+    numpy.ndarray, shape (size,)
+
+    Raises
+    ------
+    DimensionError
+        When ``value`` is not numeric or not a vector of length ``size``.
+    BoundsError
+        When ``finite`` and an entry is NaN or inf.
+    """
     arr = _as_float(name, value)
     if arr.ndim == 0 and size is not None:
         arr = np.full(size, float(arr))
@@ -111,7 +134,26 @@ def as_box(
 
 
 def as_time(name: str, value: ArrayLike) -> FloatArray:
-    """Convert a time vector: 1-D, finite, strictly increasing, at least one sample."""
+    """Convert a time vector: 1-D, finite, strictly increasing, at least one sample.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : array_like
+        The user's time vector.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T,)
+
+    Raises
+    ------
+    DimensionError
+        When ``value`` is not a non-empty 1-D array.
+    DataError
+        When a time is not finite or the times do not increase strictly.
+    """
     arr = _as_float(name, value)
     if arr.ndim != 1 or arr.size == 0:
         raise DimensionError(f"{name}: expected a non-empty 1-D time vector, got shape {np.shape(value)}")
@@ -126,6 +168,26 @@ def as_signal(name: str, value: ArrayLike, steps: int, width: int) -> FloatArray
     """Convert a time-first signal of shape (T, width) or (M, T, width) and check it is finite.
 
     A 1-D array is read as (T,) when ``width == 1``.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : array_like
+        The user's signal.
+    steps : int
+        Expected number of samples ``T``.
+    width : int
+        Expected number of channels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, width) or (M, T, width)
+
+    Raises
+    ------
+    DataError
+        When the shape is wrong or a value is NaN or inf.
     """
     arr = _as_float(name, value)
     if arr.ndim == 1 and width == 1:
@@ -139,7 +201,25 @@ def as_signal(name: str, value: ArrayLike, steps: int, width: int) -> FloatArray
 
 
 def check_no_kwargs(function: str, kwargs: dict[str, Any], allowed: Sequence[str] = ()) -> None:
-    """Raise ``TypeError`` naming the first keyword of ``kwargs`` that is not in ``allowed``."""
+    """Raise ``TypeError`` naming the first keyword of ``kwargs`` that is not in ``allowed``.
+
+    Every public function that takes ``**kwargs`` calls this first, so a misspelt option fails loudly
+    instead of being ignored (``tests/test_kwargs.py`` checks it).
+
+    Parameters
+    ----------
+    function : str
+        Name of the calling function, used in the message.
+    kwargs : dict of str to object
+        The keywords the caller received.
+    allowed : sequence of str
+        The keywords it understands.
+
+    Raises
+    ------
+    TypeError
+        ``"<function>: unexpected keyword argument '<name>'; allowed: [...]"``.
+    """
     unknown = [k for k in kwargs if k not in allowed]
     if unknown:
         raise TypeError(f"{function}: unexpected keyword argument {unknown[0]!r}; allowed: {sorted(allowed)}")

@@ -47,7 +47,7 @@ _PLACED_KEPT = 3
 class FramerDesign:
     """A verified framer design.
 
-    Attributes
+    Parameters
     ----------
     L : numpy.ndarray, shape (n, p)
         Observer gain (of the sampled model).
@@ -59,6 +59,8 @@ class FramerDesign:
         Steady-state bound of the x-radius for zero state magnitude (noise only).
     coordinates : str
         Which candidate coordinates won.
+    tried : dict of str to float
+        Smallest sum of steady-state radius bounds reached in each candidate coordinates (``inf``: no gain).
     """
 
     L: FloatArray
@@ -70,14 +72,46 @@ class FramerDesign:
 
 
 def framer_matrices(model: SampledModel, C: FloatArray, L: FloatArray, T: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The width-system matrix ``N`` and the z-coordinate observer matrix ``T(Φ - LC)T⁻¹``."""
+    """The width-system matrix ``N`` and the z-coordinate observer matrix ``T(Φ - LC)T⁻¹``.
+
+    Parameters
+    ----------
+    model : SampledModel
+        Sampled interval model (``Φ``, ``δΦ``).
+    C : numpy.ndarray, shape (p, n)
+        Output matrix.
+    L : numpy.ndarray, shape (n, p)
+        Observer gain.
+    T : numpy.ndarray, shape (n, n)
+        Invertible coordinate change ``z = T x``.
+
+    Returns
+    -------
+    N : numpy.ndarray, shape (n, n)
+        ``|T(Φ - LC)T⁻¹| + |T| δΦ |T⁻¹|``; the framer is stable iff ``ρ(N) < 1``.
+    M : numpy.ndarray, shape (n, n)
+        ``T(Φ - LC)T⁻¹``.
+    """
     t_inv = np.linalg.inv(T)
     m_z = T @ (model.Phi - L @ C) @ t_inv
     return np.abs(m_z) + np.abs(T) @ model.dPhi @ np.abs(t_inv), m_z
 
 
 def is_detectable(model: SampledModel, C: FloatArray) -> bool:
-    """PBH test: every eigenvalue of ``Φ`` with modulus ≥ 1 is observable through ``C``."""
+    """PBH test: every eigenvalue of ``Φ`` with modulus ≥ 1 is observable through ``C``.
+
+    Parameters
+    ----------
+    model : SampledModel
+        Sampled model (its ``Φ`` is tested).
+    C : numpy.ndarray, shape (p, n)
+        Output matrix.
+
+    Returns
+    -------
+    bool
+        True when some gain ``L`` makes ``Φ - LC`` Schur stable.
+    """
     n = model.Phi.shape[0]
     for lam in np.linalg.eigvals(model.Phi):
         if abs(lam) >= 1 - 1e-12:
@@ -116,6 +150,22 @@ def coordinate_candidates(
     geometrically (continuous-time rates ``a·s·r^i`` for a grid of scales ``s`` and spreads ``r``, mapped
     through ``exp(-·h)``) and take ``T = V⁻¹``, which makes ``T(Φ - L₀C)T⁻¹`` diagonal; the
     ``_PLACED_KEPT`` with the smallest steady-state radius bound at ``L₀`` are kept.
+
+    Parameters
+    ----------
+    model : SampledModel
+        Sampled interval model.
+    C : numpy.ndarray, shape (p, n)
+        Output matrix.
+    F : numpy.ndarray, shape (p, nv)
+        Measurement-noise matrix.
+    v_radius : numpy.ndarray, shape (nv,)
+        Radius of the measurement-noise box.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Named coordinate changes ``T``, shape (n, n), ``"identity"`` first.
     """
     n = model.Phi.shape[0]
     found: dict[str, FloatArray] = {"identity": np.eye(n)}

@@ -48,7 +48,7 @@ class SampledModel:
 
     .. math:: x^+ \in (\Phi \pm \delta\Phi)x + (\Gamma \pm \delta\Gamma)u + [c \pm r]
 
-    Attributes
+    Parameters
     ----------
     Phi, dPhi : numpy.ndarray, shape (n, n)
         Midpoint transition matrix and its elementwise radius (``dPhi >= 0``).

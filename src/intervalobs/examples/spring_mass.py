@@ -19,7 +19,13 @@ T_FINAL = 20.0
 
 
 def system() -> LTISystem:
-    """The uncertain two-mass system (continuous time)."""
+    """The uncertain two-mass system (continuous time).
+
+    Returns
+    -------
+    LTISystem
+        ``n = 4`` states, one known input, two process-noise channels, one output, interval ``dA``.
+    """
     k1, k2, c = 2.0, 1.0, 0.4
     A = np.array(
         [[0, 0, 1, 0], [0, 0, 0, 1], [-(k1 + k2), k2, -c, 0], [k2, -k2, 0, -c]],
@@ -34,7 +40,12 @@ def system() -> LTISystem:
 
 
 def bounds() -> Bounds:
-    """Initial box ±0.5, process noise ±0.05, measurement noise ±0.02."""
+    """Initial box ±0.5, process noise ±0.05, measurement noise ±0.02.
+
+    Returns
+    -------
+    Bounds
+    """
     return Bounds(
         x0=(-0.5 * np.ones(4), 0.5 * np.ones(4)),
         w=(-0.05 * np.ones(2), 0.05 * np.ones(2)),
@@ -43,5 +54,15 @@ def bounds() -> Bounds:
 
 
 def input_signal(t: np.ndarray) -> np.ndarray:
-    """The known force on mass 2, shape (T, 1)."""
+    """The known force on mass 2, :math:`u = \\sin(0.5t)`.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Times in seconds.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 1)
+    """
     return np.sin(0.5 * t)[:, None]

@@ -28,7 +28,7 @@ FloatArray = NDArray[np.float64]
 class ObserverState:
     """The state of an observer between two samples.
 
-    Attributes
+    Parameters
     ----------
     lower, upper : numpy.ndarray, shape (n,) or (M, n)
         Current state box.
@@ -58,15 +58,55 @@ class Observer(ABC):
 
     @abstractmethod
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
-        """State at the first sample, from the prior box of ``x(t_0)`` (default: the design bounds)."""
+        """State at the first sample, from the prior box of ``x(t_0)`` (default: the design bounds).
+
+        Parameters
+        ----------
+        x0_lower, x0_upper : array_like, shape (n,), optional
+            Prior box of the initial state; both or neither.
+
+        Returns
+        -------
+        ObserverState
+        """
 
     @abstractmethod
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume ``y_k`` (and ``u_k``) and return the state at the next sample."""
+        """Consume ``y_k`` (and ``u_k``) and return the state at the next sample.
+
+        Parameters
+        ----------
+        state : ObserverState
+            State at ``t_k``.
+        y : array_like, shape (p,) or (M, p)
+            Measurement at ``t_k``.
+        u : array_like, shape (m,) or (M, m), optional
+            Known input at ``t_k``.
+
+        Returns
+        -------
+        ObserverState
+            State at ``t_{k+1}``.
+        """
 
     @abstractmethod
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record; ``y`` is (T, p) or (M, T, p)."""
+        """Bounds over a whole record; same numbers as repeated :meth:`step` calls.
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Sample times.
+        y : array_like, shape (T, p) or (M, T, p)
+            Measurements; a leading axis holds Monte Carlo runs.
+        u : array_like, shape (T, m) or (M, T, m), optional
+            Known inputs.
+
+        Returns
+        -------
+        Estimate
+            Row ``k`` is the box of ``x(t_k)``; row 0 is the initial box.
+        """
 
     def _signals(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Validate ``t``, ``y``, ``u``; return them with ``u`` broadcast to ``y``'s leading axes."""

@@ -385,6 +385,9 @@ class IntervalObserver(Observer):
         Returns
         -------
         dict
+            ``method`` (``"IntervalObserver/<method>"``), ``L``, ``T``, ``spectral_radius``, ``h``,
+            ``transient_s``; ``horizon`` for the tube method; after :meth:`design`, ``steady_width``
+            (noise-only steady-state width bound).
         """
         info: dict[str, Any] = {
             "method": f"IntervalObserver/{self.method}",

@@ -15,7 +15,13 @@ __all__ = ["Example", "registry", "write_reproduction"]
 
 
 def registry() -> dict[str, Example]:
-    """All reproducible examples by name, in the order of their seed file, then name."""
+    """All reproducible examples by name, in the order of their seed file, then name.
+
+    Returns
+    -------
+    dict of str to Example
+        Every ``EXAMPLE`` defined by a module of :mod:`intervalobs.reproduce`.
+    """
     found: list[Example] = []
     for info in pkgutil.iter_modules(__path__):
         if info.name == "contract":

@@ -44,7 +44,18 @@ class Example:
 
 
 def to_json(value: Any) -> Any:
-    """Convert NumPy arrays and scalars (recursively) to plain JSON types; NaN/inf become None."""
+    """Convert NumPy arrays and scalars (recursively) to plain JSON types; NaN/inf become None.
+
+    Parameters
+    ----------
+    value : object
+        A scalar, array, or nested dict/list/tuple of them; complex numbers become ``{"re", "im"}``.
+
+    Returns
+    -------
+    object
+        The same structure made of dict, list, str, int, float, bool and None.
+    """
     if isinstance(value, dict):
         return {str(k): to_json(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -78,6 +89,33 @@ def base_summary(
 
     ``design``, ``paper`` and ``runtime_s`` are left for the caller to fill. Enclosure uses the same
     rule as ``check_reproduction.py``; input enclosure skips samples whose bounds are not yet finite.
+
+    Parameters
+    ----------
+    example : str
+        Example name (CLI name).
+    seed_file : str
+        The source paper's file in ``shared/seeds`` (``"-"`` for our own examples).
+    observer : str
+        Name of the observer whose bounds are reported.
+    t : array_like, shape (T,)
+        Sample times.
+    x : array_like, shape (T, n)
+        True state.
+    x_lower, x_upper : array_like, shape (T, n)
+        State bounds.
+    transient_s : float
+        Time after which the method claims enclosure.
+    d : array_like, shape (T, q), optional
+        True unknown input, for observers that estimate inputs.
+    d_lower, d_upper : array_like, shape (T, q), optional
+        Unknown-input bounds (NaN where not available yet).
+
+    Returns
+    -------
+    dict
+        Every key of the ``summary.json`` contract; ``enclosure.input`` holds None values when no
+        input bounds are given.
     """
     tt = np.asarray(t, dtype=float)
     xl, xx, xu = (np.asarray(a, dtype=float) for a in (x_lower, x, x_upper))
@@ -114,7 +152,17 @@ def base_summary(
 
 
 def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: Mapping[str, ArrayLike]) -> None:
-    """Write ``summary.json`` and ``trajectories.npz`` into ``out_dir`` (created if needed)."""
+    """Write ``summary.json`` and ``trajectories.npz`` into ``out_dir`` (created if needed).
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder of one example, e.g. ``results/aircraft-uio``.
+    summary : dict
+        From :func:`base_summary`, completed by the caller; converted with :func:`to_json`.
+    trajectories : mapping of str to array_like
+        Arrays of the contract (``t``, ``x``, ``x_lower``, ``x_upper``, ...).
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "summary.json").write_text(json.dumps(to_json(summary), indent=2) + "\n")
     arrays: dict[str, Any] = {k: np.asarray(v) for k, v in trajectories.items()}

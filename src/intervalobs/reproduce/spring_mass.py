@@ -20,7 +20,22 @@ NAME = "spring-mass-lti"
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
-    """Design the observer automatically, simulate with bang-bang noise, write the contract files."""
+    """Design the observer automatically, simulate with bang-bang noise, write the contract files.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder for this example.
+    seed : int
+        Seed of the noise realisation.
+    plots : bool
+        Also write ``states.png`` and ``widths.png``.
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
     system, bounds = spring_mass.system(), spring_mass.bounds()
     start = time.perf_counter()
     observer = IntervalObserver.design(system, bounds, h=spring_mass.SAMPLING_PERIOD)

@@ -1,0 +1,154 @@
+"""The package checks itself: docstrings, type hints, version and packaging of the public API.
+
+The public API is walked automatically (:mod:`public_api`): everything exported by
+``intervalobs.__init__``, the ``__all__`` of every public module (or its public classes and
+functions when it has no ``__all__``), and the public methods and properties of those classes.
+A new module is checked from the moment it exists.
+
+Docstrings are validated with numpydoc's own validator (:func:`numpydoc.validate.validate`), not a
+parser of ours. The error codes enforced are listed in :data:`CHECKED`; the others are left out on
+purpose: SA01/EX01/ES01 (no See Also / Examples / extended summary: useful, not mandatory),
+RT02/RT03 (``Returns`` may give only a type), SS05/SS06/PR08/PR09/GL01–GL03 (wording and layout).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import inspect
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpydoc.validate
+import pytest
+
+import intervalobs
+from public_api import public_modules, public_objects, signature_of
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHECKED = {
+    "GL06": "a section name numpydoc does not know (typo, or a heading that will not render)",
+    "GL07": "sections in the wrong order",
+    "GL08": "the object has no docstring",
+    "SS01": "no one-line summary",
+    "PR01": "a parameter of the signature is not documented",
+    "PR02": "a documented parameter is not in the signature",
+    "PR03": "parameters documented in a different order than the signature",
+    "PR04": "a documented parameter has no type",
+    "PR06": "a type spelled 'integer'/'boolean'/'string' instead of int/bool/str",
+    "PR07": "a documented parameter has no description",
+    "PR10": "'name: type' without a space before the colon (numpydoc reads it as a name)",
+    "RT01": "a function that returns a value has no Returns section",
+    "YD01": "a generator has no Yields section",
+}
+
+
+class _Validator(numpydoc.validate.Validator):
+    """numpydoc's validator, fixed for modules that define no function or class.
+
+    ``Validator.source_file_def_line`` looks for the first ``def``/``class`` line of the object's
+    source and raises ``StopIteration`` for a package ``__init__`` made only of imports (numpydoc 1.11).
+    """
+
+    def __init__(self, obj_name: str) -> None:
+        super().__init__(numpydoc.validate.get_doc_object(numpydoc.validate.Validator._load_obj(obj_name)))
+
+    @property
+    def source_file_def_line(self) -> int | None:
+        if inspect.ismodule(self.code_obj):
+            return None
+        return super().source_file_def_line
+
+
+def _errors(name: str) -> list[str]:
+    result: dict[str, Any] = numpydoc.validate.validate(name, validator_cls=_Validator)
+    return [f"{code}: {message}" for code, message in result["errors"] if code in CHECKED]
+
+
+def test_the_walk_finds_the_public_api():
+    names = public_objects()
+    for expected in (
+        "intervalobs.observers.interval_observer.IntervalObserver",
+        "intervalobs.observers.interval_observer.IntervalObserver.design",
+        "intervalobs.simulate.simulate",
+        "intervalobs.systems.lti.LTISystem.n",
+    ):
+        assert expected in names
+    exported = {n for n in intervalobs.__all__ if n != "__version__"}
+    assert exported <= {name.rsplit(".", 1)[-1] for name in names}
+
+
+@pytest.mark.parametrize("name", list(public_modules()), ids=str)
+def test_module_docstring(name):
+    errors = _errors(name)
+    assert not errors, f"{name}:\n  " + "\n  ".join(errors)
+
+
+@pytest.mark.parametrize("name", list(public_objects()), ids=str)
+def test_numpydoc_docstring(name):
+    errors = _errors(name)
+    assert not errors, f"{name}:\n  " + "\n  ".join(errors)
+
+
+def _unannotated(obj: Any) -> list[str]:
+    if isinstance(obj, property):
+        obj = obj.fget
+    if inspect.isclass(obj):
+        init = vars(obj).get("__init__")
+        if init is None:  # constructor inherited (checked where it is defined) or dataclass-made
+            return []
+        obj = init
+    missing = []
+    signature = signature_of(obj)
+    for param in signature.parameters.values():
+        if param.annotation is inspect.Parameter.empty and param.name not in ("self", "cls"):
+            missing.append(param.name)
+    if signature.return_annotation is inspect.Signature.empty:
+        missing.append("return")
+    return missing
+
+
+@pytest.mark.parametrize("name", list(public_objects()), ids=str)
+def test_type_hints(name):
+    missing = _unannotated(public_objects()[name])
+    assert not missing, f"{name}: no type hint for {missing}"
+
+
+def test_version_is_the_installed_distribution_version():
+    assert re.fullmatch(r"\d+\.\d+\.\d+([.-]?\w+)?", intervalobs.__version__)
+    assert intervalobs.__version__ == importlib.metadata.version("intervalobs")
+
+
+def test_cli_version_matches():
+    exe = shutil.which("intervalobs", path=str(Path(sys.executable).parent))
+    command = [exe] if exe else [sys.executable, "-m", "intervalobs.cli"]
+    out = subprocess.run([*command, "--version"], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == f"intervalobs {intervalobs.__version__}"
+
+
+def test_changelog_license_and_py_typed():
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert pyproject["project"]["license"] == "BSD-3-Clause"
+    assert (ROOT / "LICENSE").read_text().startswith("BSD 3-Clause License")
+    assert "py.typed" in pyproject["tool"]["setuptools"]["package-data"]["intervalobs"]
+    assert (ROOT / "src" / "intervalobs" / "py.typed").is_file()
+    changelog = (ROOT / "CHANGELOG.md").read_text()
+    assert f"## [{intervalobs.__version__}]" in changelog, "CHANGELOG.md has no section for the current version"
+
+
+@pytest.mark.slow
+def test_wheel_ships_py_typed_license_and_version(tmp_path):
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(tmp_path), str(ROOT)], check=True
+    )
+    (wheel,) = tmp_path.glob("intervalobs-*.whl")
+    files = zipfile.ZipFile(wheel).namelist()
+    assert "intervalobs/py.typed" in files
+    assert any(f.endswith(".dist-info/licenses/LICENSE") or f.endswith(".dist-info/LICENSE") for f in files)
+    assert wheel.name.startswith(f"intervalobs-{intervalobs.__version__}-")
