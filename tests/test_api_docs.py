@@ -8,11 +8,14 @@ A new module is checked from the moment it exists.
 Docstrings are validated with numpydoc's own validator (:func:`numpydoc.validate.validate`), not a
 parser of ours. The error codes enforced are listed in :data:`CHECKED`; the others are left out on
 purpose: SA01/EX01/ES01 (no See Also / Examples / extended summary: useful, not mandatory),
-RT02/RT03 (``Returns`` may give only a type), SS05/SS06/PR08/PR09/GL01–GL03 (wording and layout).
+RT02/RT03 (``Returns`` may give only a type), PR07 (a parameter may be documented by its type and
+shape alone, e.g. ``C : numpy.ndarray, shape (p, n)`` for a matrix named as in the paper),
+SS05/SS06/PR08/PR09/GL01–GL03 (wording and layout).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.metadata
 import inspect
 import re
@@ -42,7 +45,6 @@ CHECKED = {
     "PR03": "parameters documented in a different order than the signature",
     "PR04": "a documented parameter has no type",
     "PR06": "a type spelled 'integer'/'boolean'/'string' instead of int/bool/str",
-    "PR07": "a documented parameter has no description",
     "PR10": "'name: type' without a space before the colon (numpydoc reads it as a name)",
     "RT01": "a function that returns a value has no Returns section",
     "YD01": "a generator has no Yields section",
@@ -50,14 +52,30 @@ CHECKED = {
 
 
 class _Validator(numpydoc.validate.Validator):
-    """numpydoc's validator, fixed for modules that define no function or class.
+    """numpydoc's validator with two adjustments.
 
-    ``Validator.source_file_def_line`` looks for the first ``def``/``class`` line of the object's
-    source and raises ``StopIteration`` for a package ``__init__`` made only of imports (numpydoc 1.11).
+    - A dataclass's fields are both its attributes and its constructor parameters: when its docstring
+      has no ``Parameters`` section, the ``Attributes`` section is checked against the signature
+      instead (so every field must still be documented, in order, with a type).
+    - ``Validator.source_file_def_line`` looks for the first ``def``/``class`` line of the object's
+      source and raises ``StopIteration`` for a package ``__init__`` made only of imports (numpydoc 1.11).
     """
 
     def __init__(self, obj_name: str) -> None:
         super().__init__(numpydoc.validate.get_doc_object(numpydoc.validate.Validator._load_obj(obj_name)))
+
+    def _parameter_sections(self, sections: list[str]) -> list[str]:
+        if dataclasses.is_dataclass(self.obj) and inspect.isclass(self.obj) and not self.doc["Parameters"]:
+            return ["Attributes" if section == "Parameters" else section for section in sections]
+        return sections
+
+    @property
+    def doc_parameters(self) -> dict[str, Any]:
+        return self._doc_parameters(self._parameter_sections(["Parameters"]))
+
+    @property
+    def doc_all_parameters(self) -> dict[str, Any]:
+        return self._doc_parameters(self._parameter_sections(["Parameters", "Other Parameters"]))
 
     @property
     def source_file_def_line(self) -> int | None:

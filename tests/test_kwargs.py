@@ -39,12 +39,20 @@ def _from_control(**kwargs: Any) -> Any:
     return LTISystem.from_control(control.ss([[0.5, 0.1], [0.0, 0.6]], [[0.0], [1.0]], [[1.0, 0.0]], 0, 1.0), **kwargs)
 
 
+def _integrated_design(**kwargs: Any) -> Any:
+    from intervalobs.examples import numerical3
+    from intervalobs.observers.zonotopic import IntegratedObserver
+
+    return IntegratedObserver.design(numerical3.system("68"), numerical3.bounds(), **kwargs)
+
+
 # qualified name -> (call with extra keywords, keywords the function documents and must accept)
 CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
     "intervalobs.observers.interval_observer.IntervalObserver.design": (
         _design,
         {"candidates": {"identity": np.eye(2)}},
     ),
+    "intervalobs.observers.zonotopic.IntegratedObserver.design": (_integrated_design, {"fallback": "hinf"}),
     "intervalobs.systems.lti.LTISystem.from_control": (_from_control, {"E": np.eye(2)}),
 }
 

@@ -9,9 +9,9 @@ The array functions of this module (:func:`interval_matrix_image`, :func:`reduce
 axes (time, Monte Carlo runs), so observers call them in their hot loops without creating objects;
 :class:`Zonotope` wraps them for a single, validated set.
 
-Soundness
----------
-Every operation returns a set that *contains* the exact image: Minkowski sum and linear image are
+Notes
+-----
+**Soundness.** Every operation returns a set that *contains* the exact image: Minkowski sum and linear image are
 exact (Property 1, Definition A.2); the interval-matrix map (Properties 3–4) and the reduction
 (Property 2) over-approximate. Property 4 of the seed adds the term of the centre as the single
 generator ``diam(A)/2 · c``, which is not an enclosure of ``{ΔA c : |ΔA| ≤ diam(A)/2}`` (that set is a

@@ -104,7 +104,13 @@ class GainDesign:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain-JSON form for ``summary.json``."""
+        """Plain-JSON form for ``summary.json``.
+
+        Returns
+        -------
+        dict
+            The fields, arrays as (nested) lists.
+        """
         return {
             "gain": self.gain.ravel().tolist(),
             "lmi": self.lmi,

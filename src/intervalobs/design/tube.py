@@ -61,7 +61,18 @@ class TubeDesign:
 
 
 def tube_horizon(m: FloatArray) -> int | None:
-    """Smallest ``J`` with ``‖|M^J|‖∞ ≤ 1/4``, or None when ``M`` does not contract within the cap."""
+    """Smallest ``J`` with ``‖|M^J|‖∞ ≤ 1/4``, or None when ``M`` does not contract within the cap.
+
+    Parameters
+    ----------
+    m : numpy.ndarray, shape (n, n)
+        Error matrix ``M = Φ - LC``.
+
+    Returns
+    -------
+    int or None
+        The horizon ``J``; None when ``ρ(M) ≥ 1`` or no ``J`` up to the cap contracts enough.
+    """
     if np.max(np.abs(np.linalg.eigvals(m))) >= 1:
         return None
     power = np.eye(m.shape[0])
@@ -85,7 +96,28 @@ def abs_powers(m: FloatArray, count: int) -> FloatArray:
 def tube_stability(
     model: SampledModel, m: FloatArray, disturbance: FloatArray, horizon: int
 ) -> tuple[float, FloatArray]:
-    """Gain ``ρ(|M^J| + GδΦ)`` and the steady radius ``(I - |M^J| - GδΦ)⁻¹ G d`` (inf when unstable)."""
+    """Gain ``ρ(|M^J| + GδΦ)`` and the steady radius ``(I - |M^J| - GδΦ)⁻¹ G d`` (inf when unstable).
+
+    Here ``G = Σ_{i<J} |M^i|``.
+
+    Parameters
+    ----------
+    model : SampledModel
+        Sampled interval model (its ``δΦ``).
+    m : numpy.ndarray, shape (n, n)
+        Error matrix ``M = Φ - LC``.
+    disturbance : numpy.ndarray, shape (n,)
+        Per-step radius ``d⁰`` of the box disturbance entering the error (without the ``δΦ`` term).
+    horizon : int
+        Tube horizon ``J``.
+
+    Returns
+    -------
+    rho : float
+        Spectral radius of ``|M^J| + GδΦ``.
+    steady_radius : numpy.ndarray, shape (n,)
+        Steady-state radius bound (``inf`` entries when ``rho ≥ 1``).
+    """
     powers = abs_powers(m, horizon + 1)
     g = powers[:horizon].sum(axis=0)
     loop = powers[horizon] + g @ model.dPhi

@@ -80,7 +80,12 @@ def system(variant: str = "68") -> LTISystem:
 
 
 def bounds() -> Bounds:
-    """Initial box ±1 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (Assumption 3.1)."""
+    """Initial box ±1 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (Assumption 3.1).
+
+    Returns
+    -------
+    Bounds
+    """
     return Bounds(
         x0=(-X0_RADIUS * np.ones(3), X0_RADIUS * np.ones(3)),
         w=(-np.ones(3), np.ones(3)),
@@ -89,10 +94,25 @@ def bounds() -> Bounds:
 
 
 def time_grid() -> NDArray[np.float64]:
-    """The 200 sample times on :math:`[0, 3\\pi]`."""
+    """The 200 sample times on :math:`[0, 3\\pi]`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (200,)
+    """
     return np.linspace(0.0, T_FINAL, STEPS)
 
 
 def input_signal(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``u = sin t``, shape (T, 1)."""
+    """``u = sin t``.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Sample times.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 1)
+    """
     return np.sin(np.asarray(t, dtype=float))[:, None]

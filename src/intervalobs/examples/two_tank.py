@@ -49,23 +49,48 @@ PRINTED_GAINS: dict[str, list[float]] = {
 
 
 def system() -> LTISystem:
-    """The uncertain two-tank model (72) (discrete time, Ts = 1 s)."""
+    """The uncertain two-tank model (72) (discrete time, Ts = 1 s).
+
+    Returns
+    -------
+    LTISystem
+    """
     d = THETA * np.ones((2, 2))
     return LTISystem(A0, C, B=B, E=E_W, F=E_V, dt=SAMPLING_PERIOD, dA=(-d, d))
 
 
 def bounds() -> Bounds:
-    """Initial box [4, 6]² cm (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1``."""
+    """Initial box [4, 6]² cm (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1``.
+
+    Returns
+    -------
+    Bounds
+    """
     return Bounds(x0=X0, w=(-np.ones(2), np.ones(2)), v=(-np.ones(1), np.ones(1)))
 
 
 def time_grid() -> NDArray[np.float64]:
-    """Sample times 0, 1, …, 1199 s."""
+    """Sample times 0, 1, …, 1199 s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (1200,)
+    """
     return np.arange(STEPS, dtype=float) * SAMPLING_PERIOD
 
 
 def input_signal(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Pump voltage: a staircase 0.35, 0.55, 0.25, 0.45, 0.2, 0.5 V, 200 s each, shape (T, 1)."""
+    """Pump voltage: a staircase 0.35, 0.55, 0.25, 0.45, 0.2, 0.5 V, 200 s each.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Sample times in seconds.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, 1)
+    """
     levels = np.array([0.35, 0.55, 0.25, 0.45, 0.2, 0.5])
     index = np.minimum((np.asarray(t, dtype=float) // 200).astype(int), levels.size - 1)
     return levels[index][:, None]

@@ -253,7 +253,14 @@ class ZonotopicObserver(Observer):
         return Estimate(times, lower, upper, meta=self.meta())
 
     def meta(self) -> dict[str, Any]:
-        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+            ``method``, ``L``, reduction ``order``, ``spectral_radius``, ``width_spectral_radius``,
+            ``certified``, ``transient_s``, and ``gain_design`` when designed.
+        """
         info: dict[str, Any] = {
             "method": "ZonotopicObserver (seed 002, Prop. 3.1)",
             "L": self.L.tolist(),
@@ -368,7 +375,13 @@ class IntegratedObserver(IntervalObserver):
         return observer
 
     def meta(self) -> dict[str, Any]:
-        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+            Those of :meth:`ZonotopicObserver.meta`, plus ``gain_design`` and ``fallback`` when set.
+        """
         info = super().meta()
         info["method"] = "IntegratedObserver (seed 002, Thm 5.3)"
         if self.gain_design is not None:

@@ -51,7 +51,22 @@ LABELS = ["$x_1$", "$x_2$", "$x_3$"]
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
-    """Design, simulate (bang-bang noise, vertex θ), run every observer on (68) and (70), write files."""
+    """Design, simulate (bang-bang noise, vertex θ), run every observer on (68) and (70), write files.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder for this example.
+    seed : int
+        Seed of the noise realisation.
+    plots : bool
+        Also write the PNG figures.
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
     t = numerical3.time_grid()
     u = numerical3.input_signal(t)
     bounds = numerical3.bounds()

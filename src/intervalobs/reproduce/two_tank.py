@@ -45,7 +45,22 @@ LABELS = ["$h_1$ (cm)", "$h_2$ (cm)"]
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
-    """Design, simulate (bang-bang noise, vertex θ), run every observer, write the contract files."""
+    """Design, simulate (bang-bang noise, vertex θ), run every observer, write the contract files.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder for this example.
+    seed : int
+        Seed of the noise realisation.
+    plots : bool
+        Also write the PNG figures.
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
     system, bounds = two_tank.system(), two_tank.bounds()
     t = two_tank.time_grid()
     u = two_tank.input_signal(t)
