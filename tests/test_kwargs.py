@@ -46,6 +46,13 @@ def _integrated_design(**kwargs: Any) -> Any:
     return IntegratedObserver.design(numerical3.system("68"), numerical3.bounds(), **kwargs)
 
 
+def _zonotopic_design(**kwargs: Any) -> Any:
+    from intervalobs.examples import numerical3
+    from intervalobs.observers.zonotopic import ZonotopicObserver
+
+    return ZonotopicObserver.design(numerical3.system("68"), numerical3.bounds(), **kwargs)
+
+
 # qualified name -> (call with extra keywords, keywords the function documents and must accept)
 CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
     "intervalobs.observers.interval_observer.IntervalObserver.design": (
@@ -53,6 +60,7 @@ CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
         {"candidates": {"identity": np.eye(2)}},
     ),
     "intervalobs.observers.zonotopic.IntegratedObserver.design": (_integrated_design, {"fallback": "hinf"}),
+    "intervalobs.observers.zonotopic.ZonotopicObserver.design": (_zonotopic_design, {"order": 12}),
     "intervalobs.systems.lti.LTISystem.from_control": (_from_control, {"E": np.eye(2)}),
 }
 
