@@ -1,0 +1,108 @@
+"""Unknown-input decoupling and cooperative coordinates (seed 000, eqs. (10)–(14), (21)–(25))."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs.design.uio import (
+    check_cooperative,
+    design_uio_coordinates,
+    uio_constraint_matrices,
+    uio_decoupling,
+)
+from intervalobs.errors import AssumptionError, DesignError
+from intervalobs.examples import aircraft as ac
+
+MISPRINTS = {("E", 1, 0), ("E", 1, 1), ("P", 1, 2), ("P", 2, 3)}
+
+
+@pytest.fixture(scope="module")
+def decoupling():
+    return uio_decoupling(ac.A, ac.C, ac.D)
+
+
+def test_aircraft_E_P_agree_with_paper_except_four_misprints(decoupling) -> None:
+    assert decoupling.rank_CD == decoupling.rank_D == 2
+    assert decoupling.decoupling_residual < 1e-15
+    assert decoupling.observability_margin == pytest.approx(0.643, abs=1e-3)
+    for name, ours in (("E", decoupling.E), ("P", decoupling.P)):
+        printed = np.array(ac.PAPER[name], dtype=float)
+        for i, j in np.ndindex(printed.shape):
+            close = abs(printed[i, j] - ours[i, j]) <= 5e-6
+            assert close != ((name, i, j) in MISPRINTS), f"{name}({i + 1},{j + 1})"
+    assert decoupling.E[1, 0] == pytest.approx(-0.9993, abs=1e-4)
+    assert decoupling.E[1, 1] == pytest.approx(-2.011e-5, rel=1e-3)
+    assert decoupling.P[1, 2] == pytest.approx(-2.011e-5, rel=1e-3)
+    assert decoupling.P[2, 3] == pytest.approx(-7.577e-4, rel=1e-3)
+
+
+def test_parametrisation_solves_the_constraints(decoupling) -> None:
+    sigma, theta, sigma_pinv = uio_constraint_matrices(ac.A, ac.C, ac.D)
+    np.testing.assert_allclose(sigma_pinv @ sigma, np.eye(7), atol=1e-12)
+    coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01))
+    nke = np.hstack([coords.N, coords.K, decoupling.E])
+    np.testing.assert_allclose(nke @ sigma, theta, atol=1e-12)  # eq. (23)
+    np.testing.assert_allclose(coords.K, coords.L + coords.N @ decoupling.E, atol=1e-12)  # eq. (14)
+
+
+def test_designed_coordinates_are_diagonal_metzler_hurwitz(decoupling) -> None:
+    coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01))
+    assert coords.offdiagonal < 1e-12
+    assert coords.metzler_check > -1e-12
+    assert np.all(coords.poles < 0)
+    assert np.unique(np.round(coords.poles, 6)).size == 5
+    assert coords.cond_T < 10
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(coords.N).real), np.sort(coords.poles), atol=1e-7)
+
+
+def test_given_poles_are_placed(decoupling) -> None:
+    poles = -np.arange(1.0, 6.0)
+    coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=poles)
+    np.testing.assert_allclose(np.sort(coords.poles), np.sort(poles), atol=1e-7)
+    assert coords.cond_T == pytest.approx(4.08, abs=0.05)
+    with pytest.raises(DesignError, match="distinct negative"):
+        design_uio_coordinates(
+            ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=[-1, -1, -2, -3, -4]
+        )
+
+
+def test_printed_K_and_T_are_not_metzler(decoupling) -> None:
+    k = np.array(ac.PAPER["K_printed"]).T
+    with pytest.raises(AssumptionError, match=r"Metzler.*-2\.61"):
+        check_cooperative(ac.A, ac.C, decoupling, k, np.array(ac.PAPER["T"]))
+
+
+@pytest.mark.parametrize(
+    ("A", "C", "D", "match"),
+    [
+        (np.zeros((3, 3)), np.array([[1.0, 0, 0]]), np.eye(3)[:, :2], "q ≤ p"),
+        (np.zeros((3, 3)), np.eye(3)[:2], np.array([[1.0, 1], [0, 0], [0, 0]]), r"rank\(D\)"),
+        (
+            np.zeros((3, 3)),
+            np.array([[1.0, 0, 0], [0, 1, 0]]),
+            np.array([[0.0, 0], [0, 0], [1, 1e-3]]) @ np.diag([1, 1]),
+            r"rank\(D\)",
+        ),
+        (
+            np.zeros((3, 3)),
+            np.array([[1.0, 0, 0], [0, 1, 0]]),
+            np.array([[1.0, 0], [0, 0], [0, 1]]),
+            r"rank\(CD\) = 1",
+        ),
+    ],
+    ids=["q>p", "rank-D", "rank-D-small", "rank-CD"],
+)
+def test_hypothesis4_violations(A, C, D, match) -> None:
+    with pytest.raises(AssumptionError, match=match):
+        uio_decoupling(A, C, D)
+
+
+def test_hypothesis5_violations() -> None:
+    A = np.array([[0.0, 1.0], [0.0, 1.0]])
+    C = np.array([[1.0, 0.0]])
+    D = np.array([[1.0], [0.0]])
+    with pytest.raises(AssumptionError, match="detectable"):
+        uio_decoupling(A, C, D)
+    with pytest.raises(AssumptionError, match="I_p"):
+        uio_decoupling(-np.eye(2), C, D, W=np.array([[-1.0], [0.0]]))

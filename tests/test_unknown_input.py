@@ -1,0 +1,122 @@
+"""UnknownInputIntervalObserver on the aircraft model of seed 000: enclosure, run == step, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs.design.differentiator import HOSMDifferentiator, levant_gains
+from intervalobs.errors import AssumptionError, DataError, DesignError, DimensionError
+from intervalobs.examples import aircraft as ac
+from intervalobs.observers.unknown_input import UnknownInputIntervalObserver
+
+H = ac.TE
+
+
+def _design(**kwargs) -> UnknownInputIntervalObserver:
+    options = {"noise_rate": np.full(4, ac.DELTA_DOT_BAR), "output_accel": np.full(4, ac.OUTPUT_ACCEL)}
+    options.update(kwargs)
+    return UnknownInputIntervalObserver.design(ac.aircraft_system(), ac.aircraft_bounds(), ac.D, H, **options)
+
+
+@pytest.fixture(scope="module")
+def observer() -> UnknownInputIntervalObserver:
+    return _design()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize(
+    ("delta_kind", "omega_kind"),
+    [("sine", "sine"), ("plateau", "vertex"), ("sine", "vertex"), ("plateau", "sine")],
+    ids=["sine-sine", "plateau-vertex", "sine-vertex", "plateau-sine"],
+)
+def test_encloses_state_and_input_under_smooth_extreme_noise(observer, seed, delta_kind, omega_kind) -> None:
+    t = np.arange(15001) * H
+    rec = ac.simulate_aircraft(t, seed=seed, delta_kind=delta_kind, omega_kind=omega_kind)
+    est = observer.run(t, rec.y)
+    state = est.enclosure(rec.x, transient=0.0)
+    assert state.fraction == 1.0 and state.max_violation == 0.0
+    inputs = est.input_enclosure(rec.xi, transient=0.0)
+    assert inputs.fraction == 1.0 and inputs.max_violation == 0.0
+    assert np.all(np.isnan(est.input_lower[0])) and np.all(np.isfinite(est.input_lower[1:]))
+    assert np.abs(rec.psi_ddot).max() <= ac.OUTPUT_ACCEL  # the assumption behind the derivative bound
+
+
+def test_encloses_from_box_vertices_with_runs(observer) -> None:
+    t = np.arange(5001) * H
+    rng = np.random.default_rng(7)
+    vertices = rng.choice([-1.0, 1.0], size=(6, 5))
+    recs = [
+        ac.simulate_aircraft(t, seed=i, x0=v, delta_kind="plateau", omega_kind="vertex")
+        for i, v in enumerate(vertices)
+    ]
+    y = np.stack([r.y for r in recs])
+    est = observer.run(t, y)
+    assert est.lower.shape == (6, t.size, 5) and est.input_lower.shape == (6, t.size, 2)
+    assert est.enclosure(np.stack([r.x for r in recs]), transient=0.0).max_violation == 0.0
+    xi = np.broadcast_to(recs[0].xi, (6, *recs[0].xi.shape))
+    assert est.input_enclosure(xi, transient=0.0).max_violation == 0.0
+
+
+@pytest.mark.parametrize("derivative", ["difference", "hosm"])
+def test_run_equals_repeated_step(derivative) -> None:
+    obs = _design(derivative=derivative, hosm=HOSMDifferentiator(1, levant_gains(1, ac.OUTPUT_ACCEL)))
+    t = np.arange(400) * H
+    y = np.stack([ac.simulate_aircraft(t, seed=s).y for s in range(2)])
+    est = obs.run(t, y)
+    state = obs.init()
+    for k in range(t.size):
+        state = obs.step(state, y[:, k])
+        np.testing.assert_allclose(state.lower, est.lower[:, k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.upper, est.upper[:, k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.input_lower, est.input_lower[:, k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.input_upper, est.input_upper[:, k], rtol=0, atol=1e-12)
+
+
+def test_widths_converge_to_rho(observer) -> None:
+    t = np.arange(120001) * H
+    rec = ac.simulate_aircraft(t, seed=3)
+    est = observer.run(t, rec.y)
+    w = est.width()
+    wi = est.input_upper - est.input_lower
+    assert np.all(w[-1] <= observer.rho_x * (1 + 1e-3)) and np.all(w[-1] >= observer.rho_x * (1 - 1e-9))
+    assert np.all(wi[-1] <= observer.rho_xi * (1 + 1e-3))
+    assert np.all(w[-1] < 0.1 * 2.0)  # well below the initial box
+    # data-independent width: decreasing after the first samples
+    assert np.all(np.diff(w[1000:], axis=0) <= 1e-12)
+    paper_x, paper_xi = observer.paper_rho()
+    assert np.all(observer.rho_x < paper_x) and np.all(observer.rho_xi < paper_xi)
+
+
+def test_paper_hosm_setting_violates_its_claimed_input_bounds() -> None:
+    obs = _design(derivative="hosm", hosm=HOSMDifferentiator(1, [100.0, 100.0]), mu1=1.1)
+    t = np.arange(50001) * H
+    rec = ac.simulate_aircraft(t, seed=0)
+    est = obs.run(t, rec.y)
+    assert est.enclosure(rec.x, transient=0.0).max_violation == 0.0  # the state does not use ẏ
+    # once the state bounds have contracted (t > 3 s), the HOSM error 0.25 > β = 0.12 shows through
+    assert est.input_enclosure(rec.xi, transient=3.0).max_violation > 0.01
+
+
+def test_bad_input_is_rejected(observer) -> None:
+    t = np.arange(100) * H
+    y = ac.simulate_aircraft(t).y
+    with pytest.raises(DataError, match="spaced"):
+        observer.run(t * 1.5, y)
+    with pytest.raises(DataError):
+        observer.run(t, y[:, :3])
+    with pytest.raises(AssumptionError, match="Metzler"):
+        _design(K=np.array(ac.PAPER["K_printed"]).T, T=np.array(ac.PAPER["T"]))
+    with pytest.raises(DimensionError, match="derivative"):
+        _design(derivative="spline")
+    with pytest.raises(DimensionError, match="hosm"):
+        _design(derivative="hosm")
+
+
+def test_given_nondiagonal_coordinates_are_refused() -> None:
+    obs = _design()
+    k = obs.coords.K
+    # a Metzler but non-diagonal J: permute-and-mix the eigenbasis by a positive upper-triangular matrix
+    mix = np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1)
+    with pytest.raises((DesignError, AssumptionError)):
+        _design(K=k, T=mix @ obs.coords.T)
