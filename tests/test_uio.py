@@ -62,9 +62,7 @@ def test_given_poles_are_placed(decoupling) -> None:
     np.testing.assert_allclose(np.sort(coords.poles), np.sort(poles), atol=1e-7)
     assert coords.cond_T == pytest.approx(4.08, abs=0.05)
     with pytest.raises(DesignError, match="distinct negative"):
-        design_uio_coordinates(
-            ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=[-1, -1, -2, -3, -4]
-        )
+        design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=[-1, -1, -2, -3, -4])
 
 
 def test_printed_K_and_T_are_not_metzler(decoupling) -> None:

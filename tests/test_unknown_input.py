@@ -47,8 +47,7 @@ def test_encloses_from_box_vertices_with_runs(observer) -> None:
     rng = np.random.default_rng(7)
     vertices = rng.choice([-1.0, 1.0], size=(6, 5))
     recs = [
-        ac.simulate_aircraft(t, seed=i, x0=v, delta_kind="plateau", omega_kind="vertex")
-        for i, v in enumerate(vertices)
+        ac.simulate_aircraft(t, seed=i, x0=v, delta_kind="plateau", omega_kind="vertex") for i, v in enumerate(vertices)
     ]
     y = np.stack([r.y for r in recs])
     est = observer.run(t, y)

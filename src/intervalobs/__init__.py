@@ -1,6 +1,8 @@
 """intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
 
+from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
 from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
+from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
 from .errors import (
     AssumptionError,
     BoundsError,
@@ -12,6 +14,7 @@ from .errors import (
 from .estimate import EnclosureReport, Estimate
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import IntervalObserver, Observer, ObserverState
+from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
 from .systems import Bounds, LTISystem
@@ -45,3 +48,14 @@ __all__ = [
 
 # seed 002
 __all__ += ["GainDesign", "IntegratedObserver", "Zonotope", "ZonotopicObserver", "hinf_gain", "zonotope_size_gain"]
+
+# seed 000
+__all__ += [
+    "HOSMDifferentiator",
+    "UnknownInputIntervalObserver",
+    "check_cooperative",
+    "design_uio_coordinates",
+    "difference_derivative_bounds",
+    "levant_gains",
+    "uio_decoupling",
+]

@@ -68,9 +68,7 @@ def levant_gains(order: int, lipschitz: float) -> FloatArray:
         raise DimensionError(f"order: expected 1 … {len(LEVANT_COEFFICIENTS) - 1}, got {order}")
     if not (np.isfinite(lipschitz) and lipschitz > 0):
         raise BoundsError(f"lipschitz: expected a positive bound, got {lipschitz!r}")
-    return np.array(
-        [LEVANT_COEFFICIENTS[order - j] * lipschitz ** (1.0 / (order - j + 1)) for j in range(order + 1)]
-    )
+    return np.array([LEVANT_COEFFICIENTS[order - j] * lipschitz ** (1.0 / (order - j + 1)) for j in range(order + 1)])
 
 
 def hosm_error_bound(delta_bar: ArrayLike, delta_dot_bar: ArrayLike, mu1: float) -> FloatArray:
@@ -129,6 +127,8 @@ class HOSMDifferentiator:
             raise BoundsError("gains: expected positive finite λ")
         self.order = order
         self.gains = g
+        self._columns = [np.ascontiguousarray(g[..., j]) for j in range(order + 1)]
+        self._powers = [(order - i) / (order - i + 1) for i in range(order)]
 
     def init(self, y0: ArrayLike) -> FloatArray:
         """Initial state, shape ``(..., p, s + 1)``: ``q_0 = y_0``, ``q_j = 0`` for ``j ≥ 1``.
@@ -164,17 +164,16 @@ class HOSMDifferentiator:
         numpy.ndarray
             State at ``t_{k+1}``.
         """
-        yk = np.asarray(y, dtype=float)
         s = self.order
-        lam = self.gains
-        nu_prev = yk
+        lam = self._columns
+        nu_prev = np.asarray(y, dtype=float)
         rates = np.empty_like(q)
         for i in range(s):
             e = q[..., i] - nu_prev
-            nu = -lam[..., i] * np.abs(e) ** ((s - i) / (s - i + 1)) * np.sign(e) + q[..., i + 1]
+            nu = q[..., i + 1] - lam[i] * np.abs(e) ** self._powers[i] * np.sign(e)
             rates[..., i] = nu
             nu_prev = nu
-        rates[..., s] = -lam[..., s] * np.sign(q[..., s] - nu_prev)
+        rates[..., s] = -lam[s] * np.sign(q[..., s] - nu_prev)
         return np.asarray(q + h * rates)
 
     def run(self, y: ArrayLike, h: float) -> FloatArray:

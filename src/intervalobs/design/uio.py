@@ -188,9 +188,7 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
             f"Hypothesis 4 (seed 000, eq. (10)): expected q ≤ p unknown inputs, got q = {q} > p = {p} outputs"
         )
     if rank_d != q:
-        raise AssumptionError(
-            f"Hypothesis 4 (seed 000, eq. (10)): expected rank(D) = q = {q}, got rank(D) = {rank_d}"
-        )
+        raise AssumptionError(f"Hypothesis 4 (seed 000, eq. (10)): expected rank(D) = q = {q}, got rank(D) = {rank_d}")
     if rank_cd != rank_d:
         raise AssumptionError(
             f"Hypothesis 4 (seed 000, eq. (10)): rank(CD) = {rank_cd} but rank(D) = {rank_d}: "
@@ -199,29 +197,22 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
     m0 = np.asarray(np.linalg.pinv(cd), dtype=float)
     e = -d @ m0 + w @ (np.eye(p) - cd @ m0)
     if _rank(np.eye(p) + c @ w) < p:
-        raise AssumptionError(
-            "Hypothesis 5 (seed 000): expected I_p + C W nonsingular, got a singular matrix"
-        )
+        raise AssumptionError("Hypothesis 5 (seed 000): expected I_p + C W nonsingular, got a singular matrix")
     pmat = np.eye(n) + e @ c
     pa = pmat @ a
     bad = _undetectable_modes(pa, c)
     if bad:
         raise AssumptionError(
-            "Hypothesis 5 (seed 000): expected (PA, C) detectable, "
-            f"got unobservable modes with Re ≥ 0 at {bad}"
+            f"Hypothesis 5 (seed 000): expected (PA, C) detectable, got unobservable modes with Re ≥ 0 at {bad}"
         )
     residual = float(np.abs(pmat @ d).max()) if d.size else 0.0
     scale = max(1.0, float(np.abs(d).max()) * max(1.0, float(np.abs(e @ c).max())))
     if residual > 1e-10 * scale:
-        raise DesignError(
-            f"uio_decoupling: expected P D = 0, got max |P D| = {residual:.3g} (ill-conditioned CD)"
-        )
+        raise DesignError(f"uio_decoupling: expected P D = 0, got max |P D| = {residual:.3g} (ill-conditioned CD)")
     return UIODecoupling(e, pmat, w, m0, rank_cd, rank_d, _observability_margin(pa, c), residual)
 
 
-def uio_constraint_matrices(
-    A: ArrayLike, C: ArrayLike, D: ArrayLike
-) -> tuple[FloatArray, FloatArray, FloatArray]:
+def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     r"""The matrices of the compact constraint ``[N K E] Σ = Θ`` (seed 000, eqs. (23)–(24)).
 
     .. math:: \Sigma = \begin{bmatrix} I_n & 0 \\ C & 0 \\ -CA & CD \end{bmatrix}, \qquad
@@ -260,9 +251,7 @@ def uio_constraint_matrices(
     return sigma, theta, sigma_pinv
 
 
-def _coordinates(
-    pa: FloatArray, c: FloatArray, e: FloatArray, k: FloatArray, t: FloatArray | None
-) -> UIOCoordinates:
+def _coordinates(pa: FloatArray, c: FloatArray, e: FloatArray, k: FloatArray, t: FloatArray | None) -> UIOCoordinates:
     n = pa.shape[0]
     nmat = pa - k @ c
     if t is None:
@@ -324,9 +313,7 @@ def asymptotic_state_width(
     -------
     numpy.ndarray, shape (n,)
     """
-    forcing = (
-        2 * np.abs(coords.T @ coords.L) @ delta_radius + 2 * np.abs(coords.T @ decoupling.P) @ omega_radius
-    )
+    forcing = 2 * np.abs(coords.T @ coords.L) @ delta_radius + 2 * np.abs(coords.T @ decoupling.P) @ omega_radius
     rho_w = forcing / np.abs(coords.poles)
     return np.asarray(np.abs(coords.S) @ rho_w + 2 * np.abs(decoupling.E) @ delta_radius)
 
@@ -375,8 +362,7 @@ def check_cooperative(
     top = float(np.max(np.linalg.eigvals(coords.J).real))
     if top >= 0:
         raise AssumptionError(
-            "Hypothesis 6 (seed 000): expected T (PA - KC) T⁻¹ Hurwitz, "
-            f"got an eigenvalue with real part {top:.4g}"
+            f"Hypothesis 6 (seed 000): expected T (PA - KC) T⁻¹ Hurwitz, got an eigenvalue with real part {top:.4g}"
         )
     return coords
 

@@ -277,6 +277,4 @@ def simulate_aircraft(
         ys.append(psi + delta)
     stack = (lambda v: np.stack(v)) if runs is not None else (lambda v: v[0])
     xi, _ = unknown_input(tt)
-    return AircraftRecord(
-        tt, stack(xs), stack(ys), xi, stack(psis), stack(dpsis), stack(ddpsis), stack(deltas)
-    )
+    return AircraftRecord(tt, stack(xs), stack(ys), xi, stack(psis), stack(dpsis), stack(ddpsis), stack(deltas))

@@ -2,6 +2,14 @@
 
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
+from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
-__all__ = ["IntegratedObserver", "IntervalObserver", "Observer", "ObserverState", "ZonotopicObserver"]
+__all__ = [
+    "IntegratedObserver",
+    "IntervalObserver",
+    "Observer",
+    "ObserverState",
+    "UnknownInputIntervalObserver",
+    "ZonotopicObserver",
+]

@@ -156,13 +156,9 @@ class UnknownInputIntervalObserver(Observer):
         input_magnitude: float = 1e6,
     ) -> None:
         if not system.continuous:
-            raise DimensionError(
-                "system: expected a continuous-time LTISystem (dt=None), got a discrete-time one"
-            )
+            raise DimensionError("system: expected a continuous-time LTISystem (dt=None), got a discrete-time one")
         if system.dA is not None:
-            raise DimensionError(
-                "system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)"
-            )
+            raise DimensionError("system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)")
         self.system = system
         self.bounds = bounds.for_system(system)
         n, p = system.n, system.p
@@ -184,9 +180,7 @@ class UnknownInputIntervalObserver(Observer):
         if derivative == "hosm" and hosm is None:
             raise DimensionError("hosm: expected a HOSMDifferentiator when derivative='hosm'")
         if not (np.isfinite(input_magnitude) and input_magnitude >= 0):
-            raise BoundsError(
-                f"input_magnitude: expected a nonnegative bound of |ξ|, got {input_magnitude!r}"
-            )
+            raise BoundsError(f"input_magnitude: expected a nonnegative bound of |ξ|, got {input_magnitude!r}")
         self.derivative = derivative
         self.hosm = hosm
         self.mu1 = float(mu1)
@@ -338,9 +332,7 @@ class UnknownInputIntervalObserver(Observer):
         resid = np.abs(np.eye(n) - S @ T) + 4 * n * _U * np.abs(S) @ np.abs(T)
         r_norm = float(np.abs(resid).sum(axis=1).max())
         if r_norm >= 0.5:
-            raise DesignError(
-                f"T: expected a well-conditioned coordinate change, got ||I - T⁻¹T|| = {r_norm:.3g}"
-            )
+            raise DesignError(f"T: expected a well-conditioned coordinate change, got ||I - T⁻¹T|| = {r_norm:.3g}")
         dS = r_norm / (1 - r_norm) * float(np.abs(S).sum(axis=1).max())
         offdiag = (
             np.abs(co.J - np.diag(lam))
@@ -370,9 +362,7 @@ class UnknownInputIntervalObserver(Observer):
         """Limits of the widths (eqs. (30), (34), (48) for this observer), rounding pads excluded."""
         c = self._c
         dw = self._c.delta_hi - self._c.delta_lo
-        g_width = (
-            (c.c_start + c.c_end) * (np.abs(c.TL) @ dw) + c.b * (c.noise_hi - c.noise_lo) + 2 * c.const_pad
-        )
+        g_width = (c.c_start + c.c_end) * (np.abs(c.TL) @ dw) + c.b * (c.noise_hi - c.noise_lo) + 2 * c.const_pad
         rho_w = g_width / (1 - c.a)
         rho_x = np.abs(self.coords.S) @ rho_w + np.abs(self.decoupling.E) @ dw
         deriv = 2 * (self.rate_radius + 0.5 * self.output_accel * (self.h + self.step_tolerance))
@@ -478,10 +468,7 @@ class UnknownInputIntervalObserver(Observer):
         s_lo, s_hi = matvec_bounds(self.coords.S, w_lo, w_hi)
         e_lo, e_hi = matvec_bounds(self.decoupling.E, plo, phi)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
-        mag = (
-            w_mag @ np.abs(self.coords.S).T
-            + np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(self.decoupling.E).T
-        )
+        mag = w_mag @ np.abs(self.coords.S).T + np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(self.decoupling.E).T
         pad = ROUNDING_MARGIN * mag + c.dS * w_mag.sum(axis=-1, keepdims=True)
         return s_lo - e_hi - pad, s_hi - e_lo + pad
 
@@ -509,19 +496,13 @@ class UnknownInputIntervalObserver(Observer):
             + np.abs(u) @ np.abs(c.Mu).T
             + c.xi_noise_mag
         )
-        pad = (
-            c.xi_pad
-            + ROUNDING_MARGIN * mag
-            + c.dS * (w_mag.sum(axis=-1, keepdims=True) * c.M0CA_abs.sum(axis=-1))
-        )
+        pad = c.xi_pad + ROUNDING_MARGIN * mag + c.dS * (w_mag.sum(axis=-1, keepdims=True) * c.M0CA_abs.sum(axis=-1))
         lo = a_lo + b_lo + e_lo + mu + c.xi_noise_lo - pad
         hi = a_hi + b_hi + e_hi + mu + c.xi_noise_hi + pad
         return lo, hi
 
     def _derivative_pair(self, y_prev: FloatArray, y_now: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return difference_pair_bounds(
-            y_prev, y_now, self.h, self.rate_radius, self.output_accel, self.step_tolerance
-        )
+        return difference_pair_bounds(y_prev, y_now, self.h, self.rate_radius, self.output_accel, self.step_tolerance)
 
     # ------------------------------------------------------------------ protocol
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -548,12 +529,7 @@ class UnknownInputIntervalObserver(Observer):
         hi = np.array(x0_upper, dtype=float)
         if lo.ndim == 1:
             lo, hi = as_box("x0", (lo, hi), self.n)
-        elif (
-            lo.shape != hi.shape
-            or lo.shape[-1] != self.n
-            or np.any(lo > hi)
-            or not np.all(np.isfinite(lo + hi))
-        ):
+        elif lo.shape != hi.shape or lo.shape[-1] != self.n or np.any(lo > hi) or not np.all(np.isfinite(lo + hi)):
             raise BoundsError(f"x0: expected finite boxes of shape (..., {self.n}) with lower <= upper")
         return lo, hi
 
@@ -642,6 +618,7 @@ class UnknownInputIntervalObserver(Observer):
         u: ArrayLike | None = None,
         x0_lower: ArrayLike | None = None,
         x0_upper: ArrayLike | None = None,
+        hosm_q1: ArrayLike | None = None,
     ) -> Estimate:
         """Bounds over a whole record (vectorised; equal to repeated :meth:`step` up to rounding).
 
@@ -655,6 +632,9 @@ class UnknownInputIntervalObserver(Observer):
             Known input (zero-order hold).
         x0_lower, x0_upper : array_like, optional
             Prior box (default: the design bounds).
+        hosm_q1 : array_like, shape like ``y``, optional
+            With ``derivative="hosm"``: the estimate ``q₁`` already computed by ``self.hosm.run(y, h)``
+            (saves the time-stepping loop when several observers share one differentiator run).
 
         Returns
         -------
@@ -670,7 +650,6 @@ class UnknownInputIntervalObserver(Observer):
             )
         x0_lo, x0_hi = self._prior(x0_lower, x0_upper)
         lead = ys.shape[:-2]
-        steps = times.size
         w0_lo, w0_hi = self._initial_w(x0_lo, x0_hi, ys[..., 0, :])
         w0_lo = np.broadcast_to(w0_lo, (*lead, self.n))
         w0_hi = np.broadcast_to(w0_hi, (*lead, self.n))
@@ -692,8 +671,13 @@ class UnknownInputIntervalObserver(Observer):
         x_hi[..., 0, :] = x0_hi
         if self.derivative == "hosm":
             assert self.hosm is not None
-            q = self.hosm.run(ys, self.h)
-            d_lo, d_hi = q[..., 1] - self.beta, q[..., 1] + self.beta
+            if hosm_q1 is None:
+                q1 = self.hosm.run(ys, self.h)[..., 1]
+            else:
+                q1 = np.asarray(hosm_q1, dtype=float)
+                if q1.shape != ys.shape:
+                    raise DataError(f"hosm_q1: expected shape {ys.shape}, got {q1.shape}")
+            d_lo, d_hi = q1 - self.beta, q1 + self.beta
         else:
             d_lo = np.full(ys.shape, np.nan)
             d_hi = np.full(ys.shape, np.nan)
@@ -707,7 +691,6 @@ class UnknownInputIntervalObserver(Observer):
             "rho_x": self.rho_x.tolist(),
             "rho_xi": self.rho_xi.tolist(),
         }
-        del steps
         return Estimate(times, x_lo, x_hi, xi_lo, xi_hi, meta)
 
     def _scalar_recursion(self, w0: FloatArray, g: FloatArray) -> FloatArray:

@@ -33,9 +33,7 @@ NOISE_CASES = (("sine", "sine"), ("plateau", "vertex"), ("sine", "vertex"), ("pl
 HOSM_TRANSIENT = 1.0
 
 
-def _observer(
-    derivative: str = "difference", hosm: HOSMDifferentiator | None = None
-) -> UnknownInputIntervalObserver:
+def _observer(derivative: str = "difference", hosm: HOSMDifferentiator | None = None) -> UnknownInputIntervalObserver:
     return UnknownInputIntervalObserver.design(
         ac.aircraft_system(),
         ac.aircraft_bounds(),
@@ -135,7 +133,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         after = t >= HOSM_TRANSIENT
         claimed = ac.MU1 * np.sqrt(ac.DELTA_BAR)
         hosm_obs = _observer("hosm", diff)
-        h_est = hosm_obs.run(t, y[:1])
+        h_est = hosm_obs.run(t, y[:1], hosm_q1=q[:1])
         hosm_estimates[name] = _single(h_est, 0)
         h0 = _single(h_est, 0)
         inp = h0.input_enclosure(xi[0], HOSM_TRANSIENT)
@@ -234,11 +232,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "d": rec0.xi,
         "d_lower": est0.input_lower,
         "d_upper": est0.input_upper,
-        "y": rec0.y,
         "hosm_paper_d_lower": hosm_estimates["paper_lambda100"].input_lower,
         "hosm_paper_d_upper": hosm_estimates["paper_lambda100"].input_upper,
-        "hosm_levant_d_lower": hosm_estimates["levant_gains"].input_lower,
-        "hosm_levant_d_upper": hosm_estimates["levant_gains"].input_upper,
     }
     write_reproduction(out_dir, summary, trajectories)
     if plots:
@@ -265,15 +260,11 @@ def _figures(
     sl = slice(None, None, every)
     assert est.input_lower is not None and est.input_upper is not None
     panels = [(est.lower[:, i], est.upper[:, i], rec.x[:, i], f"$x_{i + 1}$") for i in range(5)]
-    panels += [
-        (est.input_lower[:, j], est.input_upper[:, j], rec.xi[:, j], rf"$\xi_{j + 1}$") for j in range(2)
-    ]
+    panels += [(est.input_lower[:, j], est.input_upper[:, j], rec.xi[:, j], rf"$\xi_{j + 1}$") for j in range(2)]
     for k, (lo, hi, truth, label) in enumerate(panels, start=1):
         fig, (ax, zoom) = plt.subplots(1, 2, figsize=(10, 3.2), gridspec_kw={"width_ratios": [2, 1]})
         for a, window in ((ax, sl), (zoom, slice(int(10.0 / ac.TE), int(12.0 / ac.TE), 5))):
-            a.fill_between(
-                t[window], lo[window], hi[window], color="tab:blue", alpha=0.3, lw=0, label="bounds"
-            )
+            a.fill_between(t[window], lo[window], hi[window], color="tab:blue", alpha=0.3, lw=0, label="bounds")
             a.plot(t[window], lo[window], color="tab:blue", lw=0.6)
             a.plot(t[window], hi[window], color="tab:blue", lw=0.6)
             a.plot(t[window], truth[window], color="black", lw=0.9, label="truth")
