@@ -1,7 +1,10 @@
 """intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
 
+from .complex_interval import cabs, ctimes, linear_image
 from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
+from .design.high_gain import ThetaDesign, theta_design
 from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
+from .design.regions import Disk, RegionPlacement, place_in_disks
 from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
 from .errors import (
     AssumptionError,
@@ -13,11 +16,11 @@ from .errors import (
 )
 from .estimate import EnclosureReport, Estimate
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
-from .observers import IntervalObserver, Observer, ObserverState
+from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
-from .systems import Bounds, LTISystem
+from .systems import Bounds, LTISystem, SampledSystem, simulate_sampled
 from .zonotope import Zonotope
 
 __version__ = "0.1.0"
@@ -30,20 +33,31 @@ __all__ = [
     "DataError",
     "DesignError",
     "DimensionError",
+    "Disk",
     "EnclosureReport",
     "Estimate",
+    "HighGainIntervalObserver",
     "IntervalObserver",
     "IntervalObserverError",
     "LTISystem",
     "Observer",
     "ObserverState",
+    "RegionPlacement",
+    "SampledSystem",
     "Simulation",
+    "ThetaDesign",
     "__version__",
+    "cabs",
+    "ctimes",
     "interval_matvec_bounds",
+    "linear_image",
     "matvec_bounds",
     "neg",
+    "place_in_disks",
     "pos",
     "simulate",
+    "simulate_sampled",
+    "theta_design",
 ]
 
 # seed 002

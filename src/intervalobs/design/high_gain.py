@@ -1,0 +1,243 @@
+r"""The high-gain parameter :math:`\theta` of seed 004, Theorem 4.4, computed as printed and as it must be read.
+
+Theorem 4.4 solves LMI (32) :math:`M_1^TQ + 2D + QM_1 \prec 0` (:math:`Q \succ 0`, :math:`D \prec 0`),
+sets :math:`M_2 = DQ^{-1}`, picks :math:`\alpha` from conditions (34)
+
+.. math:: |\operatorname{diag}(e^{-(\Theta + i\omega_1)t})v_1d^r| \le \alpha_d\mathbf 1,\qquad
+          |\operatorname{diag}(e^{-(\Theta + i\omega_1)t})v_1L_1\delta| \le \alpha_n\mathbf 1_\ell
+
+through (43), and takes :math:`\theta = \alpha - \lambda_{\min}(M_2)` (33).
+
+What the printed steps really give (all computed by :func:`theta_design`):
+
+* **the paper's reading** of (43), :math:`\alpha_j = |\log(v_1d^r)_j - \log\alpha_d + \lambda_{\min} - i\omega_j|`,
+  takes the *modulus* of a complex number whose real part is negative for the noise terms; with the
+  printed :math:`v_1, L_1` and :math:`\lambda_{\min}(M_2) = -1` it gives :math:`\alpha = 8.7585`
+  (printed 8.7586, :math:`\theta = 9.7586`);
+* **a sound reading**: (34) cannot hold at :math:`t = 0` for any :math:`\theta` (the factor is 1 there),
+  and for :math:`t > 0` it holds from :math:`t^\star = \max_j \log(|(v_1d^r)_j|/\alpha_d)/\theta` on. Read
+  at :math:`t = 1`, the real-valued solution of (42) is
+  :math:`\theta = \max_j \log(|\cdot|_j/\alpha_\cdot)` (the modulus of the phase
+  :math:`e^{-i\omega t}` is 1, it does not enter);
+* whatever :math:`\theta`, the Metzler matrix (35) with the reported :math:`\alpha, \theta` is not
+  Hurwitz (``mat_abscissa``), and LMI (32) does not certify anything (a very negative :math:`D` makes
+  it feasible for every :math:`M_1`);
+* the bounds do not depend on :math:`\theta` at all in exact arithmetic: the change of coordinates
+  :math:`T_1(t) = e^{-\theta t}\operatorname{diag}(e^{-i\omega_1t})v_1` only multiplies the centre and
+  the radius by the positive scalar :math:`e^{-\theta t}`, which passes through :math:`|\cdot|` and is
+  undone by :math:`T_1^{-1}`. The observer (:mod:`intervalobs.observers.hgio`) therefore works in
+  :math:`\zeta = e^{\theta t}z` (no overflow), and :math:`\theta` is reported, not used.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cvxpy as cp
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import DesignError
+from ..validation import as_matrix, as_vector
+from .regions import ModalDecomposition, radius_matrix
+
+__all__ = ["ThetaDesign", "euler_radius_factor", "mat_matrix", "theta_design"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ThetaDesign:
+    """Both readings of Theorem 4.4 (see the module docstring).
+
+    Attributes
+    ----------
+    lambda_min_M2 : float
+        :math:`\\lambda_{\\min}(DQ^{-1})` from LMI (32).
+    alpha_paper, theta_paper : float
+        (43) with the modulus of the complex logarithm, and (33).
+    alpha_sound, theta_sound : float
+        The real-valued solution of (42) at ``t = 1`` and (33).
+    t_star_paper, t_star_sound : float
+        Time from which conditions (34) hold with ``theta_paper`` / ``theta_sound``.
+    condition34_at_0 : numpy.ndarray
+        ``|v1 d^r|`` (must be <= alpha_d at t = 0, eq. (34)); the values do not depend on theta.
+    mat_abscissa_paper, mat_abscissa_sound : float
+        Largest real eigenvalue of (35) with each (alpha, theta); >= 0 means not Hurwitz.
+    radius_abscissa : float
+        Largest real eigenvalue of M1 (the matrix that really decides the radius stability when
+        phi is bounded by its range, alpha = 0, in coordinates where theta cancels).
+    """
+
+    lambda_min_M2: float
+    alpha_paper: float
+    theta_paper: float
+    alpha_sound: float
+    theta_sound: float
+    t_star_paper: float
+    t_star_sound: float
+    condition34_at_0: FloatArray
+    mat_abscissa_paper: float
+    mat_abscissa_sound: float
+    radius_abscissa: float
+
+
+def mat_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike, alpha: float, theta: float) -> FloatArray:
+    r"""Matrix (35)/(36): :math:`M_1 + [\operatorname{diag}(-\Theta) + \alpha I,\, \alpha I;\; \alpha I,\,
+    \operatorname{diag}(-\Theta) + \alpha I]`.
+
+    Parameters
+    ----------
+    modal : ModalDecomposition
+        Decomposition of ``A - L C``.
+    L : array_like, shape (n, p)
+        Gain.
+    C : array_like, shape (p, n)
+        Output matrix.
+    alpha, theta : float
+        The scalars of Theorem 4.4.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2n, 2n)
+    """
+    n = modal.eigenvalues.size
+    eye = np.eye(n)
+    m2 = np.block([[(alpha - theta) * eye, alpha * eye], [alpha * eye, (alpha - theta) * eye]])
+    return radius_matrix(modal, L, C) + m2
+
+
+def _lambda_min_m2(m1: FloatArray) -> float:
+    """Solve LMI (32) with the normalisation ``Q >= I``, ``D <= -I`` (least trace of Q)."""
+    size = m1.shape[0]
+    q = cp.Variable((size, size), symmetric=True)
+    d = cp.Variable((size, size), symmetric=True)
+    lmi = m1.T @ q + q @ m1 + 2 * d
+    constraints = [q >> np.eye(size), d << -np.eye(size), 0.5 * (lmi + lmi.T) << -1e-7 * np.eye(size)]
+    problem = cp.Problem(cp.Minimize(cp.trace(q) - cp.trace(d)), constraints)
+    status = "not solved"
+    for solver in ("CLARABEL", "SCS"):
+        try:
+            problem.solve(solver=solver)
+        except cp.error.SolverError:
+            continue
+        status = str(problem.status)
+        if status in ("optimal", "optimal_inaccurate"):
+            break
+    if q.value is None or d.value is None:
+        raise DesignError(f"Theorem 4.4 LMI (32): solver status {status}")
+    m2 = np.asarray(d.value) @ np.linalg.inv(np.asarray(q.value))
+    return float(np.min(np.linalg.eigvals(m2).real))
+
+
+def theta_design(
+    modal: ModalDecomposition,
+    L: ArrayLike,
+    C: ArrayLike,
+    d_radius: ArrayLike,
+    v_radius: ArrayLike,
+    alpha_d: float,
+    alpha_n: float,
+    lambda_min: float | None = None,
+) -> ThetaDesign:
+    r"""Theorem 4.4: :math:`\lambda_{\min}(M_2)`, :math:`\alpha` and :math:`\theta`, as printed and as sound.
+
+    Parameters
+    ----------
+    modal : ModalDecomposition
+        Decomposition of ``A - L C`` (eq. (13)).
+    L : array_like, shape (n, p)
+        Gain :math:`L_1`.
+    C : array_like, shape (p, n)
+        Output matrix.
+    d_radius : array_like, shape (n,)
+        :math:`d^r`, radius of the additive disturbance.
+    v_radius : array_like, shape (p,)
+        :math:`\delta`, bound of the measurement noise.
+    alpha_d, alpha_n : float
+        The scalars of (34) (printed: 0.08 and 0.03).
+    lambda_min : float, optional
+        Use this :math:`\lambda_{\min}(M_2)` instead of solving LMI (32) (its value depends only on
+        the LMI's normalisation; the paper's numbers imply -1).
+
+    Returns
+    -------
+    ThetaDesign
+    """
+    n = modal.eigenvalues.size
+    gain = as_matrix("L", L, (n, None))
+    c = as_matrix("C", C, (gain.shape[1], n))
+    dr = as_vector("d_radius", d_radius, n)
+    vr = as_vector("v_radius", v_radius, c.shape[0])
+    if not (alpha_d > 0 and alpha_n > 0):
+        raise DesignError(f"alpha_d, alpha_n: expected positive scalars, got {alpha_d}, {alpha_n}")
+    m1 = radius_matrix(modal, gain, c)
+    lam = _lambda_min_m2(m1) if lambda_min is None else float(lambda_min)
+    omega = modal.omega1
+    vd = modal.v1 @ dr
+    vl = modal.v1 @ gain * vr[None, :]
+    # paper (43): modulus of the complex expression; zeros (log 0) are ignored
+    with np.errstate(divide="ignore"):
+        terms_d = np.abs(np.log(vd.astype(complex)) - np.log(alpha_d) + lam - 1j * omega)
+        terms_n = np.abs(np.log(vl.astype(complex)) - np.log(alpha_n) + lam - 1j * omega[:, None])
+        ratio_d = np.log(np.abs(vd) / alpha_d)
+        ratio_n = np.log(np.abs(vl) / alpha_n)
+    finite = [x[np.isfinite(x)] for x in (terms_d, terms_n)]
+    alpha_paper = float(max(np.max(f) if f.size else -np.inf for f in finite))
+    theta_paper = alpha_paper - lam
+    needed = np.concatenate([ratio_d.ravel(), ratio_n.ravel()])
+    needed = needed[np.isfinite(needed)]
+    theta_sound = float(max(np.max(needed), 0.0)) if needed.size else 0.0
+    alpha_sound = theta_sound + lam
+
+    def t_star(theta: float) -> float:
+        worst = float(np.max(needed)) if needed.size else 0.0
+        return 0.0 if worst <= 0 else (np.inf if theta <= 0 else worst / theta)
+
+    def abscissa(alpha: float, theta: float) -> float:
+        return float(np.max(np.linalg.eigvals(mat_matrix(modal, gain, c, alpha, theta)).real))
+
+    return ThetaDesign(
+        lambda_min_M2=lam,
+        alpha_paper=alpha_paper,
+        theta_paper=theta_paper,
+        alpha_sound=alpha_sound,
+        theta_sound=theta_sound,
+        t_star_paper=t_star(theta_paper),
+        t_star_sound=t_star(theta_sound),
+        condition34_at_0=np.abs(vd),
+        mat_abscissa_paper=abscissa(alpha_paper, theta_paper),
+        mat_abscissa_sound=abscissa(alpha_sound, theta_sound),
+        radius_abscissa=float(np.max(np.linalg.eigvals(m1).real)),
+    )
+
+
+def euler_radius_factor(p: float, theta: float, h: float) -> float:
+    r"""What θ changes in the paper's Euler implementation: steady radius, Euler over exact.
+
+    The paper integrates :math:`\dot z^r = (p - \theta)z^r + e^{-\theta t}w` by explicit Euler with step
+    :math:`h`. Rescaled to :math:`\zeta = e^{\theta t}z` (no overflow) the recursion is
+    :math:`\zeta_{k+1} = e^{\theta h}(1 + h(p - \theta))\zeta_k + he^{\theta h}w`, whose steady state for a
+    constant :math:`w` is :math:`he^{\theta h}w/(1 - e^{\theta h}(1 + h(p - \theta)))`; the exact radius
+    is :math:`w/|p|` whatever θ. A ratio below 1 means the Euler bounds are too narrow, i.e. unsound;
+    :math:`1 + h(p - \theta) \le 0` (θ ≥ 1/h + p, e.g. θ = 1000 at h = 1e-3) even flips the sign of the
+    radius recursion.
+
+    Parameters
+    ----------
+    p : float
+        Real part of an eigenvalue of :math:`A - L_1C` (negative).
+    theta : float
+        High-gain parameter.
+    h : float
+        Euler step.
+
+    Returns
+    -------
+    float
+        Euler steady radius divided by the exact one (``nan`` if the Euler recursion diverges).
+    """
+    a = np.exp(theta * h) * (1.0 + h * (p - theta))
+    if abs(a) >= 1.0 or p >= 0:
+        return float("nan")
+    return float(h * np.exp(theta * h) * (-p) / (1.0 - a))

@@ -1,0 +1,422 @@
+r"""Pole placement of :math:`A - LC` in disk LMI regions (seed 004, Section 4.1).
+
+A disk with centre :math:`c = c_1 + ic_2` and radius :math:`r` is the :math:`\mathbb{D}_R`-region of
+degree one (seed 004, eqs. (6), (7), (14))
+
+.. math:: \{s : R_{00} + R_{10}s + \overline{R_{10}s} + R_{11}|s|^2 < 0\},\quad
+          R_{00} = |c|^2 - r^2,\; R_{10} = -c_1 + ic_2,\; R_{11} = 1,
+
+i.e. :math:`|s - c| < r`. Theorem 4.1 (by duality with Maamri et al. 2006) moves *one* eigenvalue
+:math:`\lambda_j` of the current matrix into its disk with a gain acting along its right eigenvector
+:math:`u_j`: with :math:`L_j = u_j\ell` every other eigenvalue is kept (their left eigenvectors are
+orthogonal to :math:`u_j`) and :math:`\lambda_j` becomes :math:`\lambda_j - \ell Cu_j`. The LMI (15)
+for this scalar modal subsystem, with :math:`X > 0`, :math:`S = \ell X` and
+:math:`Y = \lambda_j X - S\,Cu_j`, reads
+
+.. math:: \begin{bmatrix} R_{00}X + R_{10}Y + \overline{R_{10}Y} & \bar Y \\ Y & -X \end{bmatrix} \prec 0.
+
+Algorithm 1 repeats this for every disk. A complex eigenvalue and its conjugate are moved together
+with the real gain :math:`2\operatorname{Re}(u_j\ell)` (the disks must come in conjugate pairs); a real
+eigenvalue uses a real :math:`\ell`. Among the feasible gains we take the one of least norm (or, with
+``objective="center"``, the one that puts the eigenvalue closest to the disk centre).
+
+Everything is verified afterwards from the eigenvalues of :math:`A - LC` itself, not from the solver:
+each lies strictly in its disk, they are distinct, and the eigenvector matrix (the
+C-diagonalisation :math:`A - LC = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1`, eq. (13)) has its
+condition number reported and bounded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import cvxpy as cp
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
+from scipy.signal import place_poles
+
+from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
+from ..validation import as_matrix
+
+__all__ = [
+    "Disk",
+    "ModalDecomposition",
+    "RegionPlacement",
+    "modal_decomposition",
+    "place_in_disks",
+    "radius_matrix",
+]
+
+FloatArray = NDArray[np.float64]
+ComplexArray = NDArray[np.complex128]
+
+_MAX_CONDITION = 1e8
+_LMI_MARGIN = 1e-7
+_MARGIN = 0.02
+
+
+@dataclass(frozen=True)
+class Disk:
+    """An open disk of the complex plane, the LMI region of seed 004, eq. (14).
+
+    Parameters
+    ----------
+    center : complex
+        Centre :math:`c_1 + ic_2`.
+    radius : float
+        Radius, positive.
+    """
+
+    center: complex
+    radius: float
+
+    def __post_init__(self) -> None:
+        c = complex(self.center)
+        if not (np.isfinite(c.real) and np.isfinite(c.imag)):
+            raise BoundsError(f"Disk.center: expected a finite complex number, got {self.center!r}")
+        if not (np.isfinite(self.radius) and self.radius > 0):
+            raise BoundsError(f"Disk.radius: expected a positive radius, got {self.radius!r}")
+        object.__setattr__(self, "center", c)
+        object.__setattr__(self, "radius", float(self.radius))
+
+    @property
+    def R(self) -> tuple[float, complex, float]:
+        """``(R00, R10, R11)`` of eq. (14): ``|c|^2 - r^2``, ``-c1 + i c2``, ``1``."""
+        c = complex(self.center)
+        return abs(c) ** 2 - self.radius**2, complex(-c.real, c.imag), 1.0
+
+    def characteristic(self, s: complex | ComplexArray) -> Any:
+        """The region's function :math:`R_{00} + 2\\operatorname{Re}(R_{10}s) + |s|^2`; negative inside."""
+        r00, r10, r11 = self.R
+        s_arr = np.asarray(s, dtype=complex)
+        return r00 + 2 * (r10 * s_arr).real + r11 * np.abs(s_arr) ** 2
+
+    def margin(self, s: complex | ComplexArray) -> Any:
+        """Distance from ``s`` to the disk's boundary, positive inside: ``r - |s - c|``."""
+        return self.radius - np.abs(np.asarray(s, dtype=complex) - complex(self.center))
+
+    @property
+    def is_real(self) -> bool:
+        """True when the centre is on the real axis (the disk is its own conjugate)."""
+        return complex(self.center).imag == 0.0
+
+
+@dataclass(frozen=True)
+class ModalDecomposition:
+    r"""The C-diagonalisation :math:`A - LC = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1` (eq. (13)).
+
+    Attributes
+    ----------
+    eigenvalues : numpy.ndarray, shape (n,), complex
+        :math:`p_1 + i\omega_1`.
+    v1 : numpy.ndarray, shape (n, n), complex
+        Inverse of the eigenvector matrix whose columns have unit 2-norm (the MATLAB/NumPy
+        convention, which reproduces the paper's printed :math:`v_1`).
+    v1_inv : numpy.ndarray, shape (n, n), complex
+        The eigenvector matrix.
+    condition : float
+        2-norm condition number of ``v1``.
+    separation : float
+        Smallest distance between two eigenvalues.
+    """
+
+    eigenvalues: ComplexArray
+    v1: ComplexArray
+    v1_inv: ComplexArray
+    condition: float
+    separation: float
+
+    @property
+    def p1(self) -> FloatArray:
+        """Real parts of the eigenvalues."""
+        return np.asarray(self.eigenvalues.real, dtype=float)
+
+    @property
+    def omega1(self) -> FloatArray:
+        """Imaginary parts of the eigenvalues."""
+        return np.asarray(self.eigenvalues.imag, dtype=float)
+
+
+def modal_decomposition(
+    A: ArrayLike, C: ArrayLike, L: ArrayLike, order: Sequence[complex] | None = None
+) -> ModalDecomposition:
+    """Diagonalise ``A - L C`` and check that it is C-diagonalisable and Hurwitz (seed 004, eq. (13)).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    L : array_like, shape (n, p)
+        Gain.
+    order : sequence of complex, optional
+        Targets (e.g. disk centres): eigenvalue ``j`` is the one matched to ``order[j]``.
+
+    Returns
+    -------
+    ModalDecomposition
+
+    Raises
+    ------
+    DesignError
+        If ``A - LC`` is not Hurwitz, has repeated eigenvalues or an ill-conditioned eigenbasis.
+    """
+    a = as_matrix("A", A)
+    n = a.shape[0]
+    c = as_matrix("C", C, (None, n))
+    gain = as_matrix("L", L, (n, c.shape[0]))
+    closed = a - gain @ c
+    vals, vecs = np.linalg.eig(closed)
+    if order is not None:
+        targets = np.asarray(list(order), dtype=complex)
+        if targets.size != n:
+            raise DimensionError(f"order: expected {n} targets, got {targets.size}")
+        rows, cols = linear_sum_assignment(np.abs(targets[:, None] - vals[None, :]))
+        perm = cols[np.argsort(rows)]
+        vals, vecs = vals[perm], vecs[:, perm]
+    if np.max(vals.real) >= 0:
+        raise DesignError(
+            f"A - LC: expected a Hurwitz matrix, got an eigenvalue with real part {np.max(vals.real):.4g}"
+        )
+    gaps = np.abs(vals[:, None] - vals[None, :]) + np.diag(np.full(n, np.inf))
+    separation = float(np.min(gaps)) if n > 1 else np.inf
+    condition = float(np.linalg.cond(vecs))
+    if not np.isfinite(condition) or condition > _MAX_CONDITION or separation < 1e-9 * (1 + np.max(np.abs(vals))):
+        raise DesignError(
+            f"A - LC: expected distinct eigenvalues and a well-conditioned eigenbasis (C-diagonalisation, eq. (13)), "
+            f"got separation {separation:.3g} and condition number {condition:.3g}"
+        )
+    return ModalDecomposition(
+        vals.astype(complex), np.linalg.inv(vecs).astype(complex), vecs.astype(complex), condition, separation
+    )
+
+
+def radius_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike) -> FloatArray:
+    r"""The Metzler matrix :math:`[\operatorname{diag}(p_1) + P_1,\, P_1;\; P_1,\, \operatorname{diag}(p_1) + P_1]`.
+
+    With :math:`P_1 = |v_1 L C v_1^{-1}|` (elementwise modulus). It bounds, uniformly in time, the
+    radius dynamics of real and imaginary parts when the output injection :math:`LCx` is bounded from
+    the observer's own box (Proposition 4.3 with :math:`a = 0`, Algorithm 1 step 8, the known part
+    :math:`M_1` of (36)). Hurwitz is the condition under which those radii stay bounded.
+
+    Parameters
+    ----------
+    modal : ModalDecomposition
+        Decomposition of ``A - LC``.
+    L : array_like, shape (n, p)
+        Gain.
+    C : array_like, shape (p, n)
+        Output matrix.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2n, 2n)
+    """
+    p1 = np.abs(modal.v1 @ np.asarray(L, dtype=float) @ np.asarray(C, dtype=float) @ modal.v1_inv)
+    diag = np.diag(modal.p1) + p1
+    return np.block([[diag, p1], [p1, diag]])
+
+
+@dataclass(frozen=True)
+class RegionPlacement:
+    """Result of :func:`place_in_disks` (Algorithm 1), verified from the eigenvalues of ``A - L C``.
+
+    Attributes
+    ----------
+    L : numpy.ndarray, shape (n, p)
+        The gain :math:`L_1`.
+    disks : tuple of Disk
+        Disk ``j`` holds eigenvalue ``j``.
+    modal : ModalDecomposition
+        :math:`A - L_1C = v_1^{-1}\\operatorname{diag}(p_1 + i\\omega_1)v_1`, eigenvalues in disk order.
+    margins : numpy.ndarray, shape (n,)
+        ``r_j - |λ_j - c_j|`` (all positive).
+    radius_abscissa : float
+        Largest real eigenvalue of :func:`radius_matrix` (Algorithm 1, step 8; negative = stable).
+    steps : list of dict
+        For each LMI solve: the disk, the eigenvalue before and after, the solver status.
+    """
+
+    L: FloatArray
+    disks: tuple[Disk, ...]
+    modal: ModalDecomposition
+    margins: FloatArray
+    radius_abscissa: float
+    steps: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def eigenvalues(self) -> ComplexArray:
+        """Eigenvalues of ``A - L C`` in disk order."""
+        return self.modal.eigenvalues
+
+
+def _mode_gain(lam: complex, b: ComplexArray, disk: Disk, real: bool, objective: str) -> tuple[ComplexArray, str]:
+    """Solve LMI (15) for the scalar modal subsystem ``λ - ℓ b``; return ``ℓ`` (p,) and the status."""
+    p = b.size
+    r00, r10, _ = disk.R
+    x = cp.Variable()
+    s_re = cp.Variable(p)
+    s_im = np.zeros(p) if real else cp.Variable(p)
+    # Y = λX - S b  (S = ℓ X, a row), split into real and imaginary parts
+    y_re = lam.real * x - (b.real @ s_re - b.imag @ s_im)
+    y_im = lam.imag * x - (b.real @ s_im + b.imag @ s_re)
+    h11 = r00 * x + 2 * (r10.real * y_re - r10.imag * y_im)
+    # Hermitian [[h11, conj(Y)], [Y, -X]] ≺ 0 as the real symmetric 4×4 [[Re, -Im], [Im, Re]] ≺ 0
+    zero = cp.Constant(0.0)
+    real_block = cp.bmat(
+        [
+            [cp.reshape(h11, (1, 1), order="F"), cp.reshape(y_re, (1, 1), order="F")],
+            [cp.reshape(y_re, (1, 1), order="F"), cp.reshape(-x, (1, 1), order="F")],
+        ]
+    )
+    imag_block = cp.bmat(
+        [
+            [cp.reshape(zero, (1, 1), order="F"), cp.reshape(-y_im, (1, 1), order="F")],
+            [cp.reshape(y_im, (1, 1), order="F"), cp.reshape(zero, (1, 1), order="F")],
+        ]
+    )
+    big = cp.bmat([[real_block, -imag_block], [imag_block, real_block]])
+    sym = 0.5 * (big + big.T)
+    constraints = [x >= 1.0, sym << -_LMI_MARGIN * np.eye(4)]
+    if objective == "min_gain":
+        cost = cp.norm(cp.hstack([s_re, s_im]) if not real else s_re)
+    else:
+        cost = cp.norm(cp.hstack([y_re - disk.center.real * x, y_im - disk.center.imag * x]))
+    problem = cp.Problem(cp.Minimize(cost), constraints)
+    status = "not solved"
+    for solver in ("CLARABEL", "SCS"):
+        try:
+            problem.solve(solver=solver)
+        except cp.error.SolverError:
+            continue
+        status = str(problem.status)
+        if status in ("optimal", "optimal_inaccurate"):
+            break
+    if status not in ("optimal", "optimal_inaccurate") or x.value is None:
+        raise DesignError(
+            f"Theorem 4.1 LMI (15) for the disk centre {disk.center} radius {disk.radius}: solver status {status}; "
+            "enlarge the disk or move it (the mode may be unobservable)"
+        )
+    xv = float(x.value)
+    ell = (np.asarray(s_re.value, dtype=float) + 1j * (0.0 if real else np.asarray(s_im.value, dtype=float))) / xv  # type: ignore[union-attr]
+    return np.asarray(ell, dtype=complex).reshape(p), status
+
+
+def place_in_disks(
+    A: ArrayLike, C: ArrayLike, disks: Sequence[Disk | tuple[complex, float]], objective: str = "min_gain"
+) -> RegionPlacement:
+    r"""Place every eigenvalue of :math:`A - LC` in its own disk (seed 004, Theorem 4.1, Algorithm 1).
+
+    Eigenvalues of :math:`A` are matched to disks by least total distance; disk by disk (a conjugate
+    pair of disks at once) LMI (15) is solved for the modal subsystem and the gain accumulated
+    (step 6, :math:`L_1 = \sum_j L_{1j}`, step 10). Eigenvalues are recomputed after each step (steps
+    3 and 7). The result is verified from the eigenvalues of :math:`A - L_1C`.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        State matrix.
+    C : array_like, shape (p, n)
+        Output matrix.
+    disks : sequence of Disk or (centre, radius)
+        ``n`` disks, closed under complex conjugation, each in the open left half-plane
+        (``Re c + r <= 0``).
+    objective : {"min_gain", "center"}
+        Least-norm gain among the feasible ones, or the eigenvalue closest to the disk centre.
+
+    Returns
+    -------
+    RegionPlacement
+
+    Raises
+    ------
+    AssumptionError
+        If the disks are not ``n``, not conjugate-symmetric, not in the left half-plane, or a real
+        eigenvalue has to go into a non-real disk (that would need a two-mode block, not supported).
+    DesignError
+        If an LMI is infeasible or the verification fails.
+    """
+    a = as_matrix("A", A)
+    n = a.shape[0]
+    if a.shape != (n, n):
+        raise DimensionError(f"A: expected a square matrix, got shape {a.shape}")
+    c = as_matrix("C", C, (None, n))
+    if objective not in ("min_gain", "center"):
+        raise ValueError(f"objective: expected 'min_gain' or 'center', got {objective!r}")
+    region = tuple(d if isinstance(d, Disk) else Disk(complex(d[0]), float(d[1])) for d in disks)
+    if len(region) != n:
+        raise AssumptionError(f"disks: expected one disk per state ({n}), got {len(region)}")
+    for d in region:
+        if d.center.real + d.radius > 0:
+            raise AssumptionError(
+                f"disks: expected disks in the left half-plane (Re c + r <= 0), got centre {d.center} radius {d.radius}"
+            )
+    centres = np.array([d.center for d in region])
+    if not np.allclose(np.sort_complex(centres), np.sort_complex(centres.conj()), atol=1e-12):
+        raise AssumptionError(
+            "disks: expected disks closed under complex conjugation (a real gain places conjugate pairs)"
+        )
+    gain = np.zeros((n, c.shape[0]))
+    vals = np.linalg.eigvals(a)
+    rows, cols = linear_sum_assignment(np.abs(centres[:, None] - vals[None, :]))
+    assigned = vals[cols[np.argsort(rows)]]
+    steps: list[dict[str, Any]] = []
+    done = np.zeros(n, dtype=bool)
+    for j, disk in enumerate(region):
+        if done[j]:
+            continue
+        done[j] = True
+        if not disk.is_real:
+            partner = [i for i in range(n) if not done[i] and abs(region[i].center - disk.center.conjugate()) < 1e-12]
+            if not partner:
+                raise AssumptionError(f"disks: the disk {disk.center} has no conjugate partner")
+            done[partner[0]] = True
+        # Algorithm 1, steps 3-6: LMI (15) on the modal subsystem of the eigenvalue matched to the disk.
+        cur_vals, cur_vecs = np.linalg.eig(a - gain @ c)
+        k = int(np.argmin(np.abs(cur_vals - assigned[j])))
+        lam = complex(cur_vals[k])
+        if disk.is_real != (abs(lam.imag) <= 1e-9 * (1 + abs(lam))):
+            kind = "real" if disk.is_real else "non-real"
+            raise AssumptionError(
+                f"disks: the eigenvalue {lam:.4g} was matched to the {kind} disk centred at {disk.center}; "
+                "a real gain places real eigenvalues in real-centred disks and conjugate pairs in conjugate "
+                "disk pairs (other combinations need a two-mode block, not supported)"
+            )
+        if objective == "min_gain" and disk.margin(lam) > _MARGIN * disk.radius:
+            steps.append({"disk": j, "before": lam, "after": lam, "status": "already inside", "gain_norm": 0.0})
+            continue
+        target = Disk(disk.center, disk.radius * (1.0 - _MARGIN))
+        u = cur_vecs[:, k]
+        b = c @ u
+        ell, status = _mode_gain(complex(lam.real) if disk.is_real else lam, b, target, disk.is_real, objective)
+        wanted = lam - complex(ell @ b)
+        if disk.is_real:
+            step_gain = np.outer(u.real, ell.real)
+        else:
+            # A real gain along the real invariant plane [Re u, Im u] moves the pair to (wanted, conj)
+            # exactly and keeps every other eigenvalue (their left eigenvectors annihilate the plane).
+            plane = np.column_stack([u.real, u.imag])
+            block = np.linalg.lstsq(plane, (a - gain @ c) @ plane, rcond=None)[0]
+            placed = place_poles(block.T, (c @ plane).T, np.array([wanted, wanted.conjugate()]))
+            step_gain = plane @ placed.gain_matrix.T
+        gain = gain + step_gain
+        new = np.linalg.eigvals(a - gain @ c)
+        after = complex(new[np.argmin(np.abs(new - wanted))])
+        assigned[j] = after
+        steps.append(
+            {"disk": j, "before": lam, "after": after, "status": status, "gain_norm": float(np.linalg.norm(step_gain))}
+        )
+    modal = modal_decomposition(a, c, gain, order=list(centres))
+    margins = np.array([d.margin(lam) for d, lam in zip(region, modal.eigenvalues)], dtype=float)
+    if np.any(margins <= 0):
+        j = int(np.argmin(margins))
+        raise DesignError(
+            f"place_in_disks: eigenvalue {modal.eigenvalues[j]:.6g} lies outside its disk (centre {region[j].center}, "
+            f"radius {region[j].radius}) after the LMI steps; verification failed"
+        )
+    abscissa = float(np.max(np.linalg.eigvals(radius_matrix(modal, gain, c)).real))
+    return RegionPlacement(gain, region, modal, margins, abscissa, steps)

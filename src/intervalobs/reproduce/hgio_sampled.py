@@ -1,0 +1,281 @@
+"""Reproduction ``hgio-sampled``: seed 004's example, the constructive HGIO next to the θ = 1000 design.
+
+Constructive design: Algorithm 1 (disks of Section 5.2, least-norm gain), Theorem 4.4 computed both
+ways, the sound continuous–discrete observer of :mod:`intervalobs.observers.hgio`. Earlier design
+(Thabet et al. 2021): θ = 1000 and ``L = θΔ_θ⁻¹K``; K is not printed, we take K = (1, 0, 0) (the
+simplest K with ``A − LC`` Hurwitz and C-diagonalisable) and report K = (3, 3, 1) (the textbook
+binomial high-gain choice) over a short horizon. Both state observers get the same output bounds.
+The truth is integrated 4× finer than the observer, with bang-bang disturbances switching inside the
+observer's steps and the paper's samples every 5 ms.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..design.high_gain import euler_radius_factor, theta_design
+from ..design.regions import modal_decomposition, place_in_disks
+from ..estimate import Estimate, enclosure_report
+from ..examples import hgio as example
+from ..observers.hgio import HighGainIntervalObserver
+from ..plotting import plot_widths, save_figure
+from ..systems.sampled import simulate_sampled
+from .contract import Example, base_summary, write_reproduction
+
+NAME = "hgio-sampled"
+SEED_FILE = "004_a01fe651baa78161.txt"
+RUNS = 3
+SUBSTEPS = 4
+THETA_ARBITRARY = 1000.0
+K_ARBITRARY = np.array([1.0, 0.0, 0.0])
+K_BINOMIAL = np.array([3.0, 3.0, 1.0])
+BINOMIAL_HORIZON = 2.0
+WIDTH_WINDOW = 5.0
+
+
+def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
+    """``L = θ Δ_θ⁻¹ K`` with ``Δ_θ = diag(1, 1/θ, …, 1/θ^{n-1})`` (seed 004, eq. (10)), shape (n, 1)."""
+    n = K.size
+    return (theta ** np.arange(1, n + 1) * K)[:, None]
+
+
+def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
+    """Design both observers, simulate with bang-bang disturbances, write the contract files."""
+    system, bounds = example.system(), example.bounds()
+    order = [d.center for d in example.DISKS]
+    d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
+    delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
+    start = time.perf_counter()
+    placement = place_in_disks(system.A, system.C, example.DISKS)
+    ours = theta_design(placement.modal, placement.L, system.C, d_radius, delta, example.ALPHA_D, example.ALPHA_N)
+    printed_l1 = np.array(example.PAPER["L1"])[:, None]
+    printed_modal = modal_decomposition(system.A, system.C, printed_l1, order=order)
+    printed = theta_design(printed_modal, printed_l1, system.C, d_radius, delta, example.ALPHA_D, example.ALPHA_N)
+    constructive = HighGainIntervalObserver(
+        system, bounds, placement.L, example.STEP, theta=ours.theta_paper, input_rate=example.INPUT_RATE, order=order
+    )
+    l_arbitrary = high_gain_gain(THETA_ARBITRARY, K_ARBITRARY)
+    arbitrary = HighGainIntervalObserver(
+        system,
+        bounds,
+        l_arbitrary,
+        example.STEP,
+        output_gain=placement.L,
+        theta=THETA_ARBITRARY,
+        input_rate=example.INPUT_RATE,
+    )
+    design_time = time.perf_counter() - start
+
+    t = np.arange(0.0, example.T_FINAL + example.STEP / 2, example.STEP)
+    sim = simulate_sampled(
+        system, bounds, t, u=example.input_signal, noise="extreme", seed=seed, runs=RUNS, substeps=SUBSTEPS
+    )
+    start = time.perf_counter()
+    est_c = constructive.run(t, sim.y, sim.u)
+    est_a = arbitrary.run(t, sim.y, sim.u)
+    run_time = time.perf_counter() - start
+
+    # textbook binomial K over a short horizon (its gains reach 1e9: the widths say why)
+    short = t <= BINOMIAL_HORIZON
+    binomial = HighGainIntervalObserver(
+        system,
+        bounds,
+        high_gain_gain(THETA_ARBITRARY, K_BINOMIAL),
+        example.STEP,
+        output_gain=placement.L,
+        theta=THETA_ARBITRARY,
+        input_rate=example.INPUT_RATE,
+    )
+    est_b = binomial.run(t[short], sim.y[:, short], sim.u[short])
+
+    c45 = (est_c.meta["theorem45_lower"], est_c.meta["theorem45_upper"])
+    a45 = (est_a.meta["theorem45_lower"], est_a.meta["theorem45_upper"])
+    window = t >= WIDTH_WINDOW
+    width_c = (c45[1] - c45[0])[:, window].mean(axis=(0, 1))
+    width_a = (a45[1] - a45[0])[:, window].mean(axis=(0, 1))
+    width_r = (est_c.upper - est_c.lower)[:, window].mean(axis=(0, 1))
+    b45 = (est_b.meta["theorem45_lower"], est_b.meta["theorem45_upper"])
+    width_c_short = (c45[1] - c45[0])[:, short].mean(axis=(0, 1))
+    width_b_short = (b45[1] - b45[0]).mean(axis=(0, 1))
+    cx = sim.x[..., :1]
+    output_report = enclosure_report(t, est_c.meta["output_lower"], cx, est_c.meta["output_upper"])
+    all_runs = {
+        "recommended": est_c.enclosure(sim.x).as_dict(),
+        "constructive_theorem45": enclosure_report(t, *c45[:1], sim.x, c45[1]).as_dict(),
+        "arbitrary_theta1000_theorem45": enclosure_report(t, a45[0], sim.x, a45[1]).as_dict(),
+        "binomial_theta1000_theorem45": enclosure_report(t[short], b45[0], sim.x[:, short], b45[1]).as_dict(),
+        "output_Cx": output_report.as_dict(),
+    }
+
+    summary = base_summary(
+        example=NAME,
+        seed_file=SEED_FILE,
+        observer="HighGainIntervalObserver (constructive design, refined report)",
+        t=t,
+        x=sim.x[0],
+        x_lower=est_c.lower[0],
+        x_upper=est_c.upper[0],
+        transient_s=0.0,
+    )
+    p1 = placement.modal.p1
+    summary["design"] = {
+        "L1": placement.L.ravel(),
+        "p1": p1,
+        "omega1": placement.modal.omega1,
+        "eigenvalues": placement.eigenvalues,
+        "disk_margins": placement.margins,
+        "v1": placement.modal.v1,
+        "v1_condition": placement.modal.condition,
+        "radius_matrix_abscissa": placement.radius_abscissa,
+        "alpha": ours.alpha_paper,
+        "theta": ours.theta_paper,
+        "lambda_min_M2": ours.lambda_min_M2,
+        "theorem44_ours": _theta_dict(ours),
+        "theorem44_with_printed_L1_v1": _theta_dict(printed),
+        "printed_L1_eigenvalues": printed_modal.eigenvalues,
+        "theta_used_by_observer": "none: theta cancels in exact arithmetic; the observer works in zeta = e^{theta t} z",
+        "euler_radius_factor": {
+            f"theta={th:g}": [euler_radius_factor(float(p), th, example.STEP) for p in sorted(set(np.round(p1, 6)))]
+            for th in (0.0, ours.theta_sound, printed.theta_paper, THETA_ARBITRARY)
+        },
+        "arbitrary_design": {
+            "theta": THETA_ARBITRARY,
+            "K": K_ARBITRARY,
+            "L": l_arbitrary.ravel(),
+            "eigenvalues": arbitrary.state_modal.decomposition.eigenvalues,
+            "width_mean_theorem45": width_a,
+        },
+        "constructive_width_mean_theorem45": width_c,
+        "recommended_width_mean": width_r,
+        "width_ratio_constructive_over_theta1000": width_c / width_a,
+        "width_window_s": [WIDTH_WINDOW, example.T_FINAL],
+        "binomial_design": {
+            "K": K_BINOMIAL,
+            "L": high_gain_gain(THETA_ARBITRARY, K_BINOMIAL).ravel(),
+            "eigenvalues": binomial.state_modal.decomposition.eigenvalues,
+            "horizon_s": BINOMIAL_HORIZON,
+            "width_ratio_constructive_over_binomial": width_c_short / width_b_short,
+        },
+        "output_width_mean": (est_c.meta["output_upper"] - est_c.meta["output_lower"])[:, window].mean(),
+        "enclosure_all_runs": all_runs,
+        "runs": RUNS,
+        "truth_substeps": SUBSTEPS,
+        "sample_period_s": example.SAMPLE_PERIOD,
+    }
+    summary["paper"] = {
+        "p1": example.PAPER["p1"],
+        "omega1": example.PAPER["omega1"],
+        "L1": example.PAPER["L1"],
+        "alpha": example.PAPER["alpha"],
+        "theta": example.PAPER["theta"],
+        "theta_arbitrary": THETA_ARBITRARY,
+        "claim": "constructive bounds narrower than the theta = 1000 design (Fig. 2)",
+    }
+    summary["runtime_s"] = {"design": design_time, "run": run_time}
+    write_reproduction(
+        out_dir,
+        summary,
+        {
+            "t": t,
+            "x": sim.x[0],
+            "x_lower": est_c.lower[0],
+            "x_upper": est_c.upper[0],
+            "constructive_x_lower": c45[0][0],
+            "constructive_x_upper": c45[1][0],
+            "arbitrary_theta1000_x_lower": a45[0][0],
+            "arbitrary_theta1000_x_upper": a45[1][0],
+            "y": sim.y[0],
+            "y_lower": est_c.meta["output_lower"][0],
+            "y_upper": est_c.meta["output_upper"][0],
+        },
+    )
+    if plots:
+        _figures(out_dir, t, sim.x[0], sim.y[0], est_c, c45, a45)
+    return summary
+
+
+def _theta_dict(design: Any) -> dict[str, Any]:
+    return {
+        "lambda_min_M2": design.lambda_min_M2,
+        "alpha_paper_reading": design.alpha_paper,
+        "theta_paper_reading": design.theta_paper,
+        "alpha_sound_reading": design.alpha_sound,
+        "theta_sound_reading": design.theta_sound,
+        "condition34_from_t_paper": design.t_star_paper,
+        "condition34_from_t_sound": design.t_star_sound,
+        "abs_v1_dr_at_t0": design.condition34_at_0,
+        "mat35_abscissa_paper": design.mat_abscissa_paper,
+        "mat35_abscissa_sound": design.mat_abscissa_sound,
+        "M1_abscissa": design.radius_abscissa,
+    }
+
+
+def _figures(
+    out_dir: Path,
+    t: np.ndarray,
+    x: np.ndarray,
+    y: np.ndarray,
+    est: Estimate,
+    c45: tuple[np.ndarray, np.ndarray],
+    a45: tuple[np.ndarray, np.ndarray],
+) -> None:
+    import matplotlib.pyplot as plt
+
+    labels = ["$x_1$", "$x_2$", "$x_3$"]
+    fig, axes = plt.subplots(3, 2, figsize=(11, 7.5), sharex=True)
+    for i in range(3):
+        for col, (lo, hi, title) in enumerate(
+            (
+                (c45[0][0], c45[1][0], "(a) constructive design, Thm 4.5 bounds"),
+                (a45[0][0], a45[1][0], "(b) θ = 1000, K = (1, 0, 0), Thm 4.5 bounds"),
+            )
+        ):
+            ax = axes[i, col]
+            ax.fill_between(t, lo[:, i], hi[:, i], color="tab:blue", alpha=0.25, lw=0)
+            ax.plot(t, lo[:, i], color="tab:blue", lw=0.6)
+            ax.plot(t, hi[:, i], color="tab:blue", lw=0.6)
+            if col == 0:
+                ax.plot(t, est.upper[0][:, i], color="tab:green", lw=0.6, label="refined (reported)")
+                ax.plot(t, est.lower[0][:, i], color="tab:green", lw=0.6)
+            ax.plot(t, x[:, i], color="black", lw=0.8, label="truth")
+            ax.set_ylabel(labels[i])
+            if i == 0:
+                ax.set_title(title, fontsize=9)
+                ax.legend(fontsize=7, loc="upper right")
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.tight_layout()
+    save_figure(fig, out_dir / "states.png")
+
+    widths = {
+        "constructive (Thm 4.5)": c45[1][0] - c45[0][0],
+        "θ = 1000 (Thm 4.5)": a45[1][0] - a45[0][0],
+        "constructive, refined": est.upper[0] - est.lower[0],
+    }
+    save_figure(plot_widths(t, widths), out_dir / "widths.png")
+
+    zoom = t <= 0.2
+    fig, ax = plt.subplots(1, 1, figsize=(8, 3.2))
+    ax.fill_between(
+        t[zoom],
+        est.meta["output_lower"][0][zoom, 0],
+        est.meta["output_upper"][0][zoom, 0],
+        color="tab:orange",
+        alpha=0.3,
+        lw=0,
+    )
+    ax.plot(t[zoom], x[zoom, 0], color="black", lw=0.8, label="$Cx = x_1$")
+    have = ~np.isnan(y[:, 0]) & zoom
+    ax.errorbar(t[have], y[have, 0], yerr=0.1, fmt=".", ms=3, lw=0.5, color="tab:red", label="samples ± δ")
+    ax.set_xlabel("t [s]")
+    ax.set_title("output bounds (Thm 4.2 with intersample prediction), first 0.2 s", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, out_dir / "output.png")
+
+
+EXAMPLE = Example(NAME, SEED_FILE, "seed 004: sampled-output HGIO, constructive vs θ = 1000 design", run)

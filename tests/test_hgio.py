@@ -1,0 +1,114 @@
+"""The sound continuous-discrete HGIO (seed 004, Theorems 4.2 and 4.5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs import AssumptionError, DataError
+from intervalobs.design.regions import place_in_disks
+from intervalobs.estimate import enclosure_report
+from intervalobs.examples import hgio as example
+from intervalobs.interval import matvec_bounds
+from intervalobs.observers.hgio import HighGainIntervalObserver, _Split
+from intervalobs.systems.sampled import simulate_sampled
+
+HORIZON = 1.0
+
+
+@pytest.fixture(scope="module")
+def gains() -> dict[str, np.ndarray]:
+    placed = place_in_disks(example.A, example.C, example.DISKS)
+    return {
+        "constructive": placed.L,
+        "center": place_in_disks(example.A, example.C, example.DISKS, objective="center").L,
+        "theta1000": np.array([[1000.0], [0.0], [0.0]]),
+    }
+
+
+def _observer(gain: np.ndarray, output_gain: np.ndarray | None = None, refine: bool = True) -> HighGainIntervalObserver:
+    return HighGainIntervalObserver(
+        example.system(),
+        example.bounds(),
+        gain,
+        example.STEP,
+        output_gain=output_gain,
+        input_rate=example.INPUT_RATE,
+        refine=refine,
+    )
+
+
+@pytest.mark.parametrize("design", ["constructive", "center", "theta1000"])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_encloses_truth_under_bang_bang_disturbances(gains: dict[str, np.ndarray], design: str, seed: int) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, HORIZON + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, noise="extreme", seed=seed, runs=3, substeps=4)
+    observer = _observer(gains[design], output_gain=gains["constructive"])
+    est = observer.run(t, sim.y, sim.u)
+    for lo, hi in ((est.lower, est.upper), (est.meta["theorem45_lower"], est.meta["theorem45_upper"])):
+        report = enclosure_report(t, lo, sim.x, hi)
+        assert report.max_violation == 0.0
+    out = enclosure_report(t, est.meta["output_lower"], sim.x[..., :1], est.meta["output_upper"])
+    assert out.max_violation == 0.0
+    assert np.all(np.isfinite(est.upper))
+
+
+def test_encloses_with_held_input_and_sine_noise(gains: dict[str, np.ndarray]) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, HORIZON + 1e-12, example.STEP)
+    u = example.input_signal(t)
+    sim = simulate_sampled(system, bounds, t, u=u, noise="sine", seed=4, runs=2)
+    observer = HighGainIntervalObserver(system, bounds, gains["constructive"], example.STEP)  # input_rate 0: ZOH
+    est = observer.run(t, sim.y, sim.u)
+    assert est.enclosure(sim.x).max_violation == 0.0
+
+
+def test_run_equals_repeated_step(gains: dict[str, np.ndarray]) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, 0.1 + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, seed=5)
+    observer = _observer(gains["center"], output_gain=gains["constructive"])
+    est = observer.run(t, sim.y, sim.u)
+    state = observer.init()
+    for k in range(t.size - 1):
+        np.testing.assert_allclose(state.lower, est.lower[k], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(state.upper, est.upper[k], rtol=1e-12, atol=1e-12)
+        state = observer.step(state, sim.y[k], sim.u[k])
+
+
+def test_refinement_only_tightens(gains: dict[str, np.ndarray]) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, 0.3 + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, seed=6)
+    est = _observer(gains["constructive"]).run(t, sim.y, sim.u)
+    assert np.all(est.lower >= est.meta["theorem45_lower"] - 1e-12)
+    assert np.all(est.upper <= est.meta["theorem45_upper"] + 1e-12)
+    # the measured output pins x1 to a few noise bounds, Theorem 4.5 alone (L1 = 0) does not
+    assert np.mean(est.width()[-50:, 0]) < 0.5 * np.mean(
+        (est.meta["theorem45_upper"] - est.meta["theorem45_lower"])[-50:, 0]
+    )
+
+
+def test_split_matrix_equals_matvec_bounds() -> None:
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(3, 4))
+    lo = rng.normal(size=(5, 4))
+    hi = lo + rng.uniform(size=(5, 4))
+    for got, want in zip(_Split(a).bounds(lo, hi), matvec_bounds(a, lo, hi)):
+        np.testing.assert_allclose(got, want, rtol=1e-15)
+
+
+def test_bad_inputs_raise(gains: dict[str, np.ndarray]) -> None:
+    observer = _observer(gains["constructive"])
+    t = np.arange(0.0, 0.01 + 1e-12, example.STEP)
+    y = np.full((t.size, 1), np.nan)
+    with pytest.raises(DataError, match="uniform grid"):
+        observer.run(t * 2, y)
+    with pytest.raises(DataError, match="inf"):
+        observer.run(t, np.where(np.arange(t.size)[:, None] == 0, np.inf, y))
+    y[0] = 100.0
+    with pytest.raises(AssumptionError, match="inconsistent"):
+        observer.run(t, y)
+    with pytest.raises(AssumptionError, match="not Hurwitz"):
+        _observer(np.array([[1000.0], [0.0], [0.0]]))  # the output observer cannot take a high gain

@@ -1,0 +1,84 @@
+"""Disk pole placement (seed 004, Theorem 4.1, Algorithm 1) and the C-diagonalisation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs import AssumptionError, DesignError
+from intervalobs.design.regions import Disk, modal_decomposition, place_in_disks, radius_matrix
+from intervalobs.examples import hgio as example
+
+A, C = example.A, example.C
+
+
+def test_paper_disks_already_hold_the_open_loop_eigenvalues() -> None:
+    placed = place_in_disks(A, C, example.DISKS)
+    np.testing.assert_allclose(placed.L, 0.0, atol=1e-12)
+    assert np.all(placed.margins > 0)
+    np.testing.assert_allclose(placed.eigenvalues, [-1, -0.5 + 1.9364916731j, -0.5 - 1.9364916731j], atol=1e-9)
+    assert placed.radius_abscissa < 0
+
+
+def test_center_objective_moves_eigenvalues_to_the_centres() -> None:
+    placed = place_in_disks(A, C, example.DISKS, objective="center")
+    np.testing.assert_allclose(placed.eigenvalues, [d.center for d in example.DISKS], atol=1e-4)
+    closed = A - placed.L @ C
+    for d, lam in zip(placed.disks, np.linalg.eigvals(closed)[np.argsort(np.linalg.eigvals(closed).imag)[[1, 2, 0]]]):
+        assert d.margin(lam) > 0
+
+
+@pytest.mark.parametrize(
+    "disks",
+    [
+        [(-3.0, 0.5), (-2 + 1j, 0.3), (-2 - 1j, 0.3)],
+        [(-5.0, 1.0), (-1 + 3j, 0.5), (-1 - 3j, 0.5)],
+    ],
+    ids=["moderate", "far"],
+)
+def test_moves_every_eigenvalue_into_its_disk(disks: list[tuple[complex, float]]) -> None:
+    placed = place_in_disks(A, C, disks)
+    eig = np.linalg.eigvals(A - placed.L @ C)
+    for d in placed.disks:
+        assert np.min(np.abs(eig - d.center)) < d.radius  # verified from the matrix itself
+    assert np.all(placed.margins > 0)
+    assert placed.modal.condition < 1e8
+
+
+def test_printed_gain_reproduces_the_printed_eigenvalues_and_v1() -> None:
+    modal = modal_decomposition(A, C, np.array(example.PAPER["L1"])[:, None], order=[d.center for d in example.DISKS])
+    np.testing.assert_allclose(modal.p1, example.PAPER["p1"], atol=1e-4)
+    np.testing.assert_allclose(modal.omega1, example.PAPER["omega1"], atol=1e-4)
+    np.testing.assert_allclose(modal.v1, np.array(example.PAPER["v1"]), atol=1e-4)
+    closed = modal.v1_inv @ np.diag(modal.eigenvalues) @ modal.v1
+    np.testing.assert_allclose(closed, A - np.array(example.PAPER["L1"])[:, None] @ C, atol=1e-12)
+
+
+def test_radius_matrix_is_metzler() -> None:
+    modal = modal_decomposition(A, C, np.zeros((3, 1)))
+    mat = radius_matrix(modal, np.zeros((3, 1)), C)
+    assert np.all(mat - np.diag(np.diag(mat)) >= 0)
+
+
+@pytest.mark.parametrize(
+    "disks, match",
+    [
+        ([(-1.0, 0.5), (-1.0, 0.5)], "one disk per state"),
+        ([(-1.0, 0.5), (-0.6 + 1.8j, 0.2), (-0.6 - 1.7j, 0.2)], "conjugation"),
+        ([(0.2, 0.5), (-0.6 + 1.8j, 0.2), (-0.6 - 1.8j, 0.2)], "left half-plane"),
+        ([(-1.0, 0.5), (-2.0, 0.2), (-3.0, 0.2)], "matched"),
+    ],
+    ids=["count", "not-conjugate", "unstable-disk", "pair-to-real"],
+)
+def test_bad_disks_raise(disks: list[tuple[complex, float]], match: str) -> None:
+    with pytest.raises(AssumptionError, match=match):
+        place_in_disks(A, C, disks)
+
+
+def test_disk_validation_and_repeated_eigenvalues() -> None:
+    with pytest.raises(ValueError, match="radius"):
+        Disk(-1.0, -0.1)
+    with pytest.raises(DesignError, match="distinct"):
+        modal_decomposition(-np.eye(2), np.array([[1.0, 0.0]]), np.zeros((2, 1)))
+    with pytest.raises(DesignError, match="Hurwitz"):
+        modal_decomposition(A, C, -np.array([[10.0], [0.0], [0.0]]))
