@@ -270,8 +270,14 @@ def difference_pair_bounds(
     ----------
     y_prev, y_now : numpy.ndarray, shape (..., p)
         Consecutive measurements ``y_{k-1}``, ``y_k``.
-    h, rate, accel, step_tolerance
-        As in :func:`difference_derivative_bounds`.
+    h : float
+        Nominal sample interval.
+    rate : numpy.ndarray, shape (p,)
+        Bound of ``|dδ/dt|``.
+    accel : numpy.ndarray, shape (p,)
+        Bound ``L`` of ``|d²ψ/dt²|``.
+    step_tolerance : float
+        Bound of ``|h_k - h|``.
 
     Returns
     -------

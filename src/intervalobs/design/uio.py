@@ -281,7 +281,18 @@ def _coordinates(pa: FloatArray, c: FloatArray, e: FloatArray, k: FloatArray, t:
 
 
 def uio_pole_candidates(n: int) -> dict[str, FloatArray]:
-    """Real, distinct pole sets tried by :func:`design_uio_coordinates`: ``-a·(1 … n)`` and ``-a·1.6^i``."""
+    """Real, distinct pole sets tried by :func:`design_uio_coordinates`: ``-a·(1 … n)`` and ``-a·1.6^i``.
+
+    Parameters
+    ----------
+    n : int
+        Number of states.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Pole sets by name.
+    """
     found: dict[str, FloatArray] = {}
     for scale in (0.5, 1.0, 2.0, 3.0):
         found[f"linear x{scale:g}"] = -scale * np.arange(1, n + 1, dtype=float)

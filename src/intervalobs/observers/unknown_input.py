@@ -119,6 +119,35 @@ class UnknownInputIntervalObserver(Observer):
 
     Build it with :meth:`design`; see the module docstring for the equations and step semantics.
 
+    Parameters
+    ----------
+    system : LTISystem
+        Continuous-time model with a point matrix ``A``.
+    bounds : Bounds
+        Prior box of ``x(t_0)`` and noise boxes.
+    D : array_like, shape (n, q)
+        Unknown-input matrix.
+    h : float
+        Sampling period.
+    decoupling : UIODecoupling
+        From :func:`~intervalobs.design.uio.uio_decoupling`.
+    coords : UIOCoordinates
+        Gain and diagonalising coordinates (Hypothesis 6).
+    noise_rate : array_like, shape (nv,)
+        Bound of ``|dv/dt|``.
+    output_accel : array_like, shape (p,)
+        Bound ``L`` of ``|d²ψ/dt²|``.
+    derivative : {"difference", "hosm"}
+        Derivative enclosure for the unknown-input bounds.
+    hosm : HOSMDifferentiator, optional
+        Differentiator for ``derivative="hosm"``.
+    mu1 : float
+        ``µ_1`` of (8).
+    hosm_transient : float
+        Time after which the HOSM bound is claimed.
+    input_magnitude : float
+        Bound of ``|ξ|`` for the rounding-level leak through ``PD ≈ 0``.
+
     Attributes
     ----------
     system : LTISystem

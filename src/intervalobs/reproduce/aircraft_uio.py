@@ -91,7 +91,22 @@ def _single(est: Estimate, i: int) -> Estimate:
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
-    """Run the example and write summary.json, trajectories.npz and the figures into ``out_dir``."""
+    """Run the example and write summary.json, trajectories.npz and the figures into ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder.
+    seed : int
+        Seed of the noise realisations.
+    plots : bool
+        Write the PNG figures.
+
+    Returns
+    -------
+    dict
+        The summary.
+    """
     start = time.perf_counter()
     observer = _observer()
     design_time = time.perf_counter() - start
