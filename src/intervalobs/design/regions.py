@@ -89,13 +89,33 @@ class Disk:
         return abs(c) ** 2 - self.radius**2, complex(-c.real, c.imag), 1.0
 
     def characteristic(self, s: complex | ComplexArray) -> Any:
-        """The region's function :math:`R_{00} + 2\\operatorname{Re}(R_{10}s) + |s|^2`; negative inside."""
+        """The region's function :math:`R_{00} + 2\\operatorname{Re}(R_{10}s) + |s|^2`; negative inside.
+
+        Parameters
+        ----------
+        s : complex or numpy.ndarray
+            Point(s) of the complex plane.
+
+        Returns
+        -------
+        float or numpy.ndarray
+        """
         r00, r10, r11 = self.R
         s_arr = np.asarray(s, dtype=complex)
         return r00 + 2 * (r10 * s_arr).real + r11 * np.abs(s_arr) ** 2
 
     def margin(self, s: complex | ComplexArray) -> Any:
-        """Distance from ``s`` to the disk's boundary, positive inside: ``r - |s - c|``."""
+        """Distance from ``s`` to the disk's boundary, positive inside: ``r - |s - c|``.
+
+        Parameters
+        ----------
+        s : complex or numpy.ndarray
+            Point(s) of the complex plane.
+
+        Returns
+        -------
+        float or numpy.ndarray
+        """
         return self.radius - np.abs(np.asarray(s, dtype=complex) - complex(self.center))
 
     @property

@@ -71,14 +71,42 @@ PAPER = {
 
 
 def phi(t: float, u: FloatArray, x: FloatArray) -> FloatArray:
-    """The nonlinear term :math:`B_u u + e^{-|x|}` (vectorised over leading axes)."""
+    """The nonlinear term :math:`B_u u + e^{-|x|}` (vectorised over leading axes).
+
+    Parameters
+    ----------
+    t : float
+        Time (unused).
+    u : numpy.ndarray, shape (..., 1)
+        Known input.
+    x : numpy.ndarray, shape (..., 3)
+        State.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+    """
     return np.asarray(np.asarray(u, dtype=float) @ B_U.T + np.exp(-np.abs(x)))
 
 
 def phi_bounds(
     t0: float, t1: float, u_lower: FloatArray, u_upper: FloatArray, x_lower: FloatArray, x_upper: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Range enclosure of :func:`phi` over boxes: :math:`e^{-|x|} \\in [e^{-\\max|x|}, e^{-\\mathrm{mig}|x|}]`."""
+    """Range enclosure of :func:`phi` over boxes: :math:`e^{-|x|} \\in [e^{-\\max|x|}, e^{-\\mathrm{mig}|x|}]`.
+
+    Parameters
+    ----------
+    t0, t1 : float
+        Time interval (``phi`` does not depend on time).
+    u_lower, u_upper : numpy.ndarray, shape (..., 1)
+        Box of the input.
+    x_lower, x_upper : numpy.ndarray, shape (..., 3)
+        Box of the state.
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (..., 3)
+    """
     bu_lo, bu_hi = matvec_bounds(B_U, u_lower, u_upper)
     lo = np.asarray(x_lower, dtype=float)
     hi = np.asarray(x_upper, dtype=float)
@@ -88,12 +116,22 @@ def phi_bounds(
 
 
 def system() -> SampledSystem:
-    """The model of Section 5.1 (samples every 5 ms)."""
+    """The model of Section 5.1 (samples every 5 ms).
+
+    Returns
+    -------
+    SampledSystem
+    """
     return SampledSystem(A, C, phi=phi, phi_bounds=phi_bounds, m=1, sample_period=SAMPLE_PERIOD)
 
 
 def bounds() -> Bounds:
-    """Initial box (0, 3, 4) ± (0.09, 0.2, 0.6), d ∈ 0 ± (0.1, 1, 1), |V| ≤ 0.1."""
+    """Initial box (0, 3, 4) ± (0.09, 0.2, 0.6), d ∈ 0 ± (0.1, 1, 1), |V| ≤ 0.1.
+
+    Returns
+    -------
+    Bounds
+    """
     xc = np.array([0.0, 3.0, 4.0])
     xr = np.array([0.09, 0.2, 0.6])
     dr = np.array([0.1, 1.0, 1.0])
@@ -101,6 +139,16 @@ def bounds() -> Bounds:
 
 
 def input_signal(t: float | FloatArray) -> FloatArray:
-    """The known input :math:`u = 3\\sin t - 2\\sin 3t`, eq. (53), shape (..., 1)."""
+    """The known input :math:`u = 3\\sin t - 2\\sin 3t`, eq. (53).
+
+    Parameters
+    ----------
+    t : float or numpy.ndarray
+        Time(s).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 1)
+    """
     tt = np.asarray(t, dtype=float)
     return np.asarray((3 * np.sin(tt) - 2 * np.sin(3 * tt))[..., None])

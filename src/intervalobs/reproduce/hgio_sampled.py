@@ -38,13 +38,40 @@ WIDTH_WINDOW = 5.0
 
 
 def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
-    """``L = θ Δ_θ⁻¹ K`` with ``Δ_θ = diag(1, 1/θ, …, 1/θ^{n-1})`` (seed 004, eq. (10)), shape (n, 1)."""
+    """``L = θ Δ_θ⁻¹ K`` with ``Δ_θ = diag(1, 1/θ, …, 1/θ^{n-1})`` (seed 004, eq. (10)).
+
+    Parameters
+    ----------
+    theta : float
+        High-gain parameter.
+    K : numpy.ndarray, shape (n,)
+        Normalised gain.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 1)
+    """
     n = K.size
     return (theta ** np.arange(1, n + 1) * K)[:, None]
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
-    """Design both observers, simulate with bang-bang disturbances, write the contract files."""
+    """Design both observers, simulate with bang-bang disturbances, write the contract files.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder.
+    seed : int
+        Random seed of the simulation.
+    plots : bool
+        Write the PNG figures.
+
+    Returns
+    -------
+    dict
+        The summary.
+    """
     system, bounds = example.system(), example.bounds()
     order = [d.center for d in example.DISKS]
     d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)

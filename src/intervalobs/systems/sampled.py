@@ -125,7 +125,21 @@ class SampledSystem:
         return self.p
 
     def nonlinearity(self, t: float, u: FloatArray, x: FloatArray) -> FloatArray:
-        """``phi(t, u, x)``, zeros when the model has no nonlinear term."""
+        """``phi(t, u, x)``, zeros when the model has no nonlinear term.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        u : numpy.ndarray, shape (..., m)
+            Known input.
+        x : numpy.ndarray, shape (..., n)
+            State.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., n)
+        """
         if self.phi is None:
             return np.zeros_like(x)
         return np.asarray(self.phi(t, u, x), dtype=float)
@@ -133,7 +147,21 @@ class SampledSystem:
     def nonlinearity_bounds(
         self, t0: float, t1: float, u_lower: FloatArray, u_upper: FloatArray, x_lower: FloatArray, x_upper: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Enclosure of ``phi`` over ``[t0, t1]`` and the boxes (zeros without a nonlinear term)."""
+        """Enclosure of ``phi`` over ``[t0, t1]`` and the boxes (zeros without a nonlinear term).
+
+        Parameters
+        ----------
+        t0, t1 : float
+            Time interval.
+        u_lower, u_upper : numpy.ndarray, shape (..., m)
+            Box of the known input.
+        x_lower, x_upper : numpy.ndarray, shape (..., n)
+            Box of the state.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., n)
+        """
         if self.phi_bounds is None:
             zero = np.zeros_like(x_lower)
             return zero, zero
