@@ -119,3 +119,13 @@ def test_given_nondiagonal_coordinates_are_refused() -> None:
     mix = np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1)
     with pytest.raises((DesignError, AssumptionError)):
         _design(K=k, T=mix @ obs.coords.T)
+
+
+def test_known_inputs_are_refused() -> None:
+    from intervalobs.systems import LTISystem
+
+    system = LTISystem(ac.A, ac.C, B=np.ones((5, 1)))
+    with pytest.raises(DimensionError, match="known input"):
+        UnknownInputIntervalObserver.design(
+            system, ac.aircraft_bounds(), ac.D, H, noise_rate=np.full(4, 0.01), output_accel=np.full(4, 90.0)
+        )

@@ -43,13 +43,13 @@ through a second ``lfilter`` recursion for the state-dependent parts.
 Step semantics (current output): ``init`` returns the prior box; ``step(state, y_k, u_k)`` consumes the
 measurement of the *next* sample and returns the box at that sample given ``y_0 … y_k`` (the first call
 consumes ``y_0`` and returns the prior box at ``t_0``). Row ``k`` of :meth:`run` equals the box after the
-``(k+1)``-th ``step`` call. The known input is held over each interval (zero-order hold).
+``(k+1)``-th ``step`` call. Known inputs (B) are not supported (see the constructor).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -111,7 +111,10 @@ class _Precomputed:
     xi_noise_mag: FloatArray
     xi_pad: FloatArray
     M0CA_abs: FloatArray
-    extras: dict[str, Any] = field(default_factory=dict)
+    TL_mag: FloatArray  # magnitude matrices for the rounding pads (|M| + rounding bound / margin)
+    TE_mag: FloatArray
+    Mw_mag: FloatArray
+    Mpsi_mag: FloatArray
 
 
 class UnknownInputIntervalObserver(Observer):
@@ -188,6 +191,12 @@ class UnknownInputIntervalObserver(Observer):
             raise DimensionError("system: expected a continuous-time LTISystem (dt=None), got a discrete-time one")
         if system.dA is not None:
             raise DimensionError("system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)")
+        if system.m > 0:
+            raise DimensionError(
+                f"system: expected no known input (B with 0 columns), got m = {system.m}. A held input makes "
+                "dψ/dt jump at every sample, which breaks the |d²ψ/dt²| ≤ L assumption of the bounds; "
+                "the paper's example has none"
+            )
         self.system = system
         self.bounds = bounds.for_system(system)
         n, p = system.n, system.p
@@ -343,48 +352,66 @@ class UnknownInputIntervalObserver(Observer):
             raise DesignError(f"h: expected 0 < exp(λh) < 1, got {a}")
         c_start = b - c_end
         T, S = co.T, co.S
+        absT, absS = np.abs(T), np.abs(S)
+        # Rounding budget. The exact model is defined by the float matrices T, E, K, C, A, D, (CD)†;
+        # every other matrix is computed, and |computed - exact| is bounded entrywise by g·(sum of
+        # |products|) (g generously above n·u), propagated below. Terms named d* are such bounds;
+        # "*_mag" matrices carry them into the magnitude that the output margin multiplies.
+        g_ = 8 * (n + sys.p + self.q) * _U
+        absE, absC, absA, absK, absN = np.abs(dec.E), np.abs(sys.C), np.abs(sys.A), np.abs(co.K), np.abs(co.N)
+        absP = np.abs(dec.P)
+        dP = g_ * (1 + absE @ absC)
+        dN = g_ * (absP @ absA + absK @ absC) + dP @ absA
         TL = T @ co.L
         TP = T @ dec.P
         TPB = TP @ sys.B
         TPE = TP @ sys.E
+        resid = np.abs(np.eye(n) - S @ T) + g_ * absS @ absT
+        r_norm = float(resid.sum(axis=1).max())
+        if r_norm >= 0.5:
+            raise DesignError(f"T: expected a well-conditioned coordinate change, got ||I - T⁻¹T|| = {r_norm:.3g}")
+        dS = r_norm / (1 - r_norm) * float(absS.sum(axis=1).max())  # entrywise bound of |T⁻¹ - S|
+        dTL = g_ * (absT @ absK + absT @ absN @ absE) + absT @ dN @ absE
+        dTPE = g_ * absT @ absP @ np.abs(sys.E) + absT @ dP @ np.abs(sys.E)
         w_lo, w_hi = self.bounds.w
         v_lo, v_hi = self.bounds.v
         noise_lo, noise_hi = matvec_bounds(TPE, w_lo, w_hi)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
-        noise_mag = np.abs(TPE) @ w_mag
+        noise_mag = (np.abs(TPE) + dTPE / ROUNDING_MARGIN) @ w_mag
         delta_lo, delta_hi = matvec_bounds(sys.F, v_lo, v_hi)
         # remainder of the linear interpolation of ψ: ∫ e^{λ(h-s)} L s(h-s)/2 ds ≤ L h³/12
-        remainder = np.abs(TL) @ self.output_accel * h**3 / 12
-        leak = np.abs(TP @ self.D) @ np.full(self.q, self.input_magnitude) * b
+        remainder = (np.abs(TL) + dTL) @ self.output_accel * h**3 / 12
+        # PD is 0 only to rounding: the leak T P D ξ, with |ξ| ≤ input_magnitude
+        pd = np.abs(dec.P @ self.D) + g_ * absP @ np.abs(self.D) + dP @ np.abs(self.D)
+        leak = absT @ pd @ np.full(self.q, self.input_magnitude) * b
         const_pad = (remainder + leak) * (1 + 1e-9)
-        # rounding-level departures from the exact model
-        resid = np.abs(np.eye(n) - S @ T) + 4 * n * _U * np.abs(S) @ np.abs(T)
-        r_norm = float(np.abs(resid).sum(axis=1).max())
-        if r_norm >= 0.5:
-            raise DesignError(f"T: expected a well-conditioned coordinate change, got ||I - T⁻¹T|| = {r_norm:.3g}")
-        dS = r_norm / (1 - r_norm) * float(np.abs(S).sum(axis=1).max())
+        # J = T N T⁻¹ - Λ (off-diagonal and diagonal departures), exact T⁻¹ = S + ΔS, |ΔS| ≤ dS
         offdiag = (
             np.abs(co.J - np.diag(lam))
-            + 4 * n * _U * np.abs(T) @ np.abs(co.N) @ np.abs(S)
-            + np.abs(T) @ np.abs(co.N) * dS
-            + 4 * n * _U * np.abs(T) @ np.abs(dec.P @ sys.A)
-            + np.abs(T) @ np.abs(co.K) @ np.abs(sys.C) * 4 * n * _U
+            + g_ * absT @ absN @ absS
+            + absT @ dN @ absS
+            + (absT @ absN).sum(axis=1, keepdims=True) * dS
         )
         m0 = dec.M0
         m0ca = m0 @ sys.C @ sys.A
+        d_m0ca = g_ * np.abs(m0) @ absC @ absA
         Mw = -m0ca @ S
         Mpsi = m0ca @ dec.E
         Mu = -m0 @ sys.C @ sys.B
         Mv = -m0 @ sys.C @ sys.E
+        Mw_mag = np.abs(Mw) + (d_m0ca @ absS + g_ * np.abs(m0ca) @ absS) / ROUNDING_MARGIN
+        Mpsi_mag = np.abs(Mpsi) + (d_m0ca @ absE + g_ * np.abs(m0ca) @ absE) / ROUNDING_MARGIN
         xi_noise_lo, xi_noise_hi = matvec_bounds(Mv, w_lo, w_hi)
-        xi_noise_mag = np.abs(Mv) @ w_mag
-        xi_pad = np.abs(np.eye(self.q) - m0 @ sys.C @ self.D) @ np.full(self.q, self.input_magnitude)
+        xi_noise_mag = (np.abs(Mv) + g_ * np.abs(m0) @ absC @ np.abs(sys.E) / ROUNDING_MARGIN) @ w_mag
+        leak_xi = np.abs(np.eye(self.q) - m0 @ sys.C @ self.D) + g_ * np.abs(m0) @ absC @ np.abs(self.D)
+        xi_pad = leak_xi @ np.full(self.q, self.input_magnitude)
         return _Precomputed(
             a=a, b=b, c_start=c_start, c_end=c_end, TL=TL, TPB=TPB, TE=T @ dec.E,
             noise_lo=noise_lo, noise_hi=noise_hi, noise_mag=noise_mag, const_pad=const_pad,
             offdiag=offdiag, dS=dS, delta_lo=delta_lo, delta_hi=delta_hi,
             Mw=Mw, Mpsi=Mpsi, Mu=Mu, xi_noise_lo=xi_noise_lo, xi_noise_hi=xi_noise_hi,
             xi_noise_mag=xi_noise_mag, xi_pad=xi_pad, M0CA_abs=np.abs(m0ca),
+            TL_mag=np.abs(TL) + dTL / ROUNDING_MARGIN, TE_mag=absT @ absE, Mw_mag=Mw_mag, Mpsi_mag=Mpsi_mag,
         )  # fmt: skip
 
     def _asymptotic_widths(self) -> tuple[FloatArray, FloatArray]:
@@ -448,7 +475,7 @@ class UnknownInputIntervalObserver(Observer):
         """Bounds of TLψ and the magnitude |TL||ψ|, for measurements ``y`` (..., p)."""
         plo, phi = self._psi_box(y)
         lo, hi = matvec_bounds(self._c.TL, plo, phi)
-        mag = np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(self._c.TL).T
+        mag = np.maximum(np.abs(plo), np.abs(phi)) @ self._c.TL_mag.T
         return lo, hi, mag
 
     def _forcing(
@@ -486,7 +513,7 @@ class UnknownInputIntervalObserver(Observer):
         a_lo, a_hi = matvec_bounds(self.coords.T, x_lo, x_hi)
         b_lo, b_hi = matvec_bounds(c.TE, plo, phi)
         mag = np.maximum(np.abs(x_lo), np.abs(x_hi)) @ np.abs(self.coords.T).T
-        mag = mag + np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(c.TE).T
+        mag = mag + np.maximum(np.abs(plo), np.abs(phi)) @ c.TE_mag.T
         pad = ROUNDING_MARGIN * mag
         return a_lo + b_lo - pad, a_hi + b_hi + pad
 
@@ -520,8 +547,8 @@ class UnknownInputIntervalObserver(Observer):
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
         mag = (
             np.maximum(np.abs(d_lo), np.abs(d_hi)) @ np.abs(self.decoupling.M0).T
-            + w_mag @ np.abs(c.Mw).T
-            + np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(c.Mpsi).T
+            + w_mag @ c.Mw_mag.T
+            + np.maximum(np.abs(plo), np.abs(phi)) @ c.Mpsi_mag.T
             + np.abs(u) @ np.abs(c.Mu).T
             + c.xi_noise_mag
         )
@@ -658,7 +685,7 @@ class UnknownInputIntervalObserver(Observer):
         y : array_like, shape (T, p) or (M, T, p)
             Measurements.
         u : array_like, shape (T, m) or (M, T, m), optional
-            Known input (zero-order hold).
+            Known input; must be None or empty (m = 0).
         x0_lower, x0_upper : array_like, optional
             Prior box (default: the design bounds).
         hosm_q1 : array_like, shape like ``y``, optional
