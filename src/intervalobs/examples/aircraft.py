@@ -174,6 +174,11 @@ class AircraftRecord:
     delta: FloatArray
 
 
+def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
+    """``x @ m.T`` by einsum (no BLAS threads on long records)."""
+    return np.asarray(np.einsum("...j,ij->...i", x, m))
+
+
 def _plateau(t: FloatArray, amplitude: float, rate: float, rng: np.random.Generator, k: int) -> FloatArray:
     """Rate-limited bang-bang: dwell at ±amplitude, ramps at the largest admissible rate."""
     out = np.empty((t.size, k))
@@ -259,20 +264,20 @@ def simulate_aircraft(
             omega_dot += np.real(1j * nu * b * np.exp(1j * nu * tt)[:, None])
         coef = vinv @ (start - xp0)
         modes = np.exp(np.outer(tt - tt[0], vals))
-        x = np.real((modes * coef) @ vecs.T) + xp
+        x = np.real(np.einsum("tj,ij->ti", modes * coef, vecs)) + xp
         x[0] = start  # exact at t_0 (the closed form reproduces it only to rounding)
-        x_dot = np.real((modes * (vals * coef)) @ vecs.T) + xp_dot
+        x_dot = np.real(np.einsum("tj,ij->ti", modes * (vals * coef), vecs)) + xp_dot
         _, xi_dot = unknown_input(tt)
-        x_ddot = x_dot @ A.T + xi_dot @ D.T + omega_dot
-        psi = x @ C.T
+        x_ddot = _rmul(x_dot, A) + _rmul(xi_dot, D) + omega_dot
+        psi = _rmul(x, C)
         if delta_kind == "sine":
             delta = DELTA_BAR * np.sin(nu_delta * tt[:, None] + rng.uniform(0, 2 * np.pi, p))
         else:
             delta = _plateau(tt, DELTA_BAR, DELTA_DOT_BAR, rng, p)
         xs.append(x)
         psis.append(psi)
-        dpsis.append(x_dot @ C.T)
-        ddpsis.append(x_ddot @ C.T)
+        dpsis.append(_rmul(x_dot, C))
+        ddpsis.append(_rmul(x_ddot, C))
         deltas.append(delta)
         ys.append(psi + delta)
     stack = (lambda v: np.stack(v)) if runs is not None else (lambda v: v[0])

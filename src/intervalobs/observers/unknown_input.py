@@ -84,6 +84,11 @@ _RECURSION_ROUNDING = 8 * _U
 _STEP_TOLERANCE = 1e-9
 
 
+def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
+    """``x @ m.T`` over leading axes, by einsum: no BLAS call, so no thread oversubscription on (T, n) records."""
+    return np.asarray(np.einsum("...j,ij->...i", x, m))
+
+
 @dataclass(frozen=True)
 class _Precomputed:
     """Design-time constants of the recursion (all arrays are read-only by convention)."""
@@ -475,7 +480,7 @@ class UnknownInputIntervalObserver(Observer):
         """Bounds of TLψ and the magnitude |TL||ψ|, for measurements ``y`` (..., p)."""
         plo, phi = self._psi_box(y)
         lo, hi = matvec_bounds(self._c.TL, plo, phi)
-        mag = np.maximum(np.abs(plo), np.abs(phi)) @ self._c.TL_mag.T
+        mag = _rmul(np.maximum(np.abs(plo), np.abs(phi)), self._c.TL_mag)
         return lo, hi, mag
 
     def _forcing(
@@ -486,10 +491,10 @@ class UnknownInputIntervalObserver(Observer):
     ) -> tuple[FloatArray, FloatArray]:
         """Bounds of the exact input integral over one step (any leading axes)."""
         c = self._c
-        tpbu = u @ c.TPB.T
+        tpbu = _rmul(u, c.TPB)
         base_hi = c.c_start * tl0[1] + c.c_end * tl1[1] + c.b * (c.noise_hi + tpbu)
         base_lo = c.c_start * tl0[0] + c.c_end * tl1[0] + c.b * (c.noise_lo + tpbu)
-        mag = c.c_start * tl0[2] + c.c_end * tl1[2] + c.b * (c.noise_mag + np.abs(u) @ np.abs(c.TPB).T)
+        mag = c.c_start * tl0[2] + c.c_end * tl1[2] + c.b * (c.noise_mag + _rmul(np.abs(u), np.abs(c.TPB)))
         pad = c.const_pad + (ROUNDING_MARGIN + 2 * self.step_tolerance / self.h) * mag
         return base_lo - pad, base_hi + pad
 
@@ -504,7 +509,7 @@ class UnknownInputIntervalObserver(Observer):
         return (
             _RECURSION_ROUNDING * (w_mag + g_mag)
             + 2 * lam * self.step_tolerance * w_mag
-            + c.b * ((2 * w_run) @ c.offdiag.T)
+            + c.b * _rmul(2 * w_run, c.offdiag)
         )
 
     def _initial_w(self, x_lo: FloatArray, x_hi: FloatArray, y0: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -512,8 +517,8 @@ class UnknownInputIntervalObserver(Observer):
         plo, phi = self._psi_box(y0)
         a_lo, a_hi = matvec_bounds(self.coords.T, x_lo, x_hi)
         b_lo, b_hi = matvec_bounds(c.TE, plo, phi)
-        mag = np.maximum(np.abs(x_lo), np.abs(x_hi)) @ np.abs(self.coords.T).T
-        mag = mag + np.maximum(np.abs(plo), np.abs(phi)) @ c.TE_mag.T
+        mag = _rmul(np.maximum(np.abs(x_lo), np.abs(x_hi)), np.abs(self.coords.T))
+        mag = mag + _rmul(np.maximum(np.abs(plo), np.abs(phi)), c.TE_mag)
         pad = ROUNDING_MARGIN * mag
         return a_lo + b_lo - pad, a_hi + b_hi + pad
 
@@ -524,7 +529,9 @@ class UnknownInputIntervalObserver(Observer):
         s_lo, s_hi = matvec_bounds(self.coords.S, w_lo, w_hi)
         e_lo, e_hi = matvec_bounds(self.decoupling.E, plo, phi)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
-        mag = w_mag @ np.abs(self.coords.S).T + np.maximum(np.abs(plo), np.abs(phi)) @ np.abs(self.decoupling.E).T
+        mag = _rmul(w_mag, np.abs(self.coords.S)) + _rmul(
+            np.maximum(np.abs(plo), np.abs(phi)), np.abs(self.decoupling.E)
+        )
         pad = ROUNDING_MARGIN * mag + c.dS * w_mag.sum(axis=-1, keepdims=True)
         return s_lo - e_hi - pad, s_hi - e_lo + pad
 
@@ -543,13 +550,13 @@ class UnknownInputIntervalObserver(Observer):
         a_lo, a_hi = matvec_bounds(self.decoupling.M0, d_lo, d_hi)
         b_lo, b_hi = matvec_bounds(c.Mw, w_lo, w_hi)
         e_lo, e_hi = matvec_bounds(c.Mpsi, plo, phi)
-        mu = u @ c.Mu.T
+        mu = _rmul(u, c.Mu)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
         mag = (
-            np.maximum(np.abs(d_lo), np.abs(d_hi)) @ np.abs(self.decoupling.M0).T
-            + w_mag @ c.Mw_mag.T
-            + np.maximum(np.abs(plo), np.abs(phi)) @ c.Mpsi_mag.T
-            + np.abs(u) @ np.abs(c.Mu).T
+            _rmul(np.maximum(np.abs(d_lo), np.abs(d_hi)), np.abs(self.decoupling.M0))
+            + _rmul(w_mag, c.Mw_mag)
+            + _rmul(np.maximum(np.abs(plo), np.abs(phi)), c.Mpsi_mag)
+            + _rmul(np.abs(u), np.abs(c.Mu))
             + c.xi_noise_mag
         )
         pad = c.xi_pad + ROUNDING_MARGIN * mag + c.dS * (w_mag.sum(axis=-1, keepdims=True) * c.M0CA_abs.sum(axis=-1))
