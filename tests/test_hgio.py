@@ -112,3 +112,21 @@ def test_bad_inputs_raise(gains: dict[str, np.ndarray]) -> None:
         observer.run(t, y)
     with pytest.raises(AssumptionError, match="not Hurwitz"):
         _observer(np.array([[1000.0], [0.0], [0.0]]))  # the output observer cannot take a high gain
+
+
+def test_paper_euler_step_with_large_theta_is_unsound(gains: dict[str, np.ndarray]) -> None:
+    """θ cancels in exact arithmetic, but in the paper's Euler scheme it damps the radius artificially."""
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, 0.5 + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, seed=7, runs=2)
+    widths = {}
+    for scheme, theta in (("exact", 0.0), ("paper-euler", 100.0)):
+        observer = HighGainIntervalObserver(
+            system, bounds, gains["constructive"], example.STEP, theta=theta, input_rate=9.0, scheme=scheme
+        )
+        est = observer.run(t, sim.y, sim.u)
+        lo, hi = est.meta["theorem45_lower"], est.meta["theorem45_upper"]
+        widths[scheme] = (hi - lo)[:, -1].mean()
+        violation = enclosure_report(t, lo, sim.x, hi).max_violation
+        assert (violation == 0.0) == (scheme == "exact")
+    assert widths["paper-euler"] < 0.5 * widths["exact"]

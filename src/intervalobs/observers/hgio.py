@@ -79,7 +79,15 @@ class _Split:
 class _Modal:
     """Precomputed exact-discretisation data of one observer (gain ``L``)."""
 
-    def __init__(self, system: SampledSystem, L: FloatArray, h: float, order: list[complex] | None) -> None:
+    def __init__(
+        self,
+        system: SampledSystem,
+        L: FloatArray,
+        h: float,
+        order: list[complex] | None,
+        scheme: str = "exact",
+        theta: float = 0.0,
+    ) -> None:
         from ..design.regions import modal_decomposition
 
         self.L = L
@@ -93,6 +101,12 @@ class _Modal:
         self.phi1 = np.expm1(p * h) / p
         self.psi = (self.eph - np.exp(-1j * w * h)) / (p + 1j * w)
         self.slack = (np.abs(w) * h)[:, None] * np.abs(self.v1)
+        if scheme == "paper-euler":
+            # explicit Euler on z = e^{-θt} ζ, rescaled to ζ: ζ+ = e^{θh}(1 + h(p - θ)) ζ + h e^{θh} R v1 g
+            self.eph = np.exp(theta * h) * (1.0 + h * (p - theta))
+            self.phi1 = np.full_like(p, h * np.exp(theta * h))
+            self.psi = self.phi1.astype(complex)
+            self.slack = np.zeros_like(self.slack)
 
     def rotations(self, t: FloatArray) -> dict[str, Any]:
         """Per-time matrices (leading axis = times), computed elementwise (same numbers in run/step)."""
@@ -166,6 +180,10 @@ class HighGainIntervalObserver(Observer):
         slab ``{x : Cx ∈ output bounds}`` (all three enclose ``x(t_k)``) instead of the Theorem 4.5 box
         alone (kept in ``Estimate.meta['theorem45_lower'/'theorem45_upper']``). The observer's own
         coordinates are not re-wrapped, so this changes only what is reported and the a-priori boxes.
+    scheme : {"exact", "paper-euler"}
+        ``"exact"`` (sound, default) or the paper's explicit Euler step in the θ-shifted coordinates
+        (evaluated rescaled, so it cannot overflow), with every input bounded at ``t_k`` only. The
+        latter is NOT sound; it exists to measure what θ and the Euler step do to the paper's bounds.
     """
 
     def __init__(
@@ -180,6 +198,7 @@ class HighGainIntervalObserver(Observer):
         input_rate: float = 0.0,
         order: list[complex] | None = None,
         refine: bool = True,
+        scheme: str = "exact",
     ) -> None:
         if not isinstance(system, SampledSystem):
             raise DimensionError(f"system: expected a SampledSystem, got {type(system).__name__}")
@@ -198,8 +217,11 @@ class HighGainIntervalObserver(Observer):
         self.refine = bool(refine)
         gain = as_matrix("L", L, (self.n, self.p))
         out_gain = gain if output_gain is None else as_matrix("output_gain", output_gain, (self.n, self.p))
-        self.state_modal = _Modal(system, gain, self.h, order)
-        self.output_modal = _Modal(system, out_gain, self.h, order)
+        if scheme not in ("exact", "paper-euler"):
+            raise ValueError(f"scheme: expected 'exact' or 'paper-euler', got {scheme!r}")
+        self.scheme = scheme
+        self.state_modal = _Modal(system, gain, self.h, order, scheme, self.theta)
+        self.output_modal = _Modal(system, out_gain, self.h, order, scheme, self.theta)
         self.L = gain
         self.output_gain = out_gain
         self.output_radius_abscissa = self._output_radius_abscissa()
@@ -367,7 +389,8 @@ class HighGainIntervalObserver(Observer):
             state, (ylo, yhi) = self._advance(state, ys[..., k, :], us[..., k, :], float(times[k]), rot_s, rot_w, k)
             out_lo[..., k, :], out_hi[..., k, :] = ylo, yhi
         meta = {
-            "method": "HGIO (seed 004, Theorems 4.2 and 4.5), sound exact discretisation",
+            "method": "HGIO (seed 004, Theorems 4.2 and 4.5), "
+            + ("sound exact discretisation" if self.scheme == "exact" else "paper's Euler step (not sound)"),
             "L": self.L,
             "output_gain": self.output_gain,
             "theta": self.theta,
@@ -401,6 +424,9 @@ class HighGainIntervalObserver(Observer):
             np.where(have, yk - self.v_upper, -np.inf), np.where(have, yk - self.v_lower, np.inf)
         )
         new_lo, new_hi = np.maximum(lo, meas_lo), np.minimum(hi, meas_hi)
+        if self.scheme == "paper-euler":  # unsound scheme: keep the measurement box where they disagree
+            empty = new_lo > new_hi
+            return np.where(empty, meas_lo, new_lo), np.where(empty, meas_hi, new_hi)
         if np.any(new_lo > new_hi):
             raise AssumptionError(
                 "y: a measurement is inconsistent with the output bounds (noise or disturbance outside their boxes, "
@@ -477,7 +503,11 @@ class HighGainIntervalObserver(Observer):
                 y_hi,
             )
         u_lo, u_hi = uk - self.input_rate * self.h, uk + self.input_rate * self.h
-        b_lo, b_hi, p_lo, p_hi, f_lo, f_hi = self._enclosure(x_lo, x_hi, t, u_lo, u_hi, internal.get("f"))
+        if self.scheme == "paper-euler":  # the paper: inputs evaluated on the box at t_k only
+            b_lo, b_hi = x_lo, x_hi
+            f_lo, f_hi, p_lo, p_hi = self._field(x_lo, x_hi, t, uk, uk)
+        else:
+            b_lo, b_hi, p_lo, p_hi, f_lo, f_hi = self._enclosure(x_lo, x_hi, t, u_lo, u_hi, internal.get("f"))
         cb_lo, cb_hi = self._C.bounds(b_lo, b_hi)
         cf_lo, cf_hi = self._C.bounds(f_lo, f_hi)
         # intersample predictor (12c)-(12d): Cx(s) ∈ Cx(t_k) + [0, h]·C F(B), intersected with C B

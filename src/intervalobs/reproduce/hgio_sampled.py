@@ -35,6 +35,7 @@ K_ARBITRARY = np.array([1.0, 0.0, 0.0])
 K_BINOMIAL = np.array([3.0, 3.0, 1.0])
 BINOMIAL_HORIZON = 2.0
 WIDTH_WINDOW = 5.0
+EULER_HORIZON = 5.0
 
 
 def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
@@ -119,6 +120,29 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     )
     est_b = binomial.run(t[short], sim.y[:, short], sim.u[short])
 
+    # what theta does to the paper's Euler implementation (not sound; summary only, not saved as bounds)
+    euler_window = t <= EULER_HORIZON
+    exact_width = (est_c.meta["theorem45_upper"] - est_c.meta["theorem45_lower"])[:, euler_window]
+    euler: dict[str, Any] = {"horizon_s": EULER_HORIZON}
+    for theta in (printed.theta_paper, 100.0, THETA_ARBITRARY):
+        paper_euler = HighGainIntervalObserver(
+            system,
+            bounds,
+            placement.L,
+            example.STEP,
+            theta=theta,
+            input_rate=example.INPUT_RATE,
+            scheme="paper-euler",
+        )
+        est_e = paper_euler.run(t[euler_window], sim.y[:, euler_window], sim.u[euler_window])
+        lo_e, hi_e = est_e.meta["theorem45_lower"], est_e.meta["theorem45_upper"]
+        report = enclosure_report(t[euler_window], lo_e, sim.x[:, euler_window], hi_e)
+        euler[f"theta={theta:g}"] = {
+            "enclosure": report.as_dict(),
+            "first_violation_s": report.first_violation_time,
+            "width_over_exact": (hi_e - lo_e)[:, -1000:].mean(axis=(0, 1)) / exact_width[:, -1000:].mean(axis=(0, 1)),
+        }
+
     c45 = (est_c.meta["theorem45_lower"], est_c.meta["theorem45_upper"])
     a45 = (est_a.meta["theorem45_lower"], est_a.meta["theorem45_upper"])
     window = t >= WIDTH_WINDOW
@@ -169,6 +193,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             f"theta={th:g}": [euler_radius_factor(float(p), th, example.STEP) for p in sorted(set(np.round(p1, 6)))]
             for th in (0.0, ours.theta_sound, printed.theta_paper, THETA_ARBITRARY)
         },
+        "paper_euler_scheme": euler,
         "arbitrary_design": {
             "theta": THETA_ARBITRARY,
             "K": K_ARBITRARY,
