@@ -17,10 +17,13 @@ from .errors import (
 from .estimate import EnclosureReport, Estimate
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
+from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+from .observers.intersection import IntersectionObserver
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
 from .systems import Bounds, LTISystem, SampledSystem, simulate_sampled
+from .tightness import format_tightness, tightness_reference, tightness_report
 from .zonotope import Zonotope
 
 __version__ = "0.1.0"
@@ -37,6 +40,9 @@ __all__ = [
     "EnclosureReport",
     "Estimate",
     "HighGainIntervalObserver",
+    "HullEstimator",
+    "HullLowerBound",
+    "IntersectionObserver",
     "IntervalObserver",
     "IntervalObserverError",
     "LTISystem",
@@ -49,6 +55,8 @@ __all__ = [
     "__version__",
     "cabs",
     "ctimes",
+    "format_tightness",
+    "hull_lower_bound",
     "interval_matvec_bounds",
     "linear_image",
     "matvec_bounds",
@@ -58,6 +66,8 @@ __all__ = [
     "simulate",
     "simulate_sampled",
     "theta_design",
+    "tightness_reference",
+    "tightness_report",
 ]
 
 # seed 002

@@ -1,4 +1,4 @@
-"""Command-line interface: ``intervalobs list`` and ``intervalobs reproduce NAME|all``."""
+"""Command-line interface: ``intervalobs list``, ``intervalobs reproduce NAME|all``, ``intervalobs tightness NAME``."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from . import __version__
 from .errors import IntervalObserverError
@@ -32,6 +33,12 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--out", default="results", help="output folder (default: results)")
     reproduce.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    tightness = commands.add_parser("tightness", help="print an example's width ratios to the exact hull")
+    tightness.add_argument("name", help="example name from `intervalobs list`")
+    tightness.add_argument(
+        "--results", default=None, help="read DIR/NAME/summary.json if it has a tightness report (else run it)"
+    )
+    tightness.add_argument("--seed", type=int, default=0, help="random seed when the example is run (default: 0)")
     return parser
 
 
@@ -60,6 +67,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         for example in examples.values():
             print(f"{example.name:20s}  {example.seed_file:26s}  {example.description}")
         return 0
+    if args.command == "tightness":
+        return _tightness(examples, args.name, args.results, args.seed)
     if args.name != "all" and args.name not in examples:
         sys.stderr.write(f"error: NAME: expected one of {', '.join(['all', *examples])}, got {args.name!r}\n")
         return 2
@@ -80,6 +89,35 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{time.perf_counter() - start:.1f} s -> {out / example.name}",
             file=sys.stdout,
         )
+    return 0
+
+
+def _tightness(examples: dict[str, Any], name: str, results: str | None, seed: int) -> int:
+    """``intervalobs tightness NAME``: the table of ``summary.json``'s ``tightness`` object."""
+    import json
+    import tempfile
+
+    from .tightness import format_tightness
+
+    if name not in examples:
+        sys.stderr.write(f"error: NAME: expected one of {', '.join(examples)}, got {name!r}\n")
+        return 2
+    summary: dict[str, Any] | None = None
+    if results is not None:
+        path = Path(results) / name / "summary.json"
+        if path.is_file():
+            summary = json.loads(path.read_text())
+    if summary is None or "tightness" not in summary:
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                summary = examples[name].run(Path(tmp) / name, seed, False)
+            except IntervalObserverError as exc:
+                sys.stderr.write(f"error: {name}: {exc}\n")
+                return 2
+    if "tightness" not in summary:
+        sys.stderr.write(f"error: NAME: {name!r} has no tightness report (not a linear example)\n")
+        return 2
+    print(format_tightness(summary["tightness"], title=f"{name}: tightness (seed {summary.get('seed')})"))
     return 0
 
 

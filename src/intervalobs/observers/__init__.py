@@ -2,16 +2,23 @@
 
 from .base import Observer, ObserverState
 from .hgio import HighGainIntervalObserver
+from .hull import HullEstimator, HullLowerBound, hull_lower_bound
+from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
     "HighGainIntervalObserver",
+    "HullEstimator",
+    "HullLowerBound",
     "IntegratedObserver",
+    "IntersectionObserver",
     "IntervalObserver",
     "Observer",
     "ObserverState",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",
+    "hull_lower_bound",
+    "output_contraction",
 ]

@@ -12,11 +12,15 @@ from ..design.cooperative import FramerDesign
 from ..design.tube import TubeDesign
 from ..examples import spring_mass
 from ..observers import IntervalObserver
+from ..observers.intersection import IntersectionObserver
 from ..plotting import plot_estimate, plot_widths, save_figure
 from ..simulate import simulate
+from ..tightness import add_tightness
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "spring-mass-lti"
+TIGHTNESS_STEPS = 400
+"""The tightness report (one LP window per step) covers the first 4 s of the record."""
 
 
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
@@ -40,6 +44,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     start = time.perf_counter()
     observer = IntervalObserver.design(system, bounds, h=spring_mass.SAMPLING_PERIOD)
     design_time = time.perf_counter() - start
+    intersection = IntersectionObserver.design(system, bounds, h=spring_mass.SAMPLING_PERIOD, extra=[observer])
     framer = IntervalObserver.design(system, bounds, h=spring_mass.SAMPLING_PERIOD, method="framer")
     t = np.arange(0.0, spring_mass.T_FINAL + 1e-9, spring_mass.SAMPLING_PERIOD)
     u = spring_mass.input_signal(t)
@@ -78,6 +83,24 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     }
     summary["paper"] = {"note": "our own example: no paper numbers"}
     summary["runtime_s"] = {"design": design_time, "run": run_time}
+    compared = {"IntervalObserver": estimate, "IntersectionObserver": intersection.run(t, sim.y, u)}
+    add_tightness(
+        summary,
+        out_dir,
+        plots,
+        system,
+        bounds,
+        t,
+        sim.y,
+        u,
+        compared,
+        h=spring_mass.SAMPLING_PERIOD,
+        start=100,
+        horizon=40,
+        samples=0,
+        truth=(sim.dA, sim.x),
+        steps=TIGHTNESS_STEPS,
+    )
     trajectories = {
         "t": t,
         "x": sim.x,

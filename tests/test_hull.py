@@ -1,0 +1,185 @@
+"""HullEstimator and hull_lower_bound: soundness, exactness, containment in every sound observer."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import random_system
+from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
+from intervalobs.observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+
+STEPS = 40
+
+
+def small_discrete() -> tuple[LTISystem, Bounds]:
+    A = np.array([[0.8, 0.1, 0.3], [0.0, 0.8, 0.2], [0.01, 0.0, 0.8]])
+    system = LTISystem(A, [[0.0, 0.0, 1.0]], B=[[0.0], [0.0], [1.0]], E=0.08 * np.eye(3), F=[[0.2]], dt=1.0)
+    bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(3), np.ones(3)), v=(-np.ones(1), np.ones(1)))
+    return system, bounds
+
+
+def scale(*arrays: np.ndarray) -> np.ndarray:
+    return 1.0 + np.max(np.abs(np.stack(arrays)), axis=0)
+
+
+# A certified LP bound lies outward of the exact optimum by its dual slack (≲ 1e-8 here); two sound
+# boxes that both touch the exact hull can therefore differ by that much in either direction.
+SLACK = 1e-7
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_hull_encloses_truth_under_extreme_noise(seed: int) -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=seed)
+    for filtered in (False, True):
+        est = HullEstimator(system, bounds, horizon=10, filtered=filtered).run(t, sim.y, u)
+        report = est.enclosure(sim.x)
+        assert report.max_violation == 0.0 and report.fraction == 1.0
+
+
+def test_hull_continuous_time_sound_with_switching_noise() -> None:
+    system, bounds = random_system(5, 2, 1, continuous=True, uncertain=False)
+    h = 0.1
+    t = np.arange(30) * h
+    sim = simulate(system, bounds, t, noise="extreme", seed=5, substeps=10)
+    est = HullEstimator(system, bounds, horizon=8, h=h).run(t, sim.y)
+    assert est.enclosure(sim.x).max_violation == 0.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hull_inside_every_sound_observer(seed: int) -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    sim = simulate(system, bounds, t, noise="extreme", seed=seed)
+    hull = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
+    observers = {
+        "tube": IntervalObserver.design(system, bounds),
+        "framer": IntervalObserver.design(system, bounds, method="framer"),
+        "paper gain": IntervalObserver(system, bounds, [[0.3], [0.2], [0.8]], method="framer"),
+    }
+    for name, obs in observers.items():
+        est = obs.run(t, sim.y)
+        tol = SLACK * scale(est.lower, est.upper)
+        assert np.all(est.lower <= hull.lower + tol), name
+        assert np.all(est.upper >= hull.upper - tol), name
+        assert np.sum(est.width()) > np.sum(hull.width()), name
+
+
+@pytest.mark.parametrize("horizon", [1, 2, 5])
+def test_short_horizon_is_sound_and_contains_the_exact_hull(horizon: int) -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    sim = simulate(system, bounds, t, noise="extreme", seed=7)
+    exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
+    windowed = HullEstimator(system, bounds, horizon=horizon).run(t, sim.y)
+    assert windowed.enclosure(sim.x).max_violation == 0.0
+    tol = SLACK * scale(exact.lower, exact.upper)
+    assert np.all(windowed.lower <= exact.lower + tol)
+    assert np.all(windowed.upper >= exact.upper - tol)
+
+
+def test_full_horizon_is_exact_and_certificate_is_tight() -> None:
+    system, bounds = small_discrete()
+    t = np.arange(25, dtype=float)
+    sim = simulate(system, bounds, t, noise="extreme", seed=3)
+    full = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
+    long_window = HullEstimator(system, bounds, horizon=30).run(t, sim.y)
+    np.testing.assert_allclose(full.lower, long_window.lower, atol=1e-7)
+    np.testing.assert_allclose(full.upper, long_window.upper, atol=1e-7)
+    # The certified bound is outward of the exact optimum by at most the solver's tolerance.
+    from scipy.optimize import linprog
+
+    k = 24
+    n = 3
+    # LP over (x_0..x_k): dynamics box rows, measurements, x0 box; minimise x_k[0].
+    nx = (k + 1) * n
+    rows, lo, hi = [], [], []
+    A, C = system.A, system.C
+    for j in range(k):
+        block = np.zeros((n, nx))
+        block[:, (j + 1) * n : (j + 2) * n] = np.eye(n)
+        block[:, j * n : (j + 1) * n] = -A
+        rows.append(block)
+        lo.append(-0.08 * np.ones(n))
+        hi.append(0.08 * np.ones(n))
+        meas = np.zeros((1, nx))
+        meas[:, j * n : (j + 1) * n] = C
+        rows.append(meas)
+        lo.append(sim.y[j] - 0.2)
+        hi.append(sim.y[j] + 0.2)
+    M = np.vstack(rows)
+    a_ub = np.vstack([M, -M])
+    b_ub = np.concatenate([np.concatenate(hi), -np.concatenate(lo)])
+    cost = np.zeros(nx)
+    cost[k * n] = 1.0
+    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(-1, 1)] * n + [(None, None)] * (nx - n), method="highs")
+    assert res.status == 0
+    assert full.lower[k, 0] <= res.fun + 1e-9
+    assert full.lower[k, 0] >= res.fun - 1e-6
+
+
+def test_run_matches_repeated_step() -> None:
+    system, bounds = small_discrete()
+    t = np.arange(15, dtype=float)
+    u = np.cos(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=2)
+    for filtered in (False, True):
+        est = HullEstimator(system, bounds, horizon=4, filtered=filtered).run(t, sim.y, u)
+        stepper = HullEstimator(system, bounds, horizon=4, filtered=filtered)
+        state = stepper.init()
+        for k in range(t.size):
+            nxt = stepper.step(state, sim.y[k], u[k])
+            lo, hi = (
+                (nxt.internal["filtered_lower"], nxt.internal["filtered_upper"])
+                if filtered
+                else (state.lower, state.upper)
+            )
+            np.testing.assert_allclose(lo, est.lower[k], atol=1e-9)
+            np.testing.assert_allclose(hi, est.upper[k], atol=1e-9)
+            state = nxt
+
+
+def test_general_noise_matrices_use_noise_variables() -> None:
+    A = np.array([[0.9, 0.2], [-0.1, 0.7]])
+    E = np.array([[1.0], [0.5]])  # one channel drives both states: E·W is a segment, not a box
+    F = np.array([[1.0, 0.3]])
+    system = LTISystem(A, [[1.0, 0.0]], E=E, F=F, dt=1.0)
+    bounds = Bounds((-np.ones(2), np.ones(2)), w=([-0.1], [0.1]), v=([-0.05, -0.05], [0.05, 0.05]))
+    t = np.arange(30, dtype=float)
+    sim = simulate(system, bounds, t, noise="extreme", seed=4)
+    est = HullEstimator(system, bounds, horizon=6).run(t, sim.y)
+    assert est.enclosure(sim.x).max_violation == 0.0
+    obs = IntervalObserver.design(system, bounds).run(t, sim.y)
+    assert np.all(obs.lower <= est.lower + SLACK) and np.all(obs.upper >= est.upper - SLACK)
+
+
+def test_interval_dA_is_refused() -> None:
+    system, bounds = random_system(1, 2, 1, continuous=False, uncertain=True)
+    with pytest.raises(AssumptionError, match="hull_lower_bound"):
+        HullEstimator(system, bounds)
+
+
+def test_lower_bound_is_inside_sound_observers_and_not_an_estimate() -> None:
+    system, bounds = small_discrete()
+    d = 0.01 * np.ones((3, 3))
+    uncertain = LTISystem(system.A, system.C, B=system.B, E=system.E, F=system.F, dt=1.0, dA=(-d, d))
+    t = np.arange(30, dtype=float)
+    sim = simulate(uncertain, bounds, t, noise="extreme", seed=1)
+    bound = hull_lower_bound(uncertain, bounds, t, sim.y, samples=2, horizon=10, truth=(sim.dA, sim.x))
+    assert isinstance(bound, HullLowerBound) and not isinstance(bound, Estimate)
+    assert "not an estimate" in bound.label
+    assert bound.alive[0]  # the true ΔA with its truth anchor stays consistent
+    est = IntervalObserver.design(uncertain, bounds).run(t, sim.y)
+    ok = np.isfinite(bound.lower)
+    assert ok.all()
+    assert np.all(est.lower[ok] <= bound.lower[ok]) and np.all(est.upper[ok] >= bound.upper[ok])
+    # With the true ΔA alone, the inner hull lies inside the (outer, certified) hull of that model.
+    alone = hull_lower_bound(uncertain, bounds, t, sim.y, samples=0, horizon=10, truth=(sim.dA, sim.x))
+    exact_known = HullEstimator(
+        LTISystem(system.A + sim.dA, system.C, B=system.B, E=system.E, F=system.F, dt=1.0), bounds, horizon=None
+    ).run(t, sim.y)
+    assert np.all(alone.lower >= exact_known.lower - SLACK) and np.all(alone.upper <= exact_known.upper + SLACK)
+    assert np.all(alone.width() <= bound.width() + 1e-12)
