@@ -201,10 +201,20 @@ def add_tightness(
         Where ``tightness.png`` goes (when ``plots``).
     plots : bool
         Write the widths-over-time figure.
-    system, bounds, t, y, u, h
-        As in :func:`tightness_reference` (one run).
+    system : LTISystem
+        The model.
+    bounds : Bounds
+        Its boxes.
+    t : array_like, shape (T,)
+        Sample times.
+    y : array_like, shape (T, p)
+        Measurements of one run.
+    u : array_like, shape (T, m), or None
+        Known inputs.
     estimates : mapping of str to Estimate
         The observers to compare.
+    h : float, optional
+        Sampling period (continuous time).
     start : int
         First step of the averages.
     horizon : int or None

@@ -631,7 +631,12 @@ class HullEstimator(Observer):
         return lower, upper
 
     def meta(self) -> dict[str, Any]:
-        """Facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+        """
         return {
             "method": "HullEstimator",
             "horizon": "full" if self.horizon is None else self.horizon,
@@ -659,6 +664,8 @@ class HullLowerBound:
         Whether each sample stayed consistent with the data to the end.
     label : str
         The reminder printed in every report.
+    meta : dict
+        Window length and whether ``y_k`` was used.
     """
 
     t: FloatArray
@@ -670,7 +677,12 @@ class HullLowerBound:
     meta: dict[str, Any] = field(default_factory=dict)
 
     def width(self) -> FloatArray:
-        """Widths ``upper - lower`` (NaN where undefined)."""
+        """Widths ``upper - lower`` (NaN where undefined).
+
+        Returns
+        -------
+        numpy.ndarray, shape (T, n)
+        """
         return self.upper - self.lower
 
 

@@ -32,7 +32,7 @@ from ..errors import DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, check_no_kwargs
+from ..validation import as_box
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
 
@@ -145,7 +145,16 @@ class IntersectionObserver(Observer):
         self._restart = [isinstance(o, IntervalObserver) and o.method == "framer" for o in self.members]
 
     @classmethod
-    def design(cls, system: LTISystem, bounds: Bounds, h: float | None = None, **options: Any) -> IntersectionObserver:
+    def design(
+        cls,
+        system: LTISystem,
+        bounds: Bounds,
+        h: float | None = None,
+        extra: Sequence[Observer] = (),
+        contract: bool = True,
+        sweeps: int = 1,
+        max_members: int = 4,
+    ) -> IntersectionObserver:
         """Framers in every candidate coordinate system (one LP gain each), intersected and contracted.
 
         Parameters
@@ -156,9 +165,14 @@ class IntersectionObserver(Observer):
             Boxes of ``x0``, ``w``, ``v``.
         h : float, optional
             Sampling period (continuous time).
-        **options
-            ``extra``: observers to add as members; ``contract``, ``sweeps`` as in the constructor;
-            ``max_members`` (default 4): keep the framers with the smallest steady radius bound.
+        extra : sequence of Observer
+            Observers to add as members (e.g. the error tube, a zonotopic observer).
+        contract : bool
+            Apply the output contraction.
+        sweeps : int
+            Passes of the contractor over the output rows.
+        max_members : int
+            Keep the framers with the smallest steady radius bound.
 
         Returns
         -------
@@ -169,7 +183,6 @@ class IntersectionObserver(Observer):
         DesignError
             When no candidate coordinates give a stable framer.
         """
-        check_no_kwargs("IntersectionObserver.design", options, ("extra", "contract", "sweeps", "max_members"))
         full = bounds.for_system(system)
         assert full.v is not None
         model = sampled_model(system, full, h)
@@ -185,9 +198,9 @@ class IntersectionObserver(Observer):
         if not found:
             raise DesignError("IntersectionObserver.design: no candidate coordinates give a stable framer")
         found.sort(key=lambda item: item[0])
-        members: list[Observer] = [obs for _, obs in found[: int(options.get("max_members", 4))]]
-        members.extend(options.get("extra", ()))
-        return cls(members, system, bounds, options.get("contract", True), options.get("sweeps", 1))
+        members: list[Observer] = [obs for _, obs in found[: int(max_members)]]
+        members.extend(extra)
+        return cls(members, system, bounds, contract, sweeps)
 
     # -- protocol ------------------------------------------------------------------------------
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -316,7 +329,12 @@ class IntersectionObserver(Observer):
         return lower, upper
 
     def meta(self) -> dict[str, Any]:
-        """Facts recorded in every :class:`~intervalobs.estimate.Estimate`."""
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+        """
         return {
             "method": "IntersectionObserver",
             "members": [type(o).__name__ for o in self.members],
