@@ -71,7 +71,7 @@ TE = 1e-4
 HOSM_LAMBDA = 100.0
 MU1 = 1.1
 OUTPUT_ACCEL = HOSM_LAMBDA / 1.1
-"""Bound L of |d²ψ/dt²| implied by the paper's HOSM gain (Levant's rule λ_s = 1.1 L); checked on the truth."""
+"""Bound L of ``|d²ψ/dt²|`` implied by the paper's HOSM gain (Levant's rule λ_s = 1.1 L); checked on the truth."""
 
 PAPER = {
     "E": [

@@ -13,7 +13,7 @@ tank 2, the pump feeds tank 1 and the sensor reads :math:`h_2` ((71) prints it r
 * :math:`\theta_{ij} \in [-0.001, 0.001]`: "±0.3B" is undefined. :math:`A_{11} = 0.9886` cannot be
   changed by any gain (``C`` does not see :math:`h_1`), so every sound framer has
   :math:`\rho(|M| + D) \ge 0.9886 + \theta`, and θ ≥ 0.0114 would stop tank 1 draining; the widths
-  grow like θ·|x|, so a small radius is kept;
+  grow like ``θ·|x|``, so a small radius is kept;
 * the pump signal (Fig. 8 is not given): a staircase in 0.2–0.55 V (levels stay below the 25 cm tubes),
   1200 samples; the initial box :math:`h \in [4, 6]^2` cm.
 """

@@ -1,32 +1,8 @@
 r"""The general-purpose interval observer for LTI systems with interval uncertainty.
 
-Both methods run on the sound sampled model :math:`x_{k+1} \in (\Phi \pm \delta\Phi)x_k +
-(\Gamma \pm \delta\Gamma)u_k + [c \pm r]` (:mod:`intervalobs.design.discretization`; a discrete-time
-system is its own sampled model) and propagate a box :math:`[\hat x \pm \rho]` whose centre is a
-Luenberger estimate, in coordinates :math:`z = Tx` with :math:`M = T(\Phi - LC)T^{-1}`:
-
-.. math:: z_c^+ = M z_c + TLy_k + T\Gamma u_k + T(c - LF v_c).
-
-They differ in the radius.
-
-``method="tube"`` (default, :math:`T = I`): the exact error tube of :mod:`intervalobs.design.tube`,
-
-.. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
-          \ell = \min(k+1, J),\quad d_k = r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|\hat x_k| + \rho_k),
-
-which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain.
-
-``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
-of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
-
-.. math:: z_r^+ = |M| z_r + |T|\big(r + |LF| v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
-
-with :math:`x_c = T^{-1}z_c`, :math:`x_r = |T^{-1}|z_r`; the interval term :math:`\delta\Phi\,x` is
-bounded exactly (seed 002, Lemma A.1). It needs a stable width system
-:math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
-
-Each step follows from the inclusion of the previous one, so both hold for every admissible noise
-realisation, inside the sampling intervals too.
+:class:`IntervalObserver` propagates a box whose centre is a Luenberger estimate on the sound sampled
+model of the system; its radius follows the exact error tube (default) or the classical framer. The
+equations are in the class docstring.
 """
 
 from __future__ import annotations
@@ -56,7 +32,7 @@ METHODS = ("tube", "framer")
 
 
 class IntervalObserver(Observer):
-    """Interval observer for an :class:`~intervalobs.systems.LTISystem`, continuous or discrete.
+    r"""Interval observer for an :class:`~intervalobs.systems.LTISystem`, continuous or discrete.
 
     Parameters
     ----------
@@ -71,13 +47,43 @@ class IntervalObserver(Observer):
     h : float, optional
         Sampling period; required for a continuous-time system (measurements arrive every ``h``).
     method : {"tube", "framer"}
-        Radius propagation (see the module docstring).
+        Radius propagation (see Notes).
 
     Raises
     ------
     DesignError
         When the radius recursion is not bounded with this gain: ``ρ(|M^J| + GδΦ) ≥ 1`` for the
         tube, ``ρ(|T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|) ≥ 1`` for the framer.
+
+    Notes
+    -----
+    Both methods run on the sound sampled model :math:`x_{k+1} \in (\Phi \pm \delta\Phi)x_k +
+    (\Gamma \pm \delta\Gamma)u_k + [c \pm r]` (:mod:`intervalobs.design.discretization`; a discrete-time
+    system is its own sampled model) and propagate a box :math:`[\hat x \pm \rho]` whose centre is a
+    Luenberger estimate, in coordinates :math:`z = Tx` with :math:`M = T(\Phi - LC)T^{-1}`:
+
+    .. math:: z_c^+ = M z_c + TLy_k + T\Gamma u_k + T(c - LF v_c).
+
+    They differ in the radius.
+
+    ``method="tube"`` (default, :math:`T = I`): the exact error tube of :mod:`intervalobs.design.tube`,
+
+    .. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
+              \ell = \min(k+1, J),\quad d_k = r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|\hat x_k| + \rho_k),
+
+    which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain.
+
+    ``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
+    of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
+
+    .. math:: z_r^+ = |M| z_r + |T|\big(r + |LF| v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
+
+    with :math:`x_c = T^{-1}z_c`, :math:`x_r = |T^{-1}|z_r`; the interval term :math:`\delta\Phi\,x` is
+    bounded exactly (seed 002, Lemma A.1). It needs a stable width system
+    :math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
+
+    Each step follows from the inclusion of the previous one, so both hold for every admissible noise
+    realisation, inside the sampling intervals too.
     """
 
     def __init__(

@@ -1,0 +1,240 @@
+"""Sphinx configuration: markdown pages (MyST), the API reference (autodoc + numpydoc), benchmarks.
+
+``make docs`` builds with ``-W`` (warnings are errors). The API pages and the benchmarks page are
+generated here on every build, from the package itself and from ``benchmarks/results.json``, so a new
+module appears in the reference without editing anything under ``docs/``. Generated files go to
+``docs/api/`` and ``docs/benchmarks.md`` (both git-ignored).
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import json
+import pkgutil
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT / "src"))
+
+import intervalobs  # noqa: E402
+
+project = "intervalobs"
+author = "the intervalobs developers"
+copyright = "2026, the intervalobs developers"
+release = version = intervalobs.__version__
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+exclude_patterns = ["_build"]
+root_doc = "index"
+
+# MyST: GitHub-style markdown (the pages are also read on GitHub), anchors for ## headings.
+myst_enable_extensions = ["dollarmath"]
+myst_heading_anchors = 3
+
+
+# autodoc + numpydoc: the docstrings are numpydoc; members are listed on the class page itself.
+autodoc_member_order = "bysource"
+autodoc_typehints = "none"  # types are in the docstrings (and checked by tests/test_api_docs.py)
+autodoc_default_options = {"show-inheritance": True}
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_attributes_as_param_list = True
+numpydoc_validation_checks: set[str] = set()  # validated by the test suite, not at build time
+
+html_theme = "alabaster"
+html_title = f"intervalobs {release}"
+html_theme_options = {"description": "Sound interval observers", "fixed_sidebar": True}
+html_sidebars = {"**": ["about.html", "navigation.html", "searchbox.html"]}
+
+
+# ----------------------------------------------------------------------------------------------
+# API reference: one page per public module, each object documented once, where it is defined.
+
+
+def _public_modules() -> list[ModuleType]:
+    modules = [intervalobs]
+    for info in pkgutil.walk_packages(intervalobs.__path__, "intervalobs."):
+        if not any(part.startswith("_") for part in info.name.split(".")):
+            modules.append(importlib.import_module(info.name))
+    return sorted(modules, key=lambda m: m.__name__)
+
+
+def _exported(module: ModuleType) -> list[str]:
+    names = getattr(module, "__all__", None)
+    if names is None:
+        names = [
+            n
+            for n, obj in vars(module).items()
+            if not n.startswith("_")
+            and (inspect.isclass(obj) or inspect.isfunction(obj))
+            and obj.__module__ == module.__name__
+        ]
+    return [n for n in names if not n.startswith("__")]
+
+
+def _directive(module: ModuleType, name: str) -> str | None:
+    """The autodoc directive for ``module.name`` if this module is where it is defined, else None."""
+    obj = getattr(module, name)
+    if inspect.isclass(obj) or inspect.isfunction(obj):
+        if obj.__module__ != module.__name__:
+            return None  # re-exported: documented on its defining module's page
+        if inspect.isclass(obj) and issubclass(obj, BaseException):
+            return f".. autoexception:: {module.__name__}.{name}\n"
+        if inspect.isclass(obj):
+            return f".. autoclass:: {module.__name__}.{name}\n   :members:\n"
+        return f".. autofunction:: {module.__name__}.{name}\n"
+    if hasattr(module, "__path__") or ("", name) not in _attribute_docs(module):
+        return None  # data re-exported by a package, or without its own docstring (autodoc would show its type's)
+    return f".. autodata:: {module.__name__}.{name}\n   :no-value:\n"
+
+
+def _attribute_docs(module: ModuleType) -> dict[tuple[str, str], list[str]]:
+    from sphinx.pycode import ModuleAnalyzer
+
+    return dict(ModuleAnalyzer.for_module(module.__name__).find_attr_docs())
+
+
+def _summary(obj: Any) -> str:
+    doc = inspect.getdoc(obj) or ""
+    return doc.strip().split("\n\n")[0].replace("\n", " ")
+
+
+def _canonical(obj: Any, module: ModuleType, name: str) -> str:
+    if inspect.isclass(obj) or inspect.isfunction(obj):
+        return f"{obj.__module__}.{obj.__qualname__}"
+    return f"{module.__name__}.{name}"
+
+
+def _module_page(module: ModuleType) -> str:
+    title = f"``{module.__name__}``"
+    lines = [title, "=" * len(title), "", f".. automodule:: {module.__name__}", "   :no-members:", ""]
+    reexported = []
+    for name in _exported(module):
+        directive = _directive(module, name)
+        if directive is None:
+            reexported.append(name)
+        else:
+            lines += [directive, ""]
+    if reexported:
+        lines += ["Re-exported here", "----------------", ""]
+        for name in reexported:
+            obj = getattr(module, name)
+            role = "class" if inspect.isclass(obj) else ("func" if inspect.isfunction(obj) else "data")
+            lines.append(f"- :{role}:`~{_canonical(obj, module, name)}`")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _top_level_table() -> list[str]:
+    lines = [".. list-table::", "   :widths: 30 70", ""]
+    for name in intervalobs.__all__:
+        if name.startswith("__"):
+            continue
+        obj = getattr(intervalobs, name)
+        role = "class" if inspect.isclass(obj) else "func"
+        lines += [f"   * - :{role}:`~{_canonical(obj, intervalobs, name)}`", f"     - {_summary(obj)}"]
+    return lines
+
+
+def write_api_pages() -> None:
+    out = DOCS / "api"
+    out.mkdir(exist_ok=True)
+    modules = _public_modules()
+    wanted = {f"{m.__name__}.rst" for m in modules} | {"index.rst"}
+    for stale in out.glob("*.rst"):
+        if stale.name not in wanted:
+            stale.unlink()
+    for module in modules:
+        _write_if_changed(out / f"{module.__name__}.rst", _module_page(module))
+    index = [
+        "API reference",
+        "=============",
+        "",
+        "Generated from the docstrings (numpydoc). Everything below is importable from the module",
+        "whose page documents it; the names in the table are also importable from ``intervalobs``.",
+        "",
+        "Top-level exports",
+        "-----------------",
+        "",
+        *_top_level_table(),
+        "",
+        "Modules",
+        "-------",
+        "",
+        ".. toctree::",
+        "   :maxdepth: 1",
+        "",
+        *[f"   {m.__name__}" for m in modules],
+        "",
+    ]
+    _write_if_changed(out / "index.rst", "\n".join(index))
+
+
+# ----------------------------------------------------------------------------------------------
+# Benchmarks page: benchmarks/run.py's description and the tables of benchmarks/results.json.
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, (list, dict)):
+        return json.dumps(value)
+    return str(value).replace("|", "\\|")
+
+
+def _table(rows: list[dict[str, Any]]) -> list[str]:
+    columns: list[str] = []
+    for row in rows:
+        columns += [k for k in row if k not in columns]
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(_cell(row.get(c, "")) for c in columns) + " |" for row in rows]
+    return lines
+
+
+def write_benchmarks_page() -> None:
+    runner = ROOT / "benchmarks" / "run.py"
+    results = ROOT / "benchmarks" / "results.json"
+    lines = ["# Benchmarks", ""]
+    if runner.exists():
+        lines += ["`make bench` runs `benchmarks/run.py`:", "", "```text", *_docstring(runner).splitlines(), "```", ""]
+    if not results.exists():
+        lines += ["No results yet: run `make bench`."]
+    else:
+        data = json.loads(results.read_text())
+        lines += ["Results of the last `make bench` (`benchmarks/results.json`):", ""]
+        scalars = {k: v for k, v in data.items() if not isinstance(v, (list, dict))}
+        lines += [f"- **{k}**: {_cell(v)}" for k, v in scalars.items()]
+        lines.append("")
+        for key, value in data.items():
+            if isinstance(value, list) and value and all(isinstance(r, dict) for r in value):
+                lines += [f"## {key}", "", *_table(value), ""]
+            elif isinstance(value, (list, dict)):
+                lines += [f"## {key}", "", "```json", json.dumps(value, indent=2), "```", ""]
+    _write_if_changed(DOCS / "benchmarks.md", "\n".join(lines))
+
+
+def _docstring(path: Path) -> str:
+    import ast
+
+    return ast.get_docstring(ast.parse(path.read_text())) or ""
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+
+
+write_api_pages()
+write_benchmarks_page()
