@@ -52,7 +52,7 @@ STEP = 1e-3
 SAMPLE_PERIOD = 5e-3
 T_FINAL = 30.0
 INPUT_RATE = 9.0
-"""Bound of |du/dt| for u = 3 sin t − 2 sin 3t (3 + 6)."""
+"""Bound of ``|du/dt|`` for u = 3 sin t − 2 sin 3t (3 + 6)."""
 
 PAPER = {
     "L1": [1.111e-4, 1.25e-4, 1.0e-4],
@@ -126,7 +126,7 @@ def system() -> SampledSystem:
 
 
 def bounds() -> Bounds:
-    """Initial box (0, 3, 4) ± (0.09, 0.2, 0.6), d ∈ 0 ± (0.1, 1, 1), |V| ≤ 0.1.
+    """Initial box (0, 3, 4) ± (0.09, 0.2, 0.6), d ∈ 0 ± (0.1, 1, 1), ``|V| ≤ 0.1``.
 
     Returns
     -------
