@@ -130,3 +130,33 @@ def test_paper_euler_step_with_large_theta_is_unsound(gains: dict[str, np.ndarra
         violation = enclosure_report(t, lo, sim.x, hi).max_violation
         assert (violation == 0.0) == (scheme == "exact")
     assert widths["paper-euler"] < 0.5 * widths["exact"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_long_horizon_enclosure_and_bounded_widths(gains: dict[str, np.ndarray], seed: int) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, 15.0 + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, noise="extreme", seed=seed, runs=4, substeps=8)
+    est = _observer(gains["constructive"]).run(t, sim.y, sim.u)
+    assert est.enclosure(sim.x).max_violation == 0.0
+    lo, hi = est.meta["theorem45_lower"], est.meta["theorem45_upper"]
+    assert enclosure_report(t, lo, sim.x, hi).max_violation == 0.0
+    width = (hi - lo).mean(axis=0)
+    early = width[(t >= 5) & (t < 10)].max(axis=0)
+    late = width[t >= 10].max(axis=0)
+    assert np.all(late <= 1.2 * early)  # settled, not growing
+
+
+def test_batched_init_and_step_match_run(gains: dict[str, np.ndarray]) -> None:
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, 0.02 + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, seed=8, runs=2)
+    observer = _observer(gains["constructive"])
+    est = observer.run(t, sim.y, sim.u)
+    lo, hi = bounds.x0
+    state = observer.init(np.stack([lo, lo]), np.stack([hi, hi]))
+    for k in range(t.size - 1):
+        state = observer.step(state, sim.y[:, k], sim.u[k])
+    np.testing.assert_allclose(state.lower, est.lower[:, -1], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(state.upper, est.upper[:, -1], rtol=1e-12, atol=1e-12)

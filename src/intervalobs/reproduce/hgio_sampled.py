@@ -182,8 +182,10 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "v1": placement.modal.v1,
         "v1_condition": placement.modal.condition,
         "radius_matrix_abscissa": placement.radius_abscissa,
-        "alpha": ours.alpha_paper,
-        "theta": ours.theta_paper,
+        "alpha": ours.alpha_sound,
+        "theta": ours.theta_sound,
+        "alpha_theta_reading": "sound: (42) solved in real numbers at t = 1 s (paper readings under theorem44_*); "
+        "the observer does not use theta (it cancels)",
         "lambda_min_M2": ours.lambda_min_M2,
         "theorem44_ours": _theta_dict(ours),
         "theorem44_with_printed_L1_v1": _theta_dict(printed),
