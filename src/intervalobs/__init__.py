@@ -4,8 +4,10 @@ from .complex_interval import cabs, ctimes, linear_image
 from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
 from .design.high_gain import ThetaDesign, theta_design
 from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
+from .design.lpv import CertifiedVertexBounds, boundedness_lmi, certify_vertex_extremes, verify_boundedness
 from .design.regions import Disk, RegionPlacement, place_in_disks
 from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
+from .diagnosis import isolation_outcome, psi_hat, run_campaign, runs_for_sigma
 from .errors import (
     AssumptionError,
     BoundsError,
@@ -19,10 +21,12 @@ from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
+from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
 from .systems import Bounds, LTISystem, SampledSystem, simulate_sampled
+from .systems.lpv import LPVSystem
 from .tightness import format_tightness, tightness_reference, tightness_report
 from .zonotope import Zonotope
 
@@ -82,4 +86,20 @@ __all__ += [
     "difference_derivative_bounds",
     "levant_gains",
     "uio_decoupling",
+]
+
+# seed 001
+
+__all__ += [
+    "CertifiedVertexBounds",
+    "LPVIntervalObserver",
+    "LPVIntervalUIO",
+    "LPVSystem",
+    "boundedness_lmi",
+    "certify_vertex_extremes",
+    "isolation_outcome",
+    "psi_hat",
+    "run_campaign",
+    "runs_for_sigma",
+    "verify_boundedness",
 ]

@@ -1,4 +1,4 @@
-"""Command-line interface: ``intervalobs list``, ``intervalobs reproduce NAME|all``, ``intervalobs tightness NAME``."""
+"""Command-line interface: ``intervalobs list``, ``reproduce NAME|all``, ``tightness NAME``, ``campaign NAME``."""
 
 from __future__ import annotations
 
@@ -39,7 +39,51 @@ def _parser() -> argparse.ArgumentParser:
         "--results", default=None, help="read DIR/NAME/summary.json if it has a tightness report (else run it)"
     )
     tightness.add_argument("--seed", type=int, default=0, help="random seed when the example is run (default: 0)")
+    campaign = commands.add_parser("campaign", help="Monte Carlo performance campaign of an example, on Dask")
+    campaign.add_argument("name", help="example with a campaign (e.g. manipulator-lpv)")
+    campaign.add_argument("--runs", type=int, default=None, help="Monte Carlo runs per cell (default: the paper's)")
+    campaign.add_argument("--levels", type=float, nargs="+", default=None, help="uncertainty levels")
+    campaign.add_argument("--magnitudes", type=float, nargs="+", default=None, help="fault magnitudes")
+    campaign.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
+    campaign.add_argument("--workers", type=int, default=2, help="local Dask workers (default: 2)")
+    campaign.add_argument("--out", default="results", help="output folder (default: results)")
+    campaign.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    campaign.add_argument("--no-plots", action="store_true", help="skip the heat maps")
     return parser
+
+
+def _campaign(args: argparse.Namespace) -> int:
+    import importlib
+
+    from .diagnosis import Campaign, run_campaign
+    from .reproduce import registry
+
+    example = registry().get(args.name)
+    found = getattr(importlib.import_module(example.run.__module__), "CAMPAIGN", None) if example else None
+    if not isinstance(found, Campaign):
+        sys.stderr.write(f"error: NAME: expected an example with a campaign (manipulator-lpv), got {args.name!r}\n")
+        return 2
+    out = Path(args.out) / args.name / "campaign"
+    try:
+        result = run_campaign(
+            found,
+            out,
+            runs=args.runs,
+            levels=args.levels,
+            magnitudes=args.magnitudes,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            seed=args.seed,
+            plots=not args.no_plots,
+        )
+    except IntervalObserverError as exc:
+        sys.stderr.write(f"error: {args.name}: {exc}\n")
+        return 2
+    print(
+        f"{args.name}: campaign of {result.runs} runs per cell, {result.computed} computed, {result.reused} reused, "
+        f"{result.seconds:.1f} s -> {out / 'psi.json'}"
+    )
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -62,6 +106,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = _parser().parse_args(argv)
     except SystemExit as exc:
         return int(exc.code or 0)
+    if args.command == "campaign":
+        return _campaign(args)
     examples = registry()
     if args.command == "list":
         for example in examples.values():

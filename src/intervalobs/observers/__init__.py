@@ -5,6 +5,7 @@ from .hgio import HighGainIntervalObserver
 from .hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
+from .lpv import LPVIntervalObserver, LPVIntervalUIO
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
@@ -15,6 +16,8 @@ __all__ = [
     "IntegratedObserver",
     "IntersectionObserver",
     "IntervalObserver",
+    "LPVIntervalObserver",
+    "LPVIntervalUIO",
     "Observer",
     "ObserverState",
     "UnknownInputIntervalObserver",

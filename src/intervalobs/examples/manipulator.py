@@ -1,0 +1,696 @@
+r"""Two-joint planar manipulator of seed 001, Section 5, as an uncertain LPV system.
+
+Dynamics (121)–(122) with :math:`\phi = x_2 - x_1`, :math:`\kappa = \cos\phi`, :math:`\sigma = \sin\phi`,
+state :math:`x = (q_1, q_2, \dot q_1, \dot q_2)`, :math:`\vartheta = x`, :math:`C = I`:
+
+.. math::
+    \tilde M(\phi)\ddot q = \tau + \tau_{un} + \tilde b\sigma\begin{pmatrix} \dot q_2^2 \\ -\dot q_1^2\end{pmatrix},
+    \qquad \tilde M = \begin{pmatrix} \tilde a & \tilde b\kappa \\ \tilde b\kappa & \tilde c\end{pmatrix},
+
+so :math:`\tilde A_{33..44} = \tilde M^{-1}\tilde N` with :math:`\tilde N = \tilde b\sigma
+\begin{pmatrix} 0 & x_4 \\ -x_3 & 0\end{pmatrix}` and :math:`\tilde B = \tilde B_{un} = [0; \tilde M^{-1}]`.
+With the paper's :math:`R = \begin{pmatrix} M & 0\\ 0 & I\end{pmatrix}` written in the column order
+of its (16) (:math:`M` the nominal mass matrix acting on the velocities),
+:math:`RB_{un} = H = [I_2; 0]` (26) and
+
+.. math::
+    \Delta B_R = M\tilde M^{-1} - I,\qquad
+    \Delta A_R[1{:}2, 3] = \sigma x_3\,(b e_2 - \tilde b\, M\tilde M^{-1} e_2),\qquad
+    \Delta A_R[1{:}2, 4] = \sigma x_4\,(\tilde b\, M\tilde M^{-1} e_1 - b e_1).
+
+Every entry is a rational function of :math:`(\tilde a, \tilde b, \tilde c, \kappa)` times a scheduling
+factor; :func:`intervalobs.design.lpv.certify_vertex_extremes` proves that its range over the
+parameter box is the range over the 8 vertices (see :class:`ManipulatorModel`).
+
+The controller of the paper (Yu et al. 2002) is not given: we use computed torque with the nominal
+model and PD gains (:func:`controller`) tracking :func:`reference`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..design.lpv import CertifiedVertexBounds, certify_vertex_extremes
+from ..errors import AssumptionError, BoundsError
+from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
+from ..validation import as_vector
+
+__all__ = [
+    "FAULT_BOUND",
+    "FAULT_ONSET",
+    "LAMBDA",
+    "NOMINAL",
+    "PAPER_DELTA",
+    "THETA_BOX",
+    "TRUE_PARAMETERS",
+    "X0",
+    "ManipulatorModel",
+    "controller",
+    "reference",
+    "simulate_closed_loop",
+]
+
+FloatArray = NDArray[np.float64]
+
+NOMINAL = (5.75, 1.5, 1.75)
+"""Nominal a, b, c (kg·m²)."""
+PAPER_DELTA = (0.2, 0.1, 0.1)
+"""Half-widths of the uncertainty intervals of a, b, c (kg·m²)."""
+TRUE_PARAMETERS = (5.6, 1.4, 1.7)
+"""The paper's true ã, b̃, c̃."""
+LAMBDA = 1.0
+"""Γ = −λI, F = −λI (Section 5)."""
+FAULT_BOUND = 5.0
+"""|u_un| ≤ 5 (Section 5)."""
+FAULT_ONSET = 20.0
+"""Faults act for t > 20 s (scenarios 2–4)."""
+X0 = (np.pi / 12, -np.pi / 12, 0.0, 0.0)
+"""True initial state."""
+THETA_BOX = ((-np.pi, -np.pi, -1.0, -1.0), (np.pi, np.pi, 1.0, 1.0))
+"""Θ of the boundedness analysis (the paper's 10 000-point grid)."""
+
+ENTRY_NAMES = (
+    # rotated: ΔB_R (rows 1-2) and the coefficients of ΔA_R (× σx3 in column 3, × σx4 in column 4)
+    "dBR11", "dBR12", "dBR21", "dBR22", "gAR13", "gAR23", "gAR14", "gAR24",
+    # unrotated: ΔB (rows 3-4) and the coefficients of ΔA (rows 3-4)
+    "dB31", "dB32", "dB41", "dB42", "ga33", "ga43", "ga34", "ga44",
+)  # fmt: skip
+
+_KP, _KD = 4.0, 4.0
+
+
+def _rational_factory(nominal: tuple[float, float, float]) -> Any:
+    r"""Entries as ratios of multi-affine functions of (ã, c̃), coefficients in (b̃, κ).
+
+    Monomial order of the affine parameters (ã, c̃): ``1, c̃, ã, ãc̃``. With
+    :math:`\tilde D = \tilde a\tilde c - \tilde b^2\kappa^2` and :math:`D_0 = ac - b^2\kappa^2`:
+    :math:`M\tilde M^{-1} = \tilde D^{-1}\begin{pmatrix} a\tilde c - b\tilde b\kappa^2 &
+    \kappa(b\tilde a - a\tilde b) \\ \kappa(b\tilde c - c\tilde b) & c\tilde a - b\tilde b\kappa^2
+    \end{pmatrix}`, :math:`\tilde M^{-1} = \tilde D^{-1}\operatorname{adj}\tilde M`.
+    """
+    a, b, c = nominal
+
+    def rational(bt: Any, k: Any) -> list[tuple[Any, ...]]:
+        k2 = k**2
+        d0 = a * c - b * b * k2
+        den = [-(bt**2) * k2, 0.0, 0.0, 1.0]  # D̃ = ã c̃ − b̃² κ²
+
+        def lin(*coef: Any) -> list[Any]:
+            return list(coef)
+
+        def comb(x: list[Any], sx: Any, y: list[Any], sy: Any) -> list[Any]:
+            return [sx * xi + sy * yi for xi, yi in zip(x, y)]
+
+        m11 = lin(-b * bt * k2, a, 0.0, 0.0)
+        n12 = lin(-a * bt, 0.0, b, 0.0)  # m12 = κ n12 / D̃
+        n21 = lin(-c * bt, b, 0.0, 0.0)  # m21 = κ n21 / D̃
+        m22 = lin(-b * bt * k2, 0.0, c, 0.0)
+        one = lin(1.0, 0.0, 0.0, 0.0)
+        c_t = lin(0.0, 1.0, 0.0, 0.0)
+        a_t = lin(0.0, 0.0, 1.0, 0.0)
+        den0 = [d0 * x for x in den]
+        return [
+            (comb(m11, 1.0, den, -1.0), den),  # ΔB_R 11
+            (n12, den, k),  # ΔB_R 12
+            (n21, den, k),  # ΔB_R 21
+            (comb(m22, 1.0, den, -1.0), den),  # ΔB_R 22
+            ([-(bt * x) for x in n12], den, k),  # ΔA_R 13 / (σ x3)
+            (comb(den, b, m22, -bt), den),  # ΔA_R 23 / (σ x3)
+            (comb(m11, bt, den, -b), den),  # ΔA_R 14 / (σ x4)
+            ([bt * x for x in n21], den, k),  # ΔA_R 24 / (σ x4)
+            (comb(c_t, d0, den, -c), den0),  # ΔB 31 = c̃/D̃ − c/D0
+            (comb(den, b, one, -bt * d0), den0, k),  # ΔB 32 = κ(b/D0 − b̃/D̃)
+            (comb(den, b, one, -bt * d0), den0, k),  # ΔB 41
+            (comb(a_t, d0, den, -a), den0),  # ΔB 42 = ã/D̃ − a/D0
+            (comb(one, (bt**2) * d0, den, -b * b), den0, k),  # ΔA 33 / (σ x3) = κ(b̃²/D̃ − b²/D0)
+            (comb(den, a * b, a_t, -bt * d0), den0),  # ΔA 43 / (σ x3)
+            (comb(c_t, bt * d0, den, -b * c), den0),  # ΔA 34 / (σ x4)
+            (comb(den, b * b, one, -(bt**2) * d0), den0, k),  # ΔA 44 / (σ x4) = κ(b²/D0 − b̃²/D̃)
+        ]
+
+    return rational
+
+
+def _fast_factory(nominal: tuple[float, float, float]) -> Any:
+    """Closed form of the 8 rotated entries (ΔB_R, ΔA_R coefficients), checked against the rational form."""
+    a, b, c = nominal
+
+    def fast(at: FloatArray, bt: FloatArray, ct: FloatArray, k: FloatArray) -> FloatArray:
+        k2 = k * k
+        inv = 1.0 / (at * ct - bt * bt * k2)
+        m11 = (a * ct - b * bt * k2) * inv
+        m12 = k * (b * at - a * bt) * inv
+        m21 = k * (b * ct - c * bt) * inv
+        m22 = (c * at - b * bt * k2) * inv
+        return np.stack([m11 - 1.0, m12, m21, m22 - 1.0, -bt * m12, b - bt * m22, bt * m11 - b, bt * m21])
+
+    return fast
+
+
+def _imul(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
+    return np.minimum(np.minimum(p1, p2), np.minimum(p3, p4)), np.maximum(np.maximum(p1, p2), np.maximum(p3, p4))
+
+
+def _icos(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Range of cos over [lo, hi] (widened by 4 ulp of 1 for the libm error)."""
+    clo, chi = np.cos(lo), np.cos(hi)
+    vlo, vhi = np.minimum(clo, chi), np.maximum(clo, chi)
+    two_pi = 2 * np.pi
+    has_max = np.ceil(lo / two_pi) * two_pi <= hi
+    has_min = np.ceil((lo - np.pi) / two_pi) * two_pi + np.pi <= hi
+    wide = hi - lo >= two_pi
+    vhi = np.where(has_max | wide, 1.0, vhi)
+    vlo = np.where(has_min | wide, -1.0, vlo)
+    pad = 1e-15
+    return np.maximum(vlo - pad, -1.0), np.minimum(vhi + pad, 1.0)
+
+
+def _isin(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    return _icos(lo - np.pi / 2, hi - np.pi / 2)
+
+
+def reference(t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+    r"""Joint reference :math:`q_r(t)` and its first two derivatives (our choice; the paper's is not given).
+
+    :math:`q_{r} = (\pi/12 + 0.5\sin 0.5t,\; -\pi/12 + 0.5\sin 0.7t)`, so :math:`q_r(0) = (x_0)_{1:2}` and
+    :math:`|\dot q_r| \le 0.35` rad/s (inside Θ).
+
+    Parameters
+    ----------
+    t : array_like
+        Times (s).
+
+    Returns
+    -------
+    q, qd, qdd : numpy.ndarray, shape (..., 2)
+    """
+    tt = np.asarray(t, dtype=float)
+    q = np.stack([np.pi / 12 + 0.5 * np.sin(0.5 * tt), -np.pi / 12 + 0.5 * np.sin(0.7 * tt)], axis=-1)
+    qd = np.stack([0.25 * np.cos(0.5 * tt), 0.35 * np.cos(0.7 * tt)], axis=-1)
+    qdd = np.stack([-0.125 * np.sin(0.5 * tt), -0.245 * np.sin(0.7 * tt)], axis=-1)
+    return q, qd, qdd
+
+
+def controller(x: ArrayLike, t: float, nominal: tuple[float, float, float] = NOMINAL) -> FloatArray:
+    r"""Computed-torque tracking controller with the nominal model (our choice, documented).
+
+    .. math:: \tau^* = M(\phi)\big(\ddot q_r + K_d(\dot q_r - \dot q) + K_p(q_r - q)\big)
+              - b\sigma\,(\dot q_2^2, -\dot q_1^2),\quad K_p = K_d = 4.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 4)
+        Measured state (C = I).
+    t : float
+        Time (s).
+    nominal : tuple of float
+        a, b, c used by the controller.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        Known input u = τ* (N·m).
+    """
+    a, b, c = nominal
+    xs = np.asarray(x, dtype=float)
+    q, qd, qdd = reference(t)
+    phi = xs[..., 1] - xs[..., 0]
+    kap, sig = np.cos(phi), np.sin(phi)
+    acc = qdd + _KD * (qd - xs[..., 2:]) + _KP * (q - xs[..., :2])
+    t1 = a * acc[..., 0] + b * kap * acc[..., 1] - b * sig * xs[..., 3] ** 2
+    t2 = b * kap * acc[..., 0] + c * acc[..., 1] + b * sig * xs[..., 2] ** 2
+    return np.stack([t1, t2], axis=-1)
+
+
+def _true_rate(x: FloatArray, tau: FloatArray, at: FloatArray, bt: FloatArray, ct: FloatArray) -> FloatArray:
+    phi = x[..., 1] - x[..., 0]
+    kap, sig = np.cos(phi), np.sin(phi)
+    den = at * ct - bt * bt * kap * kap
+    r1 = tau[..., 0] + bt * sig * x[..., 3] ** 2
+    r2 = tau[..., 1] - bt * sig * x[..., 2] ** 2
+    acc1 = (ct * r1 - bt * kap * r2) / den
+    acc2 = (at * r2 - bt * kap * r1) / den
+    return np.stack([x[..., 2], x[..., 3], acc1, acc2], axis=-1)
+
+
+def rk4_step(x: FloatArray, tau: FloatArray, params: FloatArray, h: float) -> FloatArray:
+    """One classical RK4 step of the true manipulator with the torque held over the step.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (M, 4)
+        States of M runs.
+    tau : numpy.ndarray, shape (M, 2)
+        Total torque (known input plus fault), constant over the step.
+    params : numpy.ndarray, shape (M, 3)
+        True ã, b̃, c̃ of each run.
+    h : float
+        Step (s).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M, 4)
+    """
+    at, bt, ct = params[:, 0], params[:, 1], params[:, 2]
+    k1 = _true_rate(x, tau, at, bt, ct)
+    k2 = _true_rate(x + 0.5 * h * k1, tau, at, bt, ct)
+    k3 = _true_rate(x + 0.5 * h * k2, tau, at, bt, ct)
+    k4 = _true_rate(x + h * k3, tau, at, bt, ct)
+    return np.asarray(x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4))
+
+
+def simulate_closed_loop(
+    t: ArrayLike,
+    params: ArrayLike,
+    fault: ArrayLike,
+    x0: ArrayLike = X0,
+    onset: float = FAULT_ONSET,
+    substeps: int = 1,
+    nominal: tuple[float, float, float] = NOMINAL,
+) -> tuple[FloatArray, FloatArray]:
+    r"""Closed-loop truth: RK4 with ``substeps`` steps per sample, controller held over each sample.
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+        Uniform sample times (s).
+    params : array_like, shape (M, 3)
+        True ã, b̃, c̃ per run.
+    fault : array_like, shape (M, 2)
+        Fault torque u_un acting for t > ``onset`` (constant, N·m).
+    x0 : array_like, shape (4,) or (M, 4)
+        Initial state.
+    onset : float
+        Fault onset (s).
+    substeps : int
+        RK4 steps per sample interval.
+    nominal : tuple of float
+        Nominal a, b, c of the controller.
+
+    Returns
+    -------
+    x : numpy.ndarray, shape (M, T, 4)
+    u : numpy.ndarray, shape (M, T, 2)
+        Known input (held over [t_k, t_{k+1})).
+    """
+    tt = np.asarray(t, dtype=float)
+    par = np.atleast_2d(np.asarray(params, dtype=float))
+    runs = par.shape[0]
+    f = np.broadcast_to(np.asarray(fault, dtype=float), (runs, 2))
+    x = np.broadcast_to(np.asarray(x0, dtype=float), (runs, 4)).copy()
+    xs = np.empty((runs, tt.size, 4))
+    us = np.empty((runs, tt.size, 2))
+    h = float(tt[1] - tt[0]) / substeps if tt.size > 1 else 0.0
+    for k in range(tt.size):
+        xs[:, k] = x
+        u = controller(x, float(tt[k]), nominal)
+        us[:, k] = u
+        if k + 1 < tt.size:
+            tau = u + (f if tt[k] >= onset else 0.0)
+            for _ in range(substeps):
+                x = rk4_step(x, tau, par, h)
+    return xs, us
+
+
+class ManipulatorModel(SampledLPVModel):
+    r"""The manipulator as an :class:`~intervalobs.systems.lpv.LPVSystem` plus its sampled-data enclosures.
+
+    Implements :class:`~intervalobs.systems.lpv.SampledLPVModel` for the paper's
+    :math:`R(\vartheta)` (Section 5). The elementwise bounds of :math:`\Delta A, \Delta B` and of the
+    rotated :math:`\Delta A_R, \Delta B_R = \Delta B_{un,R}` are *exact* ranges over the parameter
+    box, certified by :func:`~intervalobs.design.lpv.certify_vertex_extremes` (extremes at the
+    8 vertices, slack reported in :attr:`bounds`).
+
+    Parameters
+    ----------
+    nominal : tuple of float
+        a, b, c.
+    delta : tuple of float
+        Half-widths of the intervals of a, b, c (the paper: 0.2, 0.1, 0.1).
+    fault_bound : float
+        Bound of |u_un| (each component).
+    cells, splits, pieces : int
+        Resolution of the certificate (see :func:`certify_vertex_extremes`).
+
+    Raises
+    ------
+    AssumptionError
+        If :math:`\tilde a\tilde c - \tilde b^2\cos^2\phi` can vanish on the parameter box.
+    """
+
+    n = 4
+
+    def __init__(
+        self,
+        nominal: tuple[float, float, float] = NOMINAL,
+        delta: tuple[float, float, float] = PAPER_DELTA,
+        fault_bound: float = FAULT_BOUND,
+        cells: int = 64,
+        splits: int = 8,
+        pieces: int = 4,
+    ) -> None:
+        nom = as_vector("nominal", nominal, 3)
+        dl = as_vector("delta", delta, 3)
+        if np.any(nom <= 0) or np.any(dl < 0):
+            raise BoundsError(f"nominal, delta: expected positive nominal and nonnegative delta, got {nom}, {dl}")
+        self.nominal = (float(nom[0]), float(nom[1]), float(nom[2]))
+        self.p_lower = nom - dl
+        self.p_upper = nom + dl
+        d_min = self.p_lower[0] * self.p_lower[2] - self.p_upper[1] ** 2
+        if self.p_lower.min() <= 0 or d_min <= 0:
+            raise AssumptionError(
+                f"delta: expected ã c̃ − b̃² cos²φ > 0 on the parameter box (Section 5), got min {d_min:.4g}"
+            )
+        self.d_min = float(d_min)
+        self.fault_bound = float(fault_bound)
+        self.bounds: CertifiedVertexBounds = certify_vertex_extremes(
+            _rational_factory(self.nominal),
+            ENTRY_NAMES,
+            self.p_lower,
+            self.p_upper,
+            (-1.0, 1.0),
+            affine=(0, 2),
+            cells=cells,
+            splits=splits,
+            pieces=pieces,
+        )
+        self._fast = _fast_factory(self.nominal)
+        self.bounds.check_fast(self._fast, range(8))
+        self.system = LPVSystem(
+            A=self.a_matrix,
+            B=self.b_matrix,
+            C=np.eye(4),
+            theta_box=THETA_BOX,
+            B_un=self.b_matrix,
+            dA=self.da_bounds,
+            dB=self.db_bounds,
+            dB_un=self.db_bounds,
+        )
+
+    # --- nominal matrices -----------------------------------------------------------------------
+    def a_matrix(self, theta: ArrayLike) -> FloatArray:
+        """Nominal :math:`A(\\vartheta)`.
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 4, 4)
+        """
+        a, b, c = self.nominal
+        th = np.asarray(theta, dtype=float)
+        phi = th[..., 1] - th[..., 0]
+        kap, sig = np.cos(phi), np.sin(phi)
+        den = a * c - b * b * kap * kap
+        out = np.zeros((*th.shape[:-1], 4, 4))
+        out[..., 0, 2] = out[..., 1, 3] = 1.0
+        out[..., 2, 2] = b * b * sig * kap * th[..., 2] / den
+        out[..., 2, 3] = b * c * sig * th[..., 3] / den
+        out[..., 3, 2] = -a * b * sig * th[..., 2] / den
+        out[..., 3, 3] = -b * b * sig * kap * th[..., 3] / den
+        return out
+
+    def b_matrix(self, theta: ArrayLike) -> FloatArray:
+        """Nominal :math:`B(\\vartheta) = B_{un}(\\vartheta)`.
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 4, 2)
+        """
+        a, b, c = self.nominal
+        th = np.asarray(theta, dtype=float)
+        kap = np.cos(th[..., 1] - th[..., 0])
+        den = a * c - b * b * kap * kap
+        out = np.zeros((*th.shape[:-1], 4, 2))
+        out[..., 2, 0] = c / den
+        out[..., 2, 1] = out[..., 3, 0] = -b * kap / den
+        out[..., 3, 1] = a / den
+        return out
+
+    def r_matrix(self, y: ArrayLike) -> FloatArray:
+        """The paper's :math:`R(\\vartheta)` (Section 5) at measured states.
+
+        Parameters
+        ----------
+        y : array_like, shape (..., 4)
+            Measured state (C = I).
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., 4, 4)
+        """
+        a, b, c = self.nominal
+        th = np.asarray(y, dtype=float)
+        bk = b * np.cos(th[..., 1] - th[..., 0])
+        out = np.zeros((*th.shape[:-1], 4, 4))
+        out[..., 0, 2] = a
+        out[..., 0, 3] = out[..., 1, 2] = bk
+        out[..., 1, 3] = c
+        out[..., 2, 0] = out[..., 3, 1] = 1.0
+        return out
+
+    # --- certified bounds at points -----------------------------------------------------------
+    def _entry_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        th = np.asarray(theta, dtype=float)
+        phi = th[..., 1] - th[..., 0]
+        lo, hi = self.bounds.evaluate(np.clip(np.cos(phi), -1.0, 1.0))
+        s = np.sin(phi)
+        return lo, hi, s * th[..., 2], s * th[..., 3]
+
+    @staticmethod
+    def _scale(g_lo: FloatArray, g_hi: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return np.minimum(f * g_lo, f * g_hi), np.maximum(f * g_lo, f * g_hi)
+
+    def rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` at points (14)–(15).
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        da_lower, da_upper : numpy.ndarray, shape (..., 4, 4)
+        db_lower, db_upper : numpy.ndarray, shape (..., 4, 2)
+        """
+        lo, hi, f3, f4 = self._entry_bounds(theta)
+        shape = f3.shape
+        al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
+        for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
+            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
+        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
+        for (i, j), e in (((0, 0), 0), ((0, 1), 1), ((1, 0), 2), ((1, 1), 3)):
+            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
+        return al, ah, bl, bh
+
+    def da_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` (11).
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., 4, 4)
+        """
+        lo, hi, f3, f4 = self._entry_bounds(theta)
+        al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
+        for (i, j), e, f in (((2, 2), 12, f3), ((3, 2), 13, f3), ((2, 3), 14, f4), ((3, 3), 15, f4)):
+            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
+        return al, ah
+
+    def db_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` (12), (23).
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., 4, 2)
+        """
+        lo, hi, f3, _ = self._entry_bounds(theta)
+        bl, bh = np.zeros((*f3.shape, 4, 2)), np.zeros((*f3.shape, 4, 2))
+        for (i, j), e in (((2, 0), 8), ((2, 1), 9), ((3, 0), 10), ((3, 1), 11)):
+            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
+        return bl, bh
+
+    def naive_rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        r"""Bounds of :math:`\Delta A_R` from :math:`R \cdot [\underline{\Delta A}, \overline{\Delta A}]` by
+        interval arithmetic (the paper's element-by-element recipe): sound but wider.
+
+        Parameters
+        ----------
+        theta : array_like, shape (..., 4)
+            Scheduling vector :math:`\\vartheta = x`.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., 4, 4)
+        """
+        al, ah = self.da_bounds(theta)
+        r = self.r_matrix(theta)
+        rp, rn = np.maximum(r, 0), np.maximum(-r, 0)
+        return rp @ al - rn @ ah, rp @ ah - rn @ al
+
+    # --- sampled-data enclosures (SampledLPVModel) --------------------------------------------
+    def _accel_bound(self, w_abs: FloatArray, u: FloatArray) -> FloatArray:
+        at, bt, ct = self.p_upper
+        cor = bt * w_abs[..., ::-1] ** 2
+        drive = np.abs(u) + self.fault_bound + cor
+        return np.stack([ct * drive[..., 0] + bt * drive[..., 1], bt * drive[..., 0] + at * drive[..., 1]], axis=-1) / (
+            self.d_min
+        )
+
+    def flow_box(
+        self, x_lower: FloatArray, x_upper: FloatArray, y: FloatArray, u: FloatArray, h: float
+    ) -> tuple[FloatArray, FloatArray]:
+        r"""A box containing :math:`x(t)`, :math:`t \in [t_k, t_k + h]`, from the measured :math:`x_k = y_k`.
+
+        With :math:`W_0 = |\dot q_k| + 1` and :math:`\alpha(W)` the bound of :math:`|\ddot q|` for
+        :math:`|\dot q| \le W` (any parameter in the box, any fault with :math:`|u_{un}| \le` the
+        bound, torque held), :math:`h\alpha(W_0) \le 1` keeps :math:`|\dot q| \le W_0` on the step
+        (first-exit argument), hence :math:`|\dot q - \dot q_k| \le h\alpha(W_1)` with
+        :math:`W_1 = |\dot q_k| + h\alpha(W_0)`, and :math:`q - q_k \in [0, h]\cdot[\dot q_k \mp h\alpha]`.
+
+        Parameters
+        ----------
+        x_lower, x_upper : numpy.ndarray, shape (M, 4)
+            Observer box at :math:`t_k` (unused: the state is measured).
+        y : numpy.ndarray, shape (M, 4)
+            Measured state at :math:`t_k`.
+        u : numpy.ndarray, shape (M, 2)
+            Known torque held over the step.
+        h : float
+            Step (s).
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (M, 4)
+        """
+        w = y[..., 2:]
+        a0 = self._accel_bound(np.abs(w) + 1.0, u)
+        if np.any(h * a0 > 1.0):
+            raise AssumptionError(f"h: expected h·max|q̈| ≤ 1 for the flow enclosure, got {float(np.max(h * a0)):.3g}")
+        a1 = self._accel_bound(np.abs(w) + h * a0, u)
+        dw = h * a1
+        lo = np.empty_like(y)
+        hi = np.empty_like(y)
+        lo[..., 2:], hi[..., 2:] = w - dw, w + dw
+        lo[..., :2] = y[..., :2] + np.minimum(0.0, h * (w - dw))
+        hi[..., :2] = y[..., :2] + np.maximum(0.0, h * (w + dw))
+        return lo, hi
+
+    def _trig(self, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        plo = lo[..., 1] - hi[..., 0]
+        phi = hi[..., 1] - lo[..., 0]
+        klo, khi = _icos(plo, phi)
+        slo, shi = _isin(plo, phi)
+        return klo, khi, slo, shi
+
+    def rx_bounds(self, x_lower: FloatArray, x_upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Bounds of :math:`R(\\vartheta)x = (M(\\phi)\\dot q, q)` over a box of states.
+
+        Parameters
+        ----------
+        x_lower, x_upper : numpy.ndarray, shape (M, 4)
+            Box of states.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (M, 4)
+        """
+        a, b, c = self.nominal
+        klo, khi, _, _ = self._trig(x_lower, x_upper)
+        w1l, w1h, w2l, w2h = x_lower[..., 2], x_upper[..., 2], x_lower[..., 3], x_upper[..., 3]
+        p12 = _imul(b * klo, b * khi, w2l, w2h)
+        p21 = _imul(b * klo, b * khi, w1l, w1h)
+        lo = np.stack([a * w1l + p12[0], p21[0] + c * w2l, x_lower[..., 0], x_lower[..., 1]], axis=-1)
+        hi = np.stack([a * w1h + p12[1], p21[1] + c * w2h, x_upper[..., 0], x_upper[..., 1]], axis=-1)
+        return lo, hi
+
+    def step_enclosure(
+        self, x_lower: FloatArray, x_upper: FloatArray, y: FloatArray, u: FloatArray, h: float
+    ) -> StepEnclosure:
+        r"""Enclosures over one step (:class:`~intervalobs.systems.lpv.StepEnclosure`).
+
+        Known rate: :math:`(\dot R + RA)x + RBu = (b\sigma\dot q_1\dot q_2 + u_1,\,
+        -b\sigma\dot q_1\dot q_2 + u_2,\, \dot q_1,\, \dot q_2)` (from :math:`\dot M\dot q + N\dot q`).
+        Uncertainty: :math:`\Delta A_R` column 3 is :math:`\sigma x_3` times the certified range of its
+        coefficient over the parameter box and the κ-interval of the step, column 4 likewise with
+        :math:`\sigma x_4`; :math:`\Delta B_R = \Delta B_{un,R}` are the certified ranges.
+
+        Parameters
+        ----------
+        x_lower, x_upper : numpy.ndarray, shape (M, 4)
+            Observer box at :math:`t_k` (unused: the state is measured).
+        y : numpy.ndarray, shape (M, 4)
+            Measured state at :math:`t_k`.
+        u : numpy.ndarray, shape (M, 2)
+            Known torque held over the step.
+        h : float
+            Step (s).
+
+        Returns
+        -------
+        StepEnclosure
+        """
+        a, b, c = self.nominal
+        flo, fhi = self.flow_box(x_lower, x_upper, y, u, h)
+        klo, khi, slo, shi = self._trig(flo, fhi)
+        w1l, w1h, w2l, w2h = flo[..., 2], fhi[..., 2], flo[..., 3], fhi[..., 3]
+        # R x
+        p12 = _imul(b * klo, b * khi, w2l, w2h)
+        p21 = _imul(b * klo, b * khi, w1l, w1h)
+        rx_lo = np.stack([a * w1l + p12[0], p21[0] + c * w2l, flo[..., 0], flo[..., 1]], axis=-1)
+        rx_hi = np.stack([a * w1h + p12[1], p21[1] + c * w2h, fhi[..., 0], fhi[..., 1]], axis=-1)
+        # known rate
+        ww = _imul(w1l, w1h, w2l, w2h)
+        sw = _imul(b * slo, b * shi, ww[0], ww[1])
+        rate_lo = np.stack([sw[0] + u[..., 0], -sw[1] + u[..., 1], w1l, w2l], axis=-1)
+        rate_hi = np.stack([sw[1] + u[..., 0], -sw[0] + u[..., 1], w1h, w2h], axis=-1)
+        # rotated uncertainty
+        g_lo, g_hi = self.bounds.evaluate(klo, khi, select=range(8), fast=self._fast)
+        f3 = _imul(slo, shi, w1l, w1h)
+        f4 = _imul(slo, shi, w2l, w2h)
+        shape = klo.shape
+        al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
+        for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
+            al[..., i, j], ah[..., i, j] = _imul(f[0], f[1], g_lo[e], g_hi[e])
+        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
+        bl[..., :2, :] = g_lo[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
+        bh[..., :2, :] = g_hi[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
+        return StepEnclosure(flo, fhi, rate_lo, rate_hi, rx_lo, rx_hi, al, ah, bl, bh, bl, bh)
+
+    def sample_parameters(self, runs: int, rng: np.random.Generator) -> FloatArray:
+        """Uniform draws of (ã, b̃, c̃) in the parameter box.
+
+        Parameters
+        ----------
+        runs : int
+            Number of draws.
+        rng : numpy.random.Generator
+            Random source.
+
+        Returns
+        -------
+        numpy.ndarray, shape (runs, 3)
+        """
+        return np.asarray(rng.uniform(self.p_lower, self.p_upper, size=(runs, 3)))

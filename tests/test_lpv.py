@@ -1,0 +1,304 @@
+"""Seed 001: LPV model, certified ΔA_R bounds, boundedness LMI, LPV interval observer / UIO."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs import AssumptionError, BoundsError, DesignError, DimensionError
+from intervalobs.design.lpv import IntervalJet, boundedness_lmi, verify_boundedness
+from intervalobs.examples.manipulator import (
+    FAULT_BOUND,
+    NOMINAL,
+    TRUE_PARAMETERS,
+    X0,
+    ManipulatorModel,
+    controller,
+    rk4_step,
+    simulate_closed_loop,
+)
+from intervalobs.observers.lpv import LPVIntervalObserver, LPVIntervalUIO
+from intervalobs.systems.lpv import LPVSystem
+
+
+@pytest.fixture(scope="module")
+def model() -> ManipulatorModel:
+    return ManipulatorModel(cells=32, splits=4, pieces=4)
+
+
+def _direct_entries(at, bt, ct, k):
+    a, b, c = NOMINAL
+    d = at * ct - bt**2 * k**2
+    m11, m12 = (a * ct - b * bt * k**2) / d, k * (b * at - a * bt) / d
+    m21, m22 = k * (b * ct - c * bt) / d, (c * at - b * bt * k**2) / d
+    return np.array([m11 - 1, m12, m21, m22 - 1, -bt * m12, b - bt * m22, bt * m11 - b, bt * m21])
+
+
+# --- interval forward-mode AD ------------------------------------------------------------------
+
+
+def test_interval_jet_encloses_values_and_derivatives():
+    rng = np.random.default_rng(0)
+    lo = np.array([0.5, 1.0])
+    hi = np.array([0.9, 1.5])
+    x = IntervalJet.variable(lo[0], hi[0], 0, 2)
+    y = IntervalJet.variable(lo[1], hi[1], 1, 2)
+    f = (x * y - 2.0) / (x**2 + y) + 3.0 * x
+    for _ in range(500):
+        px, py = rng.uniform(lo, hi)
+        val = (px * py - 2.0) / (px**2 + py) + 3.0 * px
+        den = px**2 + py
+        dx = (py * den - (px * py - 2.0) * 2 * px) / den**2 + 3.0
+        dy = (px * den - (px * py - 2.0)) / den**2
+        assert f.lo <= val <= f.hi
+        assert f.dlo[0] <= dx <= f.dhi[0]
+        assert f.dlo[1] <= dy <= f.dhi[1]
+
+
+def test_interval_jet_reciprocal_rejects_zero():
+    x = IntervalJet.variable(-1.0, 1.0, 0, 1)
+    with pytest.raises(BoundsError, match="excluding 0"):
+        x.reciprocal()
+
+
+# --- certified bounds ----------------------------------------------------------------------------
+
+
+def test_rotated_bounds_are_exact_and_contain_every_parameter(model):
+    b = model.bounds
+    assert np.all(b.slack[4:8] == 0.0), "ΔA_R coefficients must be certified exact (vertex ranges)"
+    assert np.all(b.certified_fraction[:, [0, 2]] == 1.0)
+    rng = np.random.default_rng(1)
+    samples = rng.uniform(model.p_lower, model.p_upper, size=(2000, 3))
+    for k in np.linspace(-1.0, 1.0, 41):
+        lo, hi = b.evaluate(np.array(k), select=range(8))
+        vals = _direct_entries(samples[:, 0], samples[:, 1], samples[:, 2], k)
+        assert np.all(vals >= lo[:, None]) and np.all(vals <= hi[:, None])
+        # exactness: the bounds are attained (at vertices) up to the rounding margin
+        verts = _direct_entries(b.vertices[:, 0], b.vertices[:, 1], b.vertices[:, 2], k)
+        np.testing.assert_allclose(verts.min(axis=1)[4:], lo[4:], atol=1e-10)
+        np.testing.assert_allclose(verts.max(axis=1)[4:], hi[4:], atol=1e-10)
+
+
+def test_bounds_over_a_scheduling_interval_are_sound(model):
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        k0 = rng.uniform(-1, 0.98)
+        k1 = k0 + rng.uniform(0, 0.02)
+        lo, hi = model.bounds.evaluate(np.array(k0), np.array(k1), select=range(8))
+        p = rng.uniform(model.p_lower, model.p_upper, size=(300, 3))
+        ks = rng.uniform(k0, k1, size=300)
+        vals = _direct_entries(p[:, 0], p[:, 1], p[:, 2], ks)
+        assert np.all(vals >= lo[:, None]) and np.all(vals <= hi[:, None])
+
+
+def test_naive_rotation_is_sound_but_wider(model):
+    th = np.array([[0.0, 0.3, 1.0, -1.0], [0.2, -1.0, 0.5, 0.5]])
+    lo, hi, _, _ = model.rotated_bounds_at(th)
+    nlo, nhi = model.naive_rotated_bounds_at(th)
+    assert np.all(nlo <= lo + 1e-12) and np.all(nhi >= hi - 1e-12)
+    assert np.sum(nhi - nlo) > 1.5 * np.sum(hi - lo)
+
+
+def test_fast_form_must_match_the_certified_form(model):
+    with pytest.raises(DesignError, match="certified entries"):
+        model.bounds.check_fast(lambda at, bt, ct, k: 1.01 * model._fast(at, bt, ct, k), range(8))
+
+
+def test_parameter_box_with_vanishing_determinant_is_rejected():
+    with pytest.raises(AssumptionError, match="cos"):
+        ManipulatorModel(delta=(4.0, 1.0, 1.0))
+
+
+# --- LPV system validation -------------------------------------------------------------------------
+
+
+def _lpv(**over):
+    args = dict(
+        A=lambda th: np.broadcast_to(-np.eye(2), (*th.shape[:-1], 2, 2)),
+        B=lambda th: np.broadcast_to(np.eye(2)[:, :1], (*th.shape[:-1], 2, 1)),
+        C=np.eye(2),
+        theta_box=([-1.0], [1.0]),
+    )
+    args.update(over)
+    return LPVSystem(**args)
+
+
+def test_lpv_system_validates_shapes_bounds_and_ranks():
+    sys_ = _lpv()
+    assert (sys_.n, sys_.m, sys_.p, sys_.n_theta) == (2, 1, 2, 1)
+    with pytest.raises(DimensionError, match="square"):
+        _lpv(A=lambda th: np.zeros((*th.shape[:-1], 2, 3)))
+    with pytest.raises(AssumptionError, match="full row rank"):
+        _lpv(C=[[1.0, 0.0], [2.0, 0.0]])
+    with pytest.raises(BoundsError, match="lower <= upper"):
+        _lpv(dA=lambda th: (np.ones((th.shape[0], 2, 2)), np.zeros((th.shape[0], 2, 2))))
+    with pytest.raises(DimensionError, match="shape"):
+        _lpv(dA=lambda th: (np.zeros((th.shape[0], 3, 2)), np.zeros((th.shape[0], 3, 2))))
+    with pytest.raises(AssumptionError, match="rank"):
+        _lpv(B_un=lambda th: np.zeros((*th.shape[:-1], 2, 1)))
+    with pytest.raises(BoundsError, match="finite"):
+        _lpv(A=lambda th: np.full((*th.shape[:-1], 2, 2), np.nan))
+
+
+def test_manipulator_lpv_system_is_consistent(model):
+    th = np.array([[0.1, -0.4, 0.3, -0.2]])
+    # A, B of the LPV form reproduce the nominal dynamics
+    u = np.array([[1.0, -2.0]])
+    nominal = np.tile(NOMINAL, (1, 1))
+    x = th.copy()
+    from intervalobs.examples.manipulator import _true_rate
+
+    rate = _true_rate(x, u, nominal[:, 0], nominal[:, 1], nominal[:, 2])
+    lpv_rate = model.a_matrix(th)[0] @ x[0] + model.b_matrix(th)[0] @ u[0]
+    np.testing.assert_allclose(rate[0], lpv_rate, rtol=1e-12)
+    # R B_un = H = [I; 0] (26)
+    np.testing.assert_allclose(
+        model.r_matrix(th)[0] @ model.b_matrix(th)[0], np.vstack([np.eye(2), np.zeros((2, 2))]), atol=1e-14
+    )
+
+
+# --- boundedness LMI ---------------------------------------------------------------------------------
+
+
+def _grid(points: int) -> np.ndarray:
+    phis = np.linspace(-np.pi, np.pi, points, endpoint=False)
+    return np.array([[0.0, p, a, b] for p in phis for a in (-1.0, 0.0, 1.0) for b in (-1.0, 0.0, 1.0)])
+
+
+def test_lmi_74_feasible_at_lambda_1_with_exact_bounds_only(model):
+    f = -np.eye(4)
+    lo, hi, _, _ = model.rotated_bounds_at(_grid(4))
+    cert = boundedness_lmi(f, f, lo, hi, switchable=range(4), eps1_candidates=(1.0,))
+    rng = np.random.default_rng(3)
+    fine = np.column_stack([rng.uniform(-np.pi, np.pi, (500, 2)), rng.uniform(-1, 1, (500, 2))])
+    flo, fhi, _, _ = model.rotated_bounds_at(fine)
+    cert = verify_boundedness(cert, f, f, flo, fhi, switchable=range(4))
+    assert cert.subsets == 16  # columns 1-2 of ΔA_R vanish
+    assert cert.fine_margin is not None and cert.fine_margin < -0.05
+    assert cert.second_block_margin <= 0.0
+    assert cert.feasible
+
+
+def test_lmi_74_has_no_certificate_at_lambda_1_with_naive_bounds(model):
+    f = -np.eye(4)
+    # R·[ΔA] by interval arithmetic: no certificate at λ = 1 (a grid of 12 φ values hits the worst ones)
+    nlo, nhi = model.naive_rotated_bounds_at(_grid(12))
+    naive = boundedness_lmi(f, f, nlo, nhi, switchable=range(4), eps1_candidates=(1.0, 2.0))
+    assert naive.coarse_margin > 0.5 and not naive.feasible
+
+
+# --- observer ------------------------------------------------------------------------------------------
+
+H = 1e-3
+X0_BOX = (np.asarray(X0) - 0.1, np.asarray(X0) + 0.1)
+
+
+def _uio(model, f=None):
+    f = -np.eye(4) if f is None else f
+    return LPVIntervalUIO(model, H, f, x0=X0_BOX, unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)))
+
+
+def test_observer_rejects_bad_gains(model):
+    with pytest.raises(AssumptionError, match="Metzler"):
+        LPVIntervalObserver(model, H, -np.eye(4) - 0.1 * (np.ones((4, 4)) - np.eye(4)))
+    with pytest.raises(DesignError, match="Hurwitz"):
+        LPVIntervalObserver(model, H, 0.1 * np.eye(4))
+    with pytest.raises(AssumptionError, match="lower <= 0 <= upper"):
+        LPVIntervalUIO(model, H, -np.eye(4), unknown_input=(np.ones(2), 2 * np.ones(2)))
+    f = -np.eye(4)
+    f[0, 1] = 0.5  # Metzler and Hurwitz, but H's columns are not eigenvectors
+    with pytest.raises(AssumptionError, match="F H = H"):
+        LPVIntervalUIO(model, H, f, unknown_input=(-np.ones(2), np.ones(2)))
+
+
+def test_run_equals_repeated_step(model):
+    t = np.arange(0, 0.3 + H / 2, H)
+    x, u = simulate_closed_loop(t, np.array([TRUE_PARAMETERS]), np.zeros(2))
+    obs = _uio(model)
+    est = obs.run(t, x[0], u[0])
+    state = obs.init()
+    for k in range(t.size):
+        state = obs.step(state, x[0, k], u[0, k])
+        np.testing.assert_allclose(state.lower, est.lower[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.upper, est.upper[k], rtol=0, atol=1e-12)
+
+
+def test_enclosure_and_no_false_alarm_at_parameter_vertices(model):
+    """Fault-free runs at the 8 vertices of the parameter box (extreme uncertainty): violation exactly 0,
+    isolation signals never negative."""
+    t = np.arange(0, 2.5 + H / 2, H)
+    params = model.bounds.vertices
+    x, u = simulate_closed_loop(t, params, np.zeros(2))
+    est, rec = _uio(model).isolate(t, x, u)
+    report = est.enclosure(x)
+    assert report.fraction == 1.0 and report.max_violation == 0.0
+    assert rec.signal_lower.min() >= 0.0 and rec.signal_upper.min() >= 0.0
+
+
+def test_bang_bang_fault_in_channel_1_never_flags_channel_2(model):
+    """(27): with u_un(2) = 0, the channel-2 signals stay nonnegative whatever fault 1 does (±5,
+    switching inside the sampling steps)."""
+    rng = np.random.default_rng(4)
+    h_true = H / 4
+    t = np.arange(0, 2.0 + H / 2, H)
+    params = model.bounds.vertices[[0, 3, 5, 6]]
+    runs = params.shape[0]
+    x = np.tile(np.asarray(X0), (runs, 1))
+    xs, us = np.empty((runs, t.size, 4)), np.empty((runs, t.size, 2))
+    fault = np.zeros((runs, 2))
+    fault[:, 0] = FAULT_BOUND
+    for k in range(t.size):
+        xs[:, k] = x
+        us[:, k] = controller(x, float(t[k]))
+        for _ in range(4):
+            if rng.random() < 0.3:
+                fault[:, 0] = -fault[:, 0]
+            x = rk4_step(x, us[:, k] + fault, params, h_true)
+    _, rec = _uio(model).isolate(t, xs, us)
+    assert rec.signal_lower[..., 1].min() >= 0.0 and rec.signal_upper[..., 1].min() >= 0.0
+
+
+def test_step_enclosure_contains_the_intersample_state(model):
+    rng = np.random.default_rng(5)
+    params = model.sample_parameters(16, rng)
+    x0 = np.column_stack([rng.uniform(-np.pi, np.pi, (16, 2)), rng.uniform(-1, 1, (16, 2))])
+    u = rng.uniform(-5, 5, (16, 2))
+    fault = rng.uniform(-FAULT_BOUND, FAULT_BOUND, (16, 2))
+    enc = model.step_enclosure(x0 - 0.1, x0 + 0.1, x0, u, 1e-2)
+    x = x0.copy()
+    for _ in range(20):
+        x = rk4_step(x, u + fault, params, 5e-4)
+        assert np.all(x >= enc.flow_lower) and np.all(x <= enc.flow_upper)
+
+
+def test_observer_input_validation(model):
+    obs = _uio(model)
+    t = np.arange(0, 0.01, H)
+    with pytest.raises(Exception, match="expected shape"):
+        obs.run(t, np.zeros((t.size, 3)))
+    with pytest.raises(Exception, match="uniform samples"):
+        obs.run(np.array([0.0, 0.002, 0.003]), np.zeros((3, 4)))
+
+
+@pytest.mark.slow
+def test_manipulator_reproduction_meets_the_issue(tmp_path):
+    import json
+
+    from intervalobs.cli import main
+
+    assert main(["reproduce", "manipulator-lpv", "--out", str(tmp_path)]) == 0
+    folder = tmp_path / "manipulator-lpv"
+    s = json.loads((folder / "summary.json").read_text())
+    sc = s["design"]["scenarios"]
+    assert s["enclosure"]["state"] == {"fraction": 1.0, "max_violation": 0.0}
+    assert sc["1"]["false_alarm"] is False and sc["1"]["isolated"] == []
+    assert sc["1"]["state_enclosure_no_fault"]["max_violation"] == 0.0
+    for name, isolated in (("2", [1]), ("3", [2]), ("4", [1, 2])):
+        assert sc[name]["false_alarm"] is False and sc[name]["isolated"] == isolated
+        assert all(20.0 < t_det < 23.0 for t_det in sc[name]["detection_time_s"])
+    assert s["design"]["lmi_74_exact_lambda_1"]["feasible"] is True
+    assert s["design"]["lmi_74_exact_lambda_1"]["fine_points"] == 10000
+    assert s["design"]["lmi_74_naive_lambda_1"]["feasible"] is False
+    for png in ("scenario1_isolation.png", "scenario4_isolation.png", "scenario1_state_bounds.png"):
+        assert (folder / png).exists()
