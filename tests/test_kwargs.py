@@ -53,11 +53,30 @@ def _zonotopic_design(**kwargs: Any) -> Any:
     return ZonotopicObserver.design(numerical3.system("68"), numerical3.bounds(), **kwargs)
 
 
+def _gsisio_design(**kwargs: Any) -> Any:
+    from intervalobs.examples import gsisio
+    from intervalobs.observers.gsisio import GSISIO
+
+    return GSISIO.design(gsisio.fullrank_system(), gsisio.FULLRANK_X0_BOX, **kwargs)
+
+
+def _nullspace_gsisio_design(**kwargs: Any) -> Any:
+    from intervalobs.examples import gsisio
+    from intervalobs.observers.gsisio import NullSpaceGSISIO
+
+    return NullSpaceGSISIO.design(gsisio.paper_system(), gsisio.X0_BOX, **kwargs)
+
+
 # qualified name -> (call with extra keywords, keywords the function documents and must accept)
 CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
     "intervalobs.observers.interval_observer.IntervalObserver.design": (
         _design,
         {"candidates": {"identity": np.eye(2)}},
+    ),
+    "intervalobs.observers.gsisio.GSISIO.design": (_gsisio_design, {"tight": False, "splits": 2}),
+    "intervalobs.observers.gsisio.NullSpaceGSISIO.design": (
+        _nullspace_gsisio_design,
+        {"direction": "output", "gain_factors": (1.0,), "splits": 3, "newton_steps": 2},
     ),
     "intervalobs.observers.zonotopic.IntegratedObserver.design": (_integrated_design, {"fallback": "hinf"}),
     "intervalobs.observers.zonotopic.ZonotopicObserver.design": (_zonotopic_design, {"order": 12}),

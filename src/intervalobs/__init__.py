@@ -1,10 +1,12 @@
 """intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
 
 from .complex_interval import cabs, ctimes, linear_image
+from .design.abstraction import AffineAbstraction, affine_abstraction
 from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
 from .design.high_gain import ThetaDesign, theta_design
 from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from .design.lpv import CertifiedVertexBounds, boundedness_lmi, certify_vertex_extremes, verify_boundedness
+from .design.mixed_monotone import JacobianDecomposition, VertexDecomposition, jacobian_bounds
 from .design.regions import Disk, RegionPlacement, place_in_disks
 from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
 from .diagnosis import isolation_outcome, psi_hat, run_campaign, runs_for_sigma
@@ -17,8 +19,10 @@ from .errors import (
     IntervalObserverError,
 )
 from .estimate import EnclosureReport, Estimate
+from .inclusion import Interval
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
+from .observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
@@ -27,6 +31,7 @@ from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
 from .systems import Bounds, LTISystem, SampledSystem, simulate_sampled
 from .systems.lpv import LPVSystem
+from .systems.nonlinear import NonlinearSystem, simulate_nonlinear
 from .tightness import format_tightness, tightness_reference, tightness_report
 from .zonotope import Zonotope
 
@@ -102,4 +107,20 @@ __all__ += [
     "run_campaign",
     "runs_for_sigma",
     "verify_boundedness",
+]
+
+# seed 003
+
+__all__ += [
+    "GSISIO",
+    "AffineAbstraction",
+    "Interval",
+    "JacobianDecomposition",
+    "NonlinearSystem",
+    "NullSpaceGSISIO",
+    "VertexDecomposition",
+    "affine_abstraction",
+    "gsisio_design",
+    "jacobian_bounds",
+    "simulate_nonlinear",
 ]

@@ -2,15 +2,19 @@
 
 from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from .lti import Bounds, LTISystem
+from .nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
 from .sampled import SampledSimulation, SampledSystem, simulate_sampled
 
 __all__ = [
     "Bounds",
     "LPVSystem",
     "LTISystem",
+    "NonlinearSimulation",
+    "NonlinearSystem",
     "SampledLPVModel",
     "SampledSimulation",
     "SampledSystem",
     "StepEnclosure",
+    "simulate_nonlinear",
     "simulate_sampled",
 ]

@@ -1,0 +1,175 @@
+r"""Seed 003, Section V: the nonlinear example of the GSISIO paper, and our own full-rank demonstration.
+
+Paper's system (n = 2 states, p = 2 outputs, q = 2 unknown inputs; the seed's n = l = p = 2):
+
+.. math::
+
+    f_1(x) = 0.6x_1 - 0.12x_2 + 1.1\sin(0.3x_2 - 0.2x_1),\quad f_2(x) = -0.2x_1 - 0.14x_2,
+
+    g_1(x) = 0.2x_1 + 0.65x_2 + 0.8\sin(0.3x_1 + 0.2x_2),\quad g_2(x) = \sin(x_1),
+
+:math:`G = [[0, -0.1], [0.2, -0.2]]`, :math:`H = [[-0.1, 0.3], [0.25, -0.75]]` (rank 1),
+:math:`B = D = 0`, :math:`|w|, |v| \le 0.2`, :math:`x_0 \in [[-1.1, -2], [2, 1.1]]`.
+
+Not given by the paper, chosen here: the unknown input (Fig. 1 only; we use
+:func:`paper_input`, two signals of amplitude up to ≈ 3 with a step and a ramp — the observer is not
+told their bounds), the true :math:`x_0` (a vertex of the box under extreme noise), the horizon (300
+steps) and the noise (bang-bang between the bounds).
+
+Our own system (:func:`fullrank_system`) has a full-column-rank H (q = 1 unknown input, p = 2 outputs),
+so that the paper's existence condition (8) holds and the paper's construction can be demonstrated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..systems.nonlinear import NonlinearSystem
+
+__all__ = [
+    "PRINTED",
+    "STEPS",
+    "X0_BOX",
+    "G",
+    "H",
+    "fullrank_input",
+    "fullrank_system",
+    "paper_input",
+    "paper_system",
+]
+
+FloatArray = NDArray[np.float64]
+
+G = np.array([[0.0, -0.1], [0.2, -0.2]])
+H = np.array([[-0.1, 0.3], [0.25, -0.75]])
+NOISE = 0.2
+X0_BOX = (np.array([-1.1, -2.0]), np.array([2.0, 1.1]))
+STEPS = 300
+
+PRINTED: dict[str, Any] = {
+    "jacobian_f_lower": [[0.38, -0.52], [-0.2, -0.14]],
+    "jacobian_f_upper": [[0.82, 0.21], [-0.2, -0.14]],
+    "jacobian_g_lower": [[-0.04, 0.49], [-1.0, 0.0]],
+    "jacobian_g_upper": [[0.44, 0.81], [1.0, 0.0]],
+    "L_f": 0.35,
+    "L_g": 0.74,
+    "K": [[0.0267, 0.0, 0.0666, 0.1061], [0.4177, 2.1203, 1.0817, 2.0209]],
+    "L": [[0.0, 0.1017, 0.0, 0.0], [0.5194, 1.1814, 1.2787, 1.9302]],
+    "rank_condition_8": [2, 2],
+    "C_f": [[0.251, 0.0], [0.0029, 0.201]],
+    "C_g": [[0.0, 0.225], [-0.374, -0.045]],
+    "L_fd": 0.852,
+    "L_gd": 1.19,
+    "script_L": 0.643,
+    "stability_condition": "(i)",
+}
+"""Every number the paper prints for its example (Section V)."""
+
+
+def _f(x: Sequence[Any]) -> tuple[Any, Any]:
+    return 0.6 * x[0] - 0.12 * x[1] + 1.1 * np.sin(0.3 * x[1] - 0.2 * x[0]), -0.2 * x[0] - 0.14 * x[1]
+
+
+def _f_jacobian(x: Sequence[Any]) -> list[list[Any]]:
+    c = np.cos(0.3 * x[1] - 0.2 * x[0])
+    return [[0.6 - 0.22 * c, -0.12 + 0.33 * c], [-0.2, -0.14]]
+
+
+def _g(x: Sequence[Any]) -> tuple[Any, Any]:
+    return 0.2 * x[0] + 0.65 * x[1] + 0.8 * np.sin(0.3 * x[0] + 0.2 * x[1]), np.sin(x[0])
+
+
+def _g_jacobian(x: Sequence[Any]) -> list[list[Any]]:
+    c = np.cos(0.3 * x[0] + 0.2 * x[1])
+    return [[0.2 + 0.24 * c, 0.65 + 0.16 * c], [np.cos(x[0]), 0.0]]
+
+
+def paper_system() -> NonlinearSystem:
+    """The example of seed 003, Section V (noise bounds 0.2 on every channel).
+
+    Returns
+    -------
+    NonlinearSystem
+    """
+    noise = (-NOISE * np.ones(2), NOISE * np.ones(2))
+    return NonlinearSystem(_f, _g, G, H, f_jacobian=_f_jacobian, g_jacobian=_g_jacobian, w=noise, v=noise)
+
+
+def paper_input(steps: int = STEPS) -> FloatArray:
+    """Our unknown input for the paper's system, shape (steps, 2): a sinusoid with a step, and a ramp-sine.
+
+    The paper shows its inputs only in Fig. 1; these are of similar size and shape. The observer is not
+    told any bound on them.
+
+    Parameters
+    ----------
+    steps : int
+        Number of samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (steps, 2)
+    """
+    k = np.arange(steps, dtype=float)
+    d1 = 1.5 * np.sin(0.05 * k) + np.where(k >= steps // 2, 1.0, 0.0)
+    d2 = 2.0 * np.cos(0.03 * k) + 0.004 * k * np.sin(0.11 * k)
+    return np.stack([d1, d2], axis=1)
+
+
+# --- our own system with a full-column-rank H ---------------------------------------------------------
+
+FULLRANK_G = np.array([[0.2], [-0.1]])
+FULLRANK_H = np.array([[1.0], [0.5]])
+FULLRANK_X0_BOX = (np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
+FULLRANK_NOISE = (0.05, 0.05)
+
+
+def _f_own(x: Sequence[Any]) -> tuple[Any, Any]:
+    return 0.3 * x[0] + 0.1 * np.sin(x[1]), 0.25 * x[1] - 0.1 * np.tanh(x[0])
+
+
+def _f_own_jacobian(x: Sequence[Any]) -> list[list[Any]]:
+    t = np.tanh(x[0])
+    return [[0.3, 0.1 * np.cos(x[1])], [-0.1 * (1.0 - t * t), 0.25]]
+
+
+def _g_own(x: Sequence[Any]) -> tuple[Any, Any]:
+    return x[0] + 0.1 * np.sin(x[1]), 0.2 * x[1] + 0.05 * x[0]
+
+
+def _g_own_jacobian(x: Sequence[Any]) -> list[list[Any]]:
+    return [[1.0, 0.1 * np.cos(x[1])], [0.05, 0.2]]
+
+
+def fullrank_system() -> NonlinearSystem:
+    """Our own two-state system with one unknown input and a full-column-rank H (condition (8) holds).
+
+    Returns
+    -------
+    NonlinearSystem
+    """
+    w = (-FULLRANK_NOISE[0] * np.ones(2), FULLRANK_NOISE[0] * np.ones(2))
+    v = (-FULLRANK_NOISE[1] * np.ones(2), FULLRANK_NOISE[1] * np.ones(2))
+    return NonlinearSystem(
+        _f_own, _g_own, FULLRANK_G, FULLRANK_H, f_jacobian=_f_own_jacobian, g_jacobian=_g_own_jacobian, w=w, v=v
+    )
+
+
+def fullrank_input(steps: int = 200) -> FloatArray:
+    """Unknown input for :func:`fullrank_system`.
+
+    Parameters
+    ----------
+    steps : int
+        Number of samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (steps, 1)
+    """
+    k = np.arange(steps, dtype=float)
+    return (2.0 * np.sin(0.07 * k) + np.where((k > 60) & (k < 120), 1.5, 0.0))[:, None]

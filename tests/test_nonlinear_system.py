@@ -1,0 +1,71 @@
+"""NonlinearSystem validation and its simulator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs.errors import AssumptionError, BoundsError, DataError, DimensionError
+from intervalobs.examples import gsisio
+from intervalobs.systems import NonlinearSystem, simulate_nonlinear
+
+
+def f(x):
+    return (0.5 * x[0], 0.5 * np.sin(x[1]))
+
+
+def g(x):
+    return (x[0] + x[1],)
+
+
+def jf(x):
+    return [[0.5, 0.0], [0.0, 0.5 * np.cos(x[1])]]
+
+
+def jg(x):
+    return [[1.0, 1.0]]
+
+
+def test_dimensions_and_defaults():
+    s = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]], f_jacobian=jf, g_jacobian=jg)
+    assert (s.n, s.m, s.p, s.q) == (2, 0, 1, 1)
+    np.testing.assert_array_equal(s.w[0], 0.0)
+    assert s.evaluate_f(np.zeros((4, 2))).shape == (4, 2)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"G": [[1.0], [0.0]], "H": [[0.5, 1.0]]}, DimensionError, "H"),
+        ({"G": [[0.0], [0.0]], "H": [[0.0]]}, AssumptionError, "full column rank"),
+        ({"G": [[1.0], [0.0]], "H": [[0.5]], "w": ([0.1, 0.1], [0.0, 0.0])}, BoundsError, "lower <= upper"),
+        (
+            {"G": [[1.0], [0.0]], "H": [[0.5]], "f_jacobian": lambda x: [[0.5, 0.0], [0.0, 0.5]]},
+            AssumptionError,
+            "finite",
+        ),
+        ({"G": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "H": [[0.5, 0, 0]]}, DimensionError, "f"),
+    ],
+    ids=["H-shape", "GH-rank", "noise-box", "wrong-jacobian", "f-size"],
+)
+def test_invalid_models_are_rejected(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        NonlinearSystem(f, g, **kwargs)
+
+
+def test_missing_jacobian_is_named():
+    s = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]])
+    with pytest.raises(AssumptionError, match="f_jacobian"):
+        s.require_jacobians()
+
+
+def test_simulation_satisfies_the_model_equations_and_noise_bounds():
+    s = gsisio.paper_system()
+    d = gsisio.paper_input(50)
+    sim = simulate_nonlinear(s, gsisio.X0_BOX, d, seed=3, runs=4)
+    assert sim.x.shape == (4, 50, 2) and sim.y.shape == (4, 50, 2)
+    np.testing.assert_allclose(sim.x[:, 1:], s.evaluate_f(sim.x[:, :-1]) + d[:-1] @ s.G.T + sim.w[:, :-1], atol=1e-12)
+    np.testing.assert_allclose(sim.y, s.evaluate_g(sim.x) + d @ s.H.T + sim.v, atol=1e-12)
+    assert np.all(np.abs(sim.w) <= 0.2 + 1e-15) and np.all(np.isclose(np.abs(sim.v), 0.2))  # bang-bang
+    with pytest.raises(DataError, match="d"):
+        simulate_nonlinear(s, gsisio.X0_BOX, np.zeros((10, 3)))

@@ -1,0 +1,45 @@
+"""The seed-003 reproduction: contract files, the paper's numbers next to ours, the sound variant enclosed."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from intervalobs.reproduce import registry
+
+CHECKER = "/work/shared/tools/check_reproduction.py"
+
+
+@pytest.mark.slow
+def test_nonlinear_gsisio(tmp_path: Path) -> None:
+    registry()["nonlinear-gsisio"].run(tmp_path / "nonlinear-gsisio", 0, False)
+    if os.path.exists(CHECKER):
+        result = subprocess.run(
+            [sys.executable, CHECKER, str(tmp_path / "nonlinear-gsisio")], capture_output=True, text=True
+        )
+        assert result.returncode == 0, result.stdout
+    s = json.loads((tmp_path / "nonlinear-gsisio" / "summary.json").read_text())
+    assert s["enclosure"] == {
+        "state": {"fraction": 1.0, "max_violation": 0.0},
+        "input": {"fraction": 1.0, "max_violation": 0.0},
+    }
+    d = s["design"]
+    assert d["rank_condition_8"] == [2, 1] and d["paper_construction"].startswith("AssumptionError")
+    assert d["stability_condition"] == "none holds"
+    sv = d["sound_variant"]
+    assert sv["enclosure_state_monte_carlo"]["max_violation"] == 0.0
+    assert sv["enclosure_input_monte_carlo"]["max_violation"] == 0.0
+    assert sv["monte_carlo_state_width_norm_max_after_10_steps"] < 4.0
+    assert d["naive_paper_construction_with_pinv"]["steps_violated_or_undefined"] > 0
+    full = d["fullrank_example"]
+    assert full["width_state_below_delta_x"] and full["width_input_below_delta_d"]
+    assert full["gsisio_design"]["stability_condition"] == "(i)"
+    z = np.load(tmp_path / "nonlinear-gsisio" / "trajectories.npz")
+    assert np.all(np.isnan(z["d_lower"][0])) and np.all(np.isnan(z["delta_x"]))
+    assert np.all(np.isfinite(z["fullrank_delta_x"]))
