@@ -41,7 +41,8 @@ returns the state at :math:`t_{k+1}`; ``run`` gives the same numbers.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,6 +54,10 @@ from ..systems.lti import Bounds
 from ..systems.sampled import SampledSystem
 from ..validation import as_box, as_matrix, as_signal, as_time
 from .base import Observer, ObserverState
+
+if TYPE_CHECKING:
+    from ..design.high_gain import ThetaDesign
+    from ..design.regions import Disk, RegionPlacement
 
 __all__ = ["HighGainIntervalObserver"]
 
@@ -237,6 +242,74 @@ class HighGainIntervalObserver(Observer):
         self._L = _Split(self.L)
         self._Lw = _Split(self.output_gain)
         self.v_lower, self.v_upper = full.v
+        self.placement: RegionPlacement | None = None
+        self.theta_design: ThetaDesign | None = None
+
+    @classmethod
+    def design(
+        cls,
+        system: SampledSystem,
+        bounds: Bounds,
+        disks: Sequence[Disk | tuple[complex, float]],
+        h: float,
+        *,
+        objective: str = "min_gain",
+        alpha_d: float | None = None,
+        alpha_n: float | None = None,
+        input_rate: float = 0.0,
+        refine: bool = True,
+    ) -> HighGainIntervalObserver:
+        """The constructive design of seed 004: Algorithm 1 for ``L1``, then (optionally) Theorem 4.4.
+
+        Parameters
+        ----------
+        system : SampledSystem
+            Model (8).
+        bounds : Bounds
+            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        disks : sequence of Disk or (centre, radius)
+            One disk per eigenvalue of ``A - L1 C`` (conjugate pairs for complex ones).
+        h : float
+            Grid step.
+        objective : {"min_gain", "center"}
+            Passed to :func:`~intervalobs.design.regions.place_in_disks`.
+        alpha_d, alpha_n : float, optional
+            The scalars of (34); when both are given θ is computed (Theorem 4.4, both readings, in
+            ``theta_design``) and recorded — it does not change the bounds.
+        input_rate : float
+            Bound of ``|du/dt|``.
+        refine : bool
+            See the class parameters.
+
+        Returns
+        -------
+        HighGainIntervalObserver
+            With ``placement`` (and ``theta_design``) set.
+        """
+        from ..design.high_gain import theta_design
+        from ..design.regions import place_in_disks
+
+        placement = place_in_disks(system.A, system.C, disks, objective=objective)
+        full = bounds.for_system(system)  # type: ignore[arg-type]
+        design = None
+        if alpha_d is not None and alpha_n is not None:
+            assert full.w is not None and full.v is not None
+            d_radius = 0.5 * (full.w[1] - full.w[0])
+            v_radius = np.maximum(np.abs(full.v[0]), np.abs(full.v[1]))
+            design = theta_design(placement.modal, placement.L, system.C, d_radius, v_radius, alpha_d, alpha_n)
+        observer = cls(
+            system,
+            bounds,
+            placement.L,
+            h,
+            theta=0.0 if design is None else design.theta_sound,
+            input_rate=input_rate,
+            order=[d.center for d in placement.disks],
+            refine=refine,
+        )
+        observer.placement = placement
+        observer.theta_design = design
+        return observer
 
     def _output_radius_abscissa(self) -> float:
         """Spectral abscissa of the worst-case radius system of the output observer (Prop. 4.3, a = 0)."""

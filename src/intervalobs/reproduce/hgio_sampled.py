@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..design.high_gain import euler_radius_factor, theta_design
-from ..design.regions import modal_decomposition, place_in_disks
+from ..design.regions import modal_decomposition
 from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
 from ..observers.hgio import HighGainIntervalObserver
@@ -78,14 +78,20 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
     delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
     start = time.perf_counter()
-    placement = place_in_disks(system.A, system.C, example.DISKS)
-    ours = theta_design(placement.modal, placement.L, system.C, d_radius, delta, example.ALPHA_D, example.ALPHA_N)
+    constructive = HighGainIntervalObserver.design(
+        system,
+        bounds,
+        example.DISKS,
+        example.STEP,
+        alpha_d=example.ALPHA_D,
+        alpha_n=example.ALPHA_N,
+        input_rate=example.INPUT_RATE,
+    )
+    assert constructive.placement is not None and constructive.theta_design is not None
+    placement, ours = constructive.placement, constructive.theta_design
     printed_l1 = np.array(example.PAPER["L1"])[:, None]
     printed_modal = modal_decomposition(system.A, system.C, printed_l1, order=order)
     printed = theta_design(printed_modal, printed_l1, system.C, d_radius, delta, example.ALPHA_D, example.ALPHA_N)
-    constructive = HighGainIntervalObserver(
-        system, bounds, placement.L, example.STEP, theta=ours.theta_paper, input_rate=example.INPUT_RATE, order=order
-    )
     l_arbitrary = high_gain_gain(THETA_ARBITRARY, K_ARBITRARY)
     arbitrary = HighGainIntervalObserver(
         system,
@@ -240,6 +246,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "x_upper": est_c.upper[0],
             "constructive_x_lower": c45[0][0],
             "constructive_x_upper": c45[1][0],
+            "constructive_refined_x_lower": est_c.lower[0],
+            "constructive_refined_x_upper": est_c.upper[0],
             "arbitrary_theta1000_x_lower": a45[0][0],
             "arbitrary_theta1000_x_upper": a45[1][0],
             "y": sim.y[0],
