@@ -208,7 +208,7 @@ def write_benchmarks_page() -> None:
     results = ROOT / "benchmarks" / "results.json"
     lines = ["# Benchmarks", ""]
     if runner.exists():
-        lines += ["`make bench` runs `benchmarks/run.py`:", "", "```text", *_docstring(runner).splitlines(), "```", ""]
+        lines += ["`make bench` runs `benchmarks/run.py`:", "", *_docstring(runner).splitlines(), ""]
     if not results.exists():
         lines += ["No results yet: run `make bench`."]
     else:
