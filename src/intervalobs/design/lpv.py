@@ -91,7 +91,7 @@ class IntervalJet:
     ----------
     lo, hi : array_like, shape S
         Value enclosure.
-    dlo, dhi : array_like, shape (k, *S)
+    dlo, dhi : array_like, shape ``(k, *S)``
         Enclosures of the partial derivatives (one row per independent variable).
     """
 
@@ -313,7 +313,7 @@ class CertifiedVertexBounds:
 
         Returns
         -------
-        numpy.ndarray, shape (entries, 2**np, *s.shape)
+        numpy.ndarray, shape ``(entries, 2**np, *s.shape)``
         """
         sv = np.asarray(s, dtype=float)
         shape = (self.vertices.shape[0],) + (1,) * sv.ndim
@@ -345,7 +345,7 @@ class CertifiedVertexBounds:
 
         Returns
         -------
-        lower, upper : numpy.ndarray, shape (entries, *s.shape)
+        lower, upper : numpy.ndarray, shape ``(entries, *s.shape)``
         """
         lo_s = np.asarray(s_lo, dtype=float)
         hi_s = lo_s if s_hi is None else np.asarray(s_hi, dtype=float)

@@ -64,7 +64,7 @@ TRUE_PARAMETERS = (5.6, 1.4, 1.7)
 LAMBDA = 1.0
 """Γ = −λI, F = −λI (Section 5)."""
 FAULT_BOUND = 5.0
-"""|u_un| ≤ 5 (Section 5)."""
+"""``|u_un| ≤ 5`` (Section 5)."""
 FAULT_ONSET = 20.0
 """Faults act for t > 20 s (scenarios 2–4)."""
 X0 = (np.pi / 12, -np.pi / 12, 0.0, 0.0)
@@ -332,7 +332,7 @@ class ManipulatorModel(SampledLPVModel):
     delta : tuple of float
         Half-widths of the intervals of a, b, c (the paper: 0.2, 0.1, 0.1).
     fault_bound : float
-        Bound of |u_un| (each component).
+        Bound of ``|u_un|`` (each component).
     cells, splits, pieces : int
         Resolution of the certificate (see :func:`certify_vertex_extremes`).
 
