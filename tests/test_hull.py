@@ -68,13 +68,14 @@ def test_hull_inside_every_sound_observer(seed: int) -> None:
         assert np.sum(est.width()) > np.sum(hull.width()), name
 
 
+@pytest.mark.parametrize("window_boxes", [False, True], ids=["prior-only", "window-boxes"])
 @pytest.mark.parametrize("horizon", [1, 2, 5])
-def test_short_horizon_is_sound_and_contains_the_exact_hull(horizon: int) -> None:
+def test_short_horizon_is_sound_and_contains_the_exact_hull(horizon: int, window_boxes: bool) -> None:
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=7)
     exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
-    windowed = HullEstimator(system, bounds, horizon=horizon).run(t, sim.y)
+    windowed = HullEstimator(system, bounds, horizon=horizon, window_boxes=window_boxes).run(t, sim.y)
     assert windowed.enclosure(sim.x).max_violation == 0.0
     tol = SLACK * scale(exact.lower, exact.upper)
     assert np.all(windowed.lower <= exact.lower + tol)

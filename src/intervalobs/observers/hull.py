@@ -357,12 +357,16 @@ class _Window:
         use_current: bool,
         first_lo: FloatArray | None,
         first_hi: FloatArray | None,
+        window_boxes: bool = False,
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Column and row bounds at step ``k``.
 
         ``boxes_*[τ]`` bound ``x_τ`` for ``τ < k`` (None: free, for inner hulls); ``last_*`` bounds
         ``x_k``; ``first_*`` is the prior of the window's first state when it is time 0 (the ``x_0``
         box) — for a later first state the caller sets the points prior or relies on ``boxes``.
+        With ``window_boxes`` False only the first state of the window gets its box (the prior); the
+        others get a tenfold-widened copy (sound and finite, as the certificate needs, but inactive:
+        fewer degenerate pivots).
         """
         lp, m = self.lp, self.model
         S, n, p, nq, nv = lp.slots, lp.n, lp.p, lp.nq, lp.nv
@@ -376,6 +380,11 @@ class _Window:
         past = valid & (times < k)
         if boxes_lo is not None and boxes_hi is not None:
             xl[past], xh[past] = boxes_lo[times[past]], boxes_hi[times[past]]
+            if not window_boxes:
+                loose = past.copy()
+                loose[int(np.argmax(past))] = False  # the oldest state keeps its box: the prior
+                mid, rad = 0.5 * (xl[loose] + xh[loose]), 0.5 * (xh[loose] - xl[loose])
+                xl[loose], xh[loose] = mid - 10.0 * rad - 1.0, mid + 10.0 * rad + 1.0
         else:
             xl[past], xh[past] = -inf, inf
         xl[S - 1], xh[S - 1] = last_lo, last_hi
@@ -434,6 +443,10 @@ class HullEstimator(Observer):
         ``y_0 … y_{k-1}``, comparable with every other observer. If True it also uses ``y_k`` (the
         "filtered" hull); :meth:`step` then returns the predicted box of ``x_{k+1}`` in ``lower``/``upper``
         and the filtered box of ``x_k`` in ``internal["filtered_lower"/"filtered_upper"]``.
+    window_boxes : bool
+        Also bound every state inside the window by its earlier box (not only the first one, the
+        prior). Slightly tighter for short windows (0.4 % at H = 10 on seed 002's (68), nothing at
+        H = 40) but about 1.5× more simplex pivots; redundant for the full history.
 
     Notes
     -----
@@ -450,6 +463,7 @@ class HullEstimator(Observer):
         horizon: int | None = 50,
         h: float | None = None,
         filtered: bool = False,
+        window_boxes: bool = False,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -466,6 +480,7 @@ class HullEstimator(Observer):
         self.n, self.p, self.m = system.n, system.p, system.m
         self.horizon = None if horizon is None else int(horizon)
         self.filtered = bool(filtered)
+        self.window_boxes = bool(window_boxes)
         self.model = _outer_model(system, self.bounds, h)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, _Window] = {}
@@ -611,7 +626,9 @@ class HullEstimator(Observer):
         lp = window.lp
         past_lo = np.asarray(box_lo[:k]).reshape(k, self.n) if k else np.zeros((0, self.n))
         past_hi = np.asarray(box_hi[:k]).reshape(k, self.n) if k else np.zeros((0, self.n))
-        bounds = window.bounds_at(k, ys, us, past_lo, past_hi, last_lo, last_hi, use_current, x0[0], x0[1])
+        bounds = window.bounds_at(
+            k, ys, us, past_lo, past_hi, last_lo, last_hi, use_current, x0[0], x0[1], self.window_boxes
+        )
         lp.set_bounds(*bounds)
         lower = last_lo.copy()
         upper = last_hi.copy()
@@ -641,6 +658,7 @@ class HullEstimator(Observer):
             "method": "HullEstimator",
             "horizon": "full" if self.horizon is None else self.horizon,
             "filtered": self.filtered,
+            "window_boxes": self.window_boxes,
             "h": self.h,
             "transient_s": 0.0,
             "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
