@@ -258,6 +258,7 @@ class HighGainIntervalObserver(Observer):
         alpha_n: float | None = None,
         input_rate: float = 0.0,
         refine: bool = True,
+        output_gain: ArrayLike | None = None,
     ) -> HighGainIntervalObserver:
         """The constructive design of seed 004: Algorithm 1 for ``L1``, then (optionally) Theorem 4.4.
 
@@ -280,6 +281,9 @@ class HighGainIntervalObserver(Observer):
             Bound of ``|du/dt|``.
         refine : bool
             See the class parameters.
+        output_gain : array_like, shape (n, p), optional
+            Gain of the output-bound observer (default: the placed ``L1``; give a small one, e.g.
+            zeros, when the placed gain makes its radius system unstable).
 
         Returns
         -------
@@ -306,6 +310,7 @@ class HighGainIntervalObserver(Observer):
             input_rate=input_rate,
             order=[d.center for d in placement.disks],
             refine=refine,
+            output_gain=output_gain,
         )
         observer.placement = placement
         observer.theta_design = design
