@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from intervalobs import AssumptionError, BoundsError, DesignError, DimensionError
-from intervalobs.design.lpv import IntervalJet, boundedness_lmi, verify_boundedness
+from intervalobs.design.lpv import IntervalJet, boundedness_lmi, uio_observer_matrix, verify_boundedness
 from intervalobs.examples.manipulator import (
     FAULT_BOUND,
     NOMINAL,
@@ -302,3 +302,15 @@ def test_manipulator_reproduction_meets_the_issue(tmp_path):
     assert s["design"]["lmi_74_naive_lambda_1"]["feasible"] is False
     for png in ("scenario1_isolation.png", "scenario4_isolation.png", "scenario1_state_bounds.png"):
         assert (folder / png).exists()
+
+
+def test_theorem_4_1_choice_gives_minus_lambda_identity(model):
+    """(101) with Γ = −λI and the paper's H* gives F = −λI at every scheduling point (Section 5)."""
+    th = np.column_stack([np.random.default_rng(6).uniform(-np.pi, np.pi, (50, 2)), np.zeros((50, 2))])
+    lam = 1.7
+    h_star = np.zeros((4, 4))
+    h_star[2:, :2] = -lam * np.eye(2)
+    h = np.vstack([np.eye(2), np.zeros((2, 2))])
+    f = uio_observer_matrix(model.r_matrix(th), h, model.b_matrix(th), -lam * np.eye(2), h_star)
+    np.testing.assert_allclose(f, np.broadcast_to(-lam * np.eye(4), f.shape), atol=1e-12)
+    np.testing.assert_allclose(f @ h, np.broadcast_to(h @ (-lam * np.eye(2)), (50, 4, 2)), atol=1e-12)  # (103)

@@ -255,7 +255,7 @@ def run_campaign(
     magnitudes: Sequence[float] | None = None,
     scheduler: str | None = None,
     workers: int = 2,
-    batch: int = 25,
+    batch: int = 50,
     seed: int = 0,
     progress: bool = True,
     plots: bool = True,

@@ -55,6 +55,7 @@ __all__ = [
     "boundedness_lmi",
     "certify_vertex_extremes",
     "eta_and_generator",
+    "uio_observer_matrix",
     "verify_boundedness",
 ]
 
@@ -551,6 +552,41 @@ def certify_vertex_extremes(
 # --------------------------------------------------------------------------------------------------
 # Boundedness analysis: LMI (43) / (74)
 # --------------------------------------------------------------------------------------------------
+
+
+def uio_observer_matrix(r: ArrayLike, h: ArrayLike, b_un: ArrayLike, gamma: ArrayLike, h_star: ArrayLike) -> FloatArray:
+    r"""The observer matrix of Theorem 4.1, (101)–(102), vectorised over grid points.
+
+    .. math:: F(\vartheta) = R(\vartheta)^{-1}\big[H\Gamma B_{un}(\vartheta)^\dagger
+              + H^*(\vartheta)\,(I - B_{un}(\vartheta)B_{un}(\vartheta)^\dagger)\big],
+
+    which makes the columns of H eigenvectors of F, :math:`FH = H\Gamma` ((103)–(104)), whenever
+    :math:`RB_{un} = H` (26).
+
+    Parameters
+    ----------
+    r : array_like, shape (..., n, n)
+        :math:`R(\vartheta)` at grid points (invertible).
+    h : array_like, shape (n, q)
+        H of (26).
+    b_un : array_like, shape (..., n, q)
+        :math:`B_{un}(\vartheta)` at the same points.
+    gamma : array_like, shape (q, q)
+        :math:`\Gamma` (diagonal).
+    h_star : array_like, shape (..., n, n)
+        :math:`H^*`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., n, n)
+    """
+    rr = np.asarray(r, dtype=float)
+    bu = np.asarray(b_un, dtype=float)
+    hh = np.asarray(h, dtype=float)
+    n = rr.shape[-1]
+    pinv = np.linalg.pinv(bu)
+    inner = hh @ np.asarray(gamma, dtype=float) @ pinv + np.asarray(h_star, dtype=float) @ (np.eye(n) - bu @ pinv)
+    return np.asarray(np.linalg.solve(rr, inner))
 
 
 def _masked(m: FloatArray, cols: FloatArray) -> FloatArray:

@@ -145,7 +145,10 @@ def _fast_factory(nominal: tuple[float, float, float]) -> Any:
         m12 = k * (b * at - a * bt) * inv
         m21 = k * (b * ct - c * bt) * inv
         m22 = (c * at - b * bt * k2) * inv
-        return np.stack([m11 - 1.0, m12, m21, m22 - 1.0, -bt * m12, b - bt * m22, bt * m11 - b, bt * m21])
+        out = np.empty((8, *np.broadcast_shapes(np.shape(at), np.shape(k))))
+        out[0], out[1], out[2], out[3] = m11 - 1.0, m12, m21, m22 - 1.0
+        out[4], out[5], out[6], out[7] = -bt * m12, b - bt * m22, bt * m11 - b, bt * m21
+        return out
 
     return fast
 
@@ -229,12 +232,16 @@ def controller(x: ArrayLike, t: float, nominal: tuple[float, float, float] = NOM
 def _true_rate(x: FloatArray, tau: FloatArray, at: FloatArray, bt: FloatArray, ct: FloatArray) -> FloatArray:
     phi = x[..., 1] - x[..., 0]
     kap, sig = np.cos(phi), np.sin(phi)
-    den = at * ct - bt * bt * kap * kap
-    r1 = tau[..., 0] + bt * sig * x[..., 3] ** 2
-    r2 = tau[..., 1] - bt * sig * x[..., 2] ** 2
-    acc1 = (ct * r1 - bt * kap * r2) / den
-    acc2 = (at * r2 - bt * kap * r1) / den
-    return np.stack([x[..., 2], x[..., 3], acc1, acc2], axis=-1)
+    bk = bt * kap
+    inv = 1.0 / (at * ct - bk * bk)
+    bs = bt * sig
+    r1 = tau[..., 0] + bs * x[..., 3] ** 2
+    r2 = tau[..., 1] - bs * x[..., 2] ** 2
+    out = np.empty_like(x)
+    out[..., :2] = x[..., 2:]
+    out[..., 2] = (ct * r1 - bk * r2) * inv
+    out[..., 3] = (at * r2 - bk * r1) * inv
+    return out
 
 
 def rk4_step(x: FloatArray, tau: FloatArray, params: FloatArray, h: float) -> FloatArray:
@@ -555,9 +562,10 @@ class ManipulatorModel(SampledLPVModel):
         at, bt, ct = self.p_upper
         cor = bt * w_abs[..., ::-1] ** 2
         drive = np.abs(u) + self.fault_bound + cor
-        return np.stack([ct * drive[..., 0] + bt * drive[..., 1], bt * drive[..., 0] + at * drive[..., 1]], axis=-1) / (
-            self.d_min
-        )
+        out = np.empty_like(drive)
+        out[..., 0] = (ct * drive[..., 0] + bt * drive[..., 1]) / self.d_min
+        out[..., 1] = (bt * drive[..., 0] + at * drive[..., 1]) / self.d_min
+        return out
 
     def flow_box(
         self, x_lower: FloatArray, x_upper: FloatArray, y: FloatArray, u: FloatArray, h: float
@@ -659,13 +667,17 @@ class ManipulatorModel(SampledLPVModel):
         # R x
         p12 = _imul(b * klo, b * khi, w2l, w2h)
         p21 = _imul(b * klo, b * khi, w1l, w1h)
-        rx_lo = np.stack([a * w1l + p12[0], p21[0] + c * w2l, flo[..., 0], flo[..., 1]], axis=-1)
-        rx_hi = np.stack([a * w1h + p12[1], p21[1] + c * w2h, fhi[..., 0], fhi[..., 1]], axis=-1)
+        rx_lo, rx_hi = np.empty_like(flo), np.empty_like(fhi)
+        rx_lo[..., 0], rx_hi[..., 0] = a * w1l + p12[0], a * w1h + p12[1]
+        rx_lo[..., 1], rx_hi[..., 1] = p21[0] + c * w2l, p21[1] + c * w2h
+        rx_lo[..., 2:], rx_hi[..., 2:] = flo[..., :2], fhi[..., :2]
         # known rate
         ww = _imul(w1l, w1h, w2l, w2h)
         sw = _imul(b * slo, b * shi, ww[0], ww[1])
-        rate_lo = np.stack([sw[0] + u[..., 0], -sw[1] + u[..., 1], w1l, w2l], axis=-1)
-        rate_hi = np.stack([sw[1] + u[..., 0], -sw[0] + u[..., 1], w1h, w2h], axis=-1)
+        rate_lo, rate_hi = np.empty_like(flo), np.empty_like(fhi)
+        rate_lo[..., 0], rate_hi[..., 0] = sw[0] + u[..., 0], sw[1] + u[..., 0]
+        rate_lo[..., 1], rate_hi[..., 1] = u[..., 1] - sw[1], u[..., 1] - sw[0]
+        rate_lo[..., 2:], rate_hi[..., 2:] = flo[..., 2:], fhi[..., 2:]
         # rotated uncertainty
         g_lo, g_hi = self.bounds.evaluate(klo, khi, select=range(8), fast=self._fast)
         f3 = _imul(slo, shi, w1l, w1h)

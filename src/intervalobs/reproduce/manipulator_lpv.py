@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..design.lpv import boundedness_lmi, verify_boundedness
+from ..design.lpv import boundedness_lmi, uio_observer_matrix, verify_boundedness
 from ..diagnosis import Campaign, isolation_outcome, scenario_success
-from ..errors import DesignError
+from ..errors import BoundsError, DesignError
 from ..estimate import enclosure_report
 from ..examples.manipulator import (
     FAULT_BOUND,
@@ -165,6 +165,13 @@ def run(out_dir: Path, seed: int = 0, plots: bool = True) -> dict[str, Any]:
         "delta_A_R_exact": bool(np.all(model.bounds.slack[4:8] == 0.0)),
         "certified_fraction_b": model.bounds.certified_fraction[:, 1].tolist(),
     }
+    # Theorem 4.1 with the paper's Γ = −λI and H* (rows 3–4 = −λI): F from (101) on the grid
+    grid = _coarse_grid()
+    h_mat = np.vstack([np.eye(2), np.zeros((2, 2))])
+    h_star = np.zeros((4, 4))
+    h_star[2:, :2] = -LAMBDA * np.eye(2)
+    f_grid = uio_observer_matrix(model.r_matrix(grid), h_mat, model.b_matrix(grid), -LAMBDA * np.eye(2), h_star)
+    f_deviation = float(np.max(np.abs(f_grid + LAMBDA * np.eye(4))))
     exact = boundedness_analysis(model, LAMBDA)
     naive_1 = boundedness_analysis(model, LAMBDA, naive=True, verify=False)
     naive_2 = boundedness_analysis(model, 2.0, naive=True)
@@ -220,7 +227,8 @@ def run(out_dir: Path, seed: int = 0, plots: bool = True) -> dict[str, Any]:
         "lambda": LAMBDA,
         "F": (-LAMBDA * np.eye(4)).tolist(),
         "Gamma": (-LAMBDA * np.eye(2)).tolist(),
-        "H_star": "rows 3-4 = -λ I (Section 5), F = -λ I from (101)",
+        "H_star": h_star.tolist(),
+        "F_from_101_max_deviation_from_minus_lambda_I": f_deviation,
         "S": "S = R (A + λ I)  (36)–(42) with C = I",
         "bounds": "exact ranges of ΔA_R, ΔB_R over the parameter box (certified vertex extremes)",
         "bounds_certificate": certificate,
@@ -336,6 +344,10 @@ def campaign_task(
     list of tuple
         ``(run, scenario index, success, false_alarm, first negative time per fault)``.
     """
+    if not 0.0 <= magnitude <= FAULT_BOUND:
+        raise BoundsError(
+            f"magnitude: expected a fault size in [0, {FAULT_BOUND:g}] (Assumption 2.2), got {magnitude:g}"
+        )
     obs = _campaign_observer(float(level))
     model = _campaign_model(float(level))
     ids = list(run_ids)
