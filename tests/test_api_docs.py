@@ -11,11 +11,17 @@ purpose: SA01/EX01/ES01 (no See Also / Examples / extended summary: useful, not 
 RT02/RT03 (``Returns`` may give only a type), PR07 (a parameter may be documented by its type and
 shape alone, e.g. ``C : numpy.ndarray, shape (p, n)`` for a matrix named as in the paper),
 SS05/SS06/PR08/PR09/GL01–GL03 (wording and layout).
+
+Every docstring (modules and documented module constants included) must also render: it is passed
+through numpydoc's Sphinx output and parsed by docutils, so what would break ``make docs`` (Sphinx
+with ``-W``) already fails ``make test``. Type hints of every public function and method are required
+as well (mypy with disallow_untyped_defs checks them too; this test keeps the rule whatever mypy's settings).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib.metadata
 import inspect
 import re
@@ -27,8 +33,13 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
+import docutils.core
+import docutils.nodes
 import numpydoc.validate
 import pytest
+from docutils.parsers.rst import Directive, directives, roles
+from numpydoc.docscrape_sphinx import get_doc_object
+from sphinx.pycode import ModuleAnalyzer
 
 import intervalobs
 from public_api import public_modules, public_objects, signature_of
@@ -112,6 +123,69 @@ def test_module_docstring(name):
 def test_numpydoc_docstring(name):
     errors = _errors(name)
     assert not errors, f"{name}:\n  " + "\n  ".join(errors)
+
+
+# -- rendering: what `make docs` (sphinx -W) would reject, caught by `make test` already -------------
+# Each docstring goes through numpydoc's Sphinx rendering and is parsed by docutils; any warning or
+# error (an undefined ``|substitution|`` from an unquoted ``|x|``, an unclosed ``*emphasis*`` from
+# ``*args`` or ``2**n`` outside double backticks, bad indentation) fails the test. Sphinx roles and
+# directives are accepted without checking their targets; LaTeX is left to MathJax.
+
+
+class _AnyDirective(Directive):
+    has_content = True
+    optional_arguments = 10
+    final_argument_whitespace = True
+    option_spec = None
+
+    def run(self) -> list[docutils.nodes.Node]:
+        return []
+
+
+class _AnyOptions(dict):
+    def __contains__(self, key: object) -> bool:
+        return True
+
+    def __getitem__(self, key: str) -> Any:
+        return directives.unchanged
+
+
+_AnyDirective.option_spec = _AnyOptions()
+for _role in ("class", "func", "meth", "mod", "attr", "data", "exc", "obj", "ref", "doc", "term", "any", "math"):
+    roles.register_generic_role(_role, docutils.nodes.literal)
+for _directive in ("math", "seealso", "autosummary", "index", "versionadded", "versionchanged", "deprecated", "plot"):
+    directives.register_directive(_directive, _AnyDirective)
+
+
+def _render_problems(rst: str) -> list[str]:
+    doctree = docutils.core.publish_doctree(
+        rst, settings_overrides={"report_level": 2, "halt_level": 5, "warning_stream": False}
+    )
+    # parse-time messages are in the tree; transform-time ones (undefined substitutions) are kept aside
+    messages = [*doctree.findall(docutils.nodes.system_message), *doctree.transform_messages]
+    return [f"line {msg.get('line', '?')}: {msg.astext()}" for msg in messages if msg["level"] >= 2]
+
+
+@functools.cache
+def _docstrings() -> dict[str, str]:
+    """Rendered docstrings of the public API, modules and documented module data included."""
+    found: dict[str, str] = {}
+    for name, module in public_modules().items():
+        found[name] = str(get_doc_object(module, what="module"))
+        if not hasattr(module, "__path__"):
+            for (scope, attr), lines in ModuleAnalyzer.for_module(name).find_attr_docs().items():
+                if not scope:
+                    found[f"{name}.{attr}"] = "\n".join(lines)
+    for name, obj in public_objects().items():
+        target = obj.fget if isinstance(obj, property) else obj
+        found[name] = str(get_doc_object(target, config={"show_class_members": False}))
+    return dict(sorted(found.items()))
+
+
+@pytest.mark.parametrize("name", list(_docstrings()), ids=str)
+def test_docstring_renders(name):
+    problems = _render_problems(_docstrings()[name])
+    assert not problems, f"{name} does not render (sphinx -W would fail):\n  " + "\n  ".join(problems)
 
 
 def _unannotated(obj: Any) -> list[str]:
