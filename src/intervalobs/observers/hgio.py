@@ -497,6 +497,8 @@ class HighGainIntervalObserver(Observer):
         """Box of ``Cx(t_k)``: predicted (27) intersected with the measurement box (28)–(29)."""
         lo = state.internal["y_lower"]
         hi = state.internal["y_upper"]
+        if np.isnan(yk).all():
+            return lo, hi
         have = ~np.isnan(yk).any(axis=-1, keepdims=True)
         meas_lo, meas_hi = inflate(
             np.where(have, yk - self.v_upper, -np.inf), np.where(have, yk - self.v_lower, np.inf)
