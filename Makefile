@@ -38,6 +38,7 @@ test-slow: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+	$(BIN)/python benchmarks/tightness.py
 
 # API reference + pages into docs/_build/html; fresh environment (-E) and warnings as errors (-W).
 docs: $(DOCS_STAMP)
