@@ -88,6 +88,19 @@ def test_paper_construction_run_equals_step(fullrank):
         np.testing.assert_allclose(state.input_upper, est.input_upper[k + 1], rtol=0, atol=1e-12)
 
 
+def test_exact_input_hull_is_sound_and_no_wider(fullrank):
+    plain = GSISIO.design(fullrank, ex.FULLRANK_X0_BOX)
+    hull = GSISIO.design(fullrank, ex.FULLRANK_X0_BOX, input_hull=True)
+    sim = simulate_nonlinear(fullrank, ex.FULLRANK_X0_BOX, ex.fullrank_input(40), seed=3, runs=2)
+    t = np.arange(40.0)
+    a, b = plain.run(t, sim.y), hull.run(t, sim.y)
+    assert b.input_enclosure(delayed(sim.d)).max_violation == 0.0
+    wa = (a.input_upper - a.input_lower)[..., 1:, :]
+    wb = (b.input_upper - b.input_lower)[..., 1:, :]
+    assert np.all(wb <= wa) and np.median(wa / wb) > 1.2
+    np.testing.assert_array_equal(a.lower, b.lower)
+
+
 def test_lemma4_current_input_bounds(paper, fullrank):
     obs = GSISIO.design(fullrank, ex.FULLRANK_X0_BOX)
     sim = simulate_nonlinear(fullrank, ex.FULLRANK_X0_BOX, ex.fullrank_input(40), seed=7)

@@ -188,6 +188,34 @@ class _ComposedRange:
         return lo, hi
 
 
+def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatArray, d_hi: FloatArray) -> BoxPair:
+    """Exact interval hull of {d : h_lo <= M d <= h_hi} (LP per component), intersected with (d_lo, d_hi).
+
+    The J-based box (Lemma 3) contains the set, so it bounds the LP; the LP optimum is widened by the
+    solver's feasibility tolerance scaled back to d and by the rounding margin.
+    """
+    from scipy.optimize import linprog
+
+    q = M.shape[1]
+    lo_out, hi_out = np.array(d_lo, dtype=float), np.array(d_hi, dtype=float)
+    flat_hl, flat_hh = h_lo.reshape(-1, M.shape[0]), h_hi.reshape(-1, M.shape[0])
+    flat_lo, flat_hi = lo_out.reshape(-1, q), hi_out.reshape(-1, q)
+    a_ub = np.vstack([M, -M])
+    slack = 1e-7 * (1.0 + np.abs(np.linalg.pinv(M)).sum())
+    for r in range(flat_hl.shape[0]):
+        b_ub = np.concatenate([flat_hh[r], -flat_hl[r]])
+        bounds = list(zip(flat_lo[r], flat_hi[r]))
+        for i in range(q):
+            for sign, out, pick in ((1.0, flat_lo, np.maximum), (-1.0, flat_hi, np.minimum)):
+                cost = np.zeros(q)
+                cost[i] = sign
+                res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+                if res.status == 0 and res.x is not None:
+                    value = float(res.x[i]) - sign * slack * (1.0 + abs(float(res.x[i])))
+                    out[r, i] = pick(out[r, i], value)
+    return flat_lo.reshape(lo_out.shape), flat_hi.reshape(hi_out.shape)
+
+
 def _divide(num: BoxPair, den: BoxPair) -> BoxPair:
     """Interval division; every denominator interval excludes 0."""
     q = np.stack([num[0] / den[0], num[0] / den[1], num[1] / den[0], num[1] / den[1]])
@@ -507,6 +535,10 @@ class GSISIO(Observer):
         Also intersect with local-Jacobian ranges.
     splits : int
         Sub-boxes per axis for the local ranges.
+    input_hull : bool
+        Replace Lemma 3's box :math:`J^+\overline h - J^-\underline h` by the exact interval hull of
+        :math:`\{d : \underline h \le [G; H]d \le \overline h\}` (2q LPs per step with HiGHS; Lemma 3's
+        "tight" holds only relative to the J-based box). Default False.
     """
 
     def __init__(
@@ -518,12 +550,14 @@ class GSISIO(Observer):
         abstraction_g: AffineAbstraction | None = None,
         tight: bool = True,
         splits: int = 1,
+        input_hull: bool = False,
     ) -> None:
         self.system = system
         self.design_result = design_result
         self.x0 = x0
         self.abstraction_f, self.abstraction_g = abstraction_f, abstraction_g
         self.tight = tight
+        self.input_hull = input_hull
         self.n, self.p, self.m = system.n, system.p, system.m
         self._range = _ComposedRange(system, np.eye(system.n), splits)
         self._phi = np.eye(system.n + system.p)
@@ -553,7 +587,8 @@ class GSISIO(Observer):
         abstraction_domain : tuple of array_like, optional
             Box on which LP (1) is solved (default: the initial box); used for boxes inside it.
         **options
-            ``tight`` (bool, default True), ``splits`` (int, default 1).
+            ``tight`` (bool, default True), ``splits`` (int, default 1), ``input_hull`` (bool, default
+            False: exact LP hull of the input bounds instead of Lemma 3's box).
 
         Returns
         -------
@@ -564,7 +599,7 @@ class GSISIO(Observer):
         AssumptionError
             Condition (8) fails, or :math:`\\rho(K_1 + L_1) \\ge 1` (framers of (9) not guaranteed).
         """
-        check_no_kwargs("GSISIO.design", options, ("tight", "splits"))
+        check_no_kwargs("GSISIO.design", options, ("tight", "splits", "input_hull"))
         box = as_box("x0", x0, system.n)
         d = gsisio_design(system, jacobian_domain)
         n = system.n
@@ -589,7 +624,7 @@ class GSISIO(Observer):
         abs_f = affine_abstraction(system.f, dom[0], dom[1], abstraction_sigma(dom[0], dom[1], *jf), n)
         abs_g = affine_abstraction(system.g, dom[0], dom[1], abstraction_sigma(dom[0], dom[1], *jg), system.p)
         return cls(system, d, box, abs_f, abs_g, tight=bool(options.get("tight", True)),
-                   splits=int(options.get("splits", 1)))  # fmt: skip
+                   splits=int(options.get("splits", 1)), input_hull=bool(options.get("input_hull", False)))  # fmt: skip
 
     # ---- Corollary 1 -------------------------------------------------------------------------------
     def _fg_bounds(self, lo: FloatArray, hi: FloatArray) -> tuple[BoxPair, BoxPair]:
@@ -663,6 +698,8 @@ class GSISIO(Observer):
         h_lo = np.concatenate([x_lo - fu_hi, gy_lo], axis=-1)
         h_hi = np.concatenate([x_hi - fu_lo, gy_hi], axis=-1)
         d_lo, d_hi = inflate(*matvec_bounds(d.J, h_lo, h_hi))
+        if self.input_hull:
+            d_lo, d_hi = _input_hull(np.vstack([sysm.G, sysm.H]), h_lo, h_hi, d_lo, d_hi)
         return ObserverState(x_lo, x_hi, d_lo, d_hi, {"k": int(state.internal.get("k", 0)) + 1})
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:

@@ -115,6 +115,8 @@ def _fullrank_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], di
     sim = simulate_nonlinear(system, box, d_true, noise="extreme", seed=seed)
     est = observer.run(t, sim.y)
     est_ns = nullspace.run(t, sim.y)
+    hull = GSISIO.design(system, box, input_hull=True).run(t, sim.y)
+    assert hull.input_lower is not None and hull.input_upper is not None
     dr = observer.design_result
     delta0 = float(np.linalg.norm(box[1] - box[0]))
     delta_x = dr.delta_x(delta0, steps)
@@ -136,6 +138,12 @@ def _fullrank_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], di
         "width_input_below_delta_d": bool(np.all(width_d[1:] <= delta_d[1:])),
         "mean_state_width_norm": float(width_x.mean()),
         "delta_x_steady": float(dr.delta_z / (1 - dr.script_L)),
+        "input_hull_enclosure": hull.input_enclosure(_delayed(sim.d)).as_dict(),
+        "input_width_ratio_lemma3_over_lp_hull": {
+            "median": float(np.median(width_d[1:] / np.linalg.norm(hull.input_upper - hull.input_lower, axis=-1)[1:])),
+            "min": float(np.min(width_d[1:] / np.linalg.norm(hull.input_upper - hull.input_lower, axis=-1)[1:])),
+            "max": float(np.max(width_d[1:] / np.linalg.norm(hull.input_upper - hull.input_lower, axis=-1)[1:])),
+        },
         "nullspace_mean_state_width_norm": float(np.linalg.norm(est_ns.width(), axis=-1).mean()),
         "nullspace_enclosure_state": est_ns.enclosure(sim.x).as_dict(),
         "design_s": design_time,
@@ -150,6 +158,8 @@ def _fullrank_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], di
         "fullrank_d_upper": est.input_upper,
         "fullrank_delta_x": delta_x,
         "fullrank_delta_d": delta_d,
+        "fullrank_hull_d_lower": hull.input_lower,
+        "fullrank_hull_d_upper": hull.input_upper,
         "fullrank_nullspace_state_lower": est_ns.lower,
         "fullrank_nullspace_state_upper": est_ns.upper,
     }
