@@ -184,3 +184,18 @@ def test_lower_bound_is_inside_sound_observers_and_not_an_estimate() -> None:
     ).run(t, sim.y)
     assert np.all(alone.lower >= exact_known.lower - SLACK) and np.all(alone.upper <= exact_known.upper + SLACK)
     assert np.all(alone.width() <= bound.width() + 1e-12)
+
+
+def test_condensed_window_agrees_with_the_sparse_window() -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=9)
+    condensed = HullEstimator(system, bounds, horizon=6)
+    assert condensed.meta()["condensed"]
+    sparse_form = HullEstimator(system, bounds, horizon=6)
+    sparse_form._condensed = None  # same LP (prior box only), states kept as variables
+    a, b = condensed.run(t, sim.y, u), sparse_form.run(t, sim.y, u)
+    assert a.enclosure(sim.x).max_violation == 0.0
+    np.testing.assert_allclose(a.lower, b.lower, atol=1e-7)
+    np.testing.assert_allclose(a.upper, b.upper, atol=1e-7)
