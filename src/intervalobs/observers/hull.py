@@ -351,7 +351,7 @@ class _CondensedLP:
     ``H + 1`` measurement rows remain (instead of ``(H + 1)(n + p)`` rows), so after the window moves
     the warm-started simplex needs a few pivots. The powers :math:`\Phi^j` and the drive are computed
     in floating point: each row and the objective are padded outward by a bound of that rounding,
-    ``c (j + 1)(n + 2) u`` times the magnitude recursion :math:`m_{j+1} = |\Phi| m_j + |e|_{max} + |\Gamma u_j|`.
+    ``4 (j + 1)(n + m + 2) u`` times the magnitude recursion :math:`m_{j+1} = |\Phi| m_j + |e|_{max} + |\Gamma u_j|`.
     """
 
     def __init__(self, model: _LinearModel, horizon: int) -> None:
@@ -416,10 +416,11 @@ class _CondensedLP:
             drive = m.Gamma @ u[s + j]
             q[j + 1] = m.Phi @ q[j] + drive
             mag[j + 1] = abs_phi @ mag[j] + e_max + np.abs(drive) + np.abs(q[j + 1])
-        factors = 4.0 * (np.arange(H + 1) + 1.0) * (n + 2) * eps
+        width = n + m.Gamma.shape[1] + 2  # terms per inner product of the powers and the drive
+        factors = 4.0 * (np.arange(H + 1) + 1.0) * width * eps
         x_error = factors[:, None] * mag  # |computed x_j - exact x_j| for every z in the box
         abs_c = np.abs(m.C)
-        row_pad = (x_error + (n + 2) * eps * mag) @ abs_c.T
+        row_pad = (x_error + width * eps * mag) @ abs_c.T
         measured = np.arange(H + 1) < H if not use_current else np.ones(H + 1, dtype=bool)
         yt = np.zeros((H + 1, p))
         available = y[s : s + H + 1]
@@ -434,7 +435,7 @@ class _CondensedLP:
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()
         self.solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
         self.solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
-        return q[H], x_error[H] + (n + 2) * eps * mag[H]
+        return q[H], x_error[H] + width * eps * mag[H]
 
     def certified_min(self, i: int, sign: float, key: int) -> float:
         """Rigorous lower bound of ``sign * (x_k)_i - sign * q_H`` over the LP (weak duality)."""
