@@ -133,3 +133,15 @@ def test_tube_with_an_unstable_gain_is_refused():
     system = LTISystem([[1.2, 0.0], [0.0, 0.5]], [[1.0, 1.0]], dt=1.0)
     with pytest.raises(DesignError, match="Schur stable"):
         IntervalObserver(system, Bounds(([-1, -1], [1, 1])), L=[[0.0], [0.0]])
+
+
+def test_step_refuses_bad_samples_with_the_argument_name():
+    system, bounds = random_system(0, 2, 1, True, False)
+    observer = IntervalObserver.design(system, bounds, h=0.05)
+    state = observer.init()
+    with pytest.raises(DataError, match="y: expected finite values with last dimension 1"):
+        observer.step(state, [np.inf])
+    with pytest.raises(DataError, match="y: expected finite values with last dimension 1"):
+        observer.step(state, [0.0, 1.0])
+    with pytest.raises(DataError, match="u: expected finite values with last dimension 0"):
+        observer.step(state, [0.0], [1.0])

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import DataError
 from ..estimate import Estimate
 from ..validation import as_signal, as_time
 
@@ -107,6 +108,18 @@ class Observer(ABC):
         Estimate
             Row ``k`` is the box of ``x(t_k)``; row 0 is the initial box.
         """
+
+    def _sample(self, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
+        """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,), (M, m) or None (zeros)."""
+        yk = np.asarray(y, dtype=float).reshape(-1) if np.ndim(y) == 0 else np.asarray(y, dtype=float)
+        if yk.ndim not in (1, 2) or yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
+            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
+        if u is None:
+            return yk, np.zeros(self.m)
+        uk = np.asarray(u, dtype=float).reshape(-1) if np.ndim(u) == 0 else np.asarray(u, dtype=float)
+        if uk.ndim not in (1, 2) or uk.shape[-1] != self.m or not np.all(np.isfinite(uk)):
+            raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
+        return yk, uk
 
     def _signals(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Validate ``t``, ``y``, ``u``; return them with ``u`` broadcast to ``y``'s leading axes."""

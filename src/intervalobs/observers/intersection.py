@@ -240,10 +240,7 @@ class IntersectionObserver(Observer):
         ObserverState
             With ``internal["filtered_lower"/"filtered_upper"]``: the box of ``x_k`` given ``y_0 … y_k``.
         """
-        yk = np.asarray(y, dtype=float)
-        if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
-            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
-        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        yk, uk = self._sample(y, u)
         lo, hi = state.lower, state.upper
         if self.contract:
             lo, hi = output_contraction(lo, hi, self.system.C, yk - self._fv_hi, yk - self._fv_lo, self.sweeps)

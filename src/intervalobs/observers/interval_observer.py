@@ -20,7 +20,7 @@ from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN
 from ..recursion import LinearRecursion
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_matrix, as_vector, check_no_kwargs
+from ..validation import as_box, as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["METHODS", "IntervalObserver"]
@@ -272,10 +272,7 @@ class IntervalObserver(Observer):
         -------
         ObserverState
         """
-        yk = as_vector("y", y, self.p) if np.ndim(y) <= 1 else np.asarray(y, dtype=float)
-        if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
-            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
-        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        yk, uk = self._sample(y, u)
         internal = self._advance(state.internal, yk, uk)
         lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
         return ObserverState(lower, upper, internal=internal)

@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.discretization import sampled_model
 from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
-from ..errors import AssumptionError, DataError, DesignError
+from ..errors import AssumptionError, DesignError
 from ..estimate import Estimate
 from ..interval import inflate
 from ..systems.lti import Bounds, LTISystem
@@ -215,12 +215,7 @@ class ZonotopicObserver(Observer):
         -------
         ObserverState
         """
-        yk = np.asarray(y, dtype=float)
-        if yk.ndim == 0:
-            yk = yk.reshape(1)
-        if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
-            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
-        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        yk, uk = self._sample(y, u)
         c, g = self._advance(state.internal["center"], state.internal["generators"], yk, uk)
         lower, upper = self._hull(c, g)
         return ObserverState(lower, upper, internal={"center": c, "generators": g})
