@@ -22,6 +22,7 @@ from .estimate import EnclosureReport, Estimate
 from .inclusion import Interval
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
+from .observers.fir import FiniteMemoryObserver
 from .observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
@@ -48,6 +49,7 @@ __all__ = [
     "Disk",
     "EnclosureReport",
     "Estimate",
+    "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
     "HullLowerBound",

@@ -1,6 +1,7 @@
 """Observers, one module per family, all on the protocol of :mod:`intervalobs.observers.base`."""
 
 from .base import Observer, ObserverState
+from .fir import FiniteMemoryObserver
 from .hgio import HighGainIntervalObserver
 from .hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .intersection import IntersectionObserver, output_contraction
@@ -10,6 +11,7 @@ from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
+    "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
     "HullLowerBound",
