@@ -39,7 +39,7 @@ from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_vector
+from ..validation import as_box
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
 
@@ -266,10 +266,7 @@ class FiniteMemoryObserver(Observer):
         -------
         ObserverState
         """
-        yk = as_vector("y", y, self.p) if np.ndim(y) <= 1 else np.asarray(y, dtype=float)
-        if yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
-            raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
-        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        yk, uk = self._sample(y, u)
         if uk.shape[-1:] != (self.m,) or not np.all(np.isfinite(uk)):
             raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
         old = state.internal
