@@ -199,3 +199,17 @@ def test_condensed_window_agrees_with_the_sparse_window() -> None:
     assert a.enclosure(sim.x).max_violation == 0.0
     np.testing.assert_allclose(a.lower, b.lower, atol=1e-7)
     np.testing.assert_allclose(a.upper, b.upper, atol=1e-7)
+
+
+def test_certificates_one_per_condensed_solve_and_refused_otherwise() -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=4)
+    certs = HullEstimator(system, bounds, horizon=6).certificates(t, sim.y, u)
+    assert set(certs) == {(i, s) for i in range(3) for s in (1.0, -1.0)}
+    for duals in certs.values():
+        assert duals.shape == (STEPS - 1 - 6, 7, 1)  # steps k = 7 … T-1, rows j = 0 … 6
+        assert np.all(duals[:, -1] == 0.0)  # predicted hull: y_k is not a row
+    with pytest.raises(AssumptionError, match="condensed"):
+        HullEstimator(system, bounds, horizon=None).certificates(t, sim.y, u)

@@ -399,6 +399,8 @@ class _CondensedLP:
         self._bases: dict[tuple[int, float], Any] = {}
         self.solves = 0
         self.iterations = 0
+        self.dual_log: list[tuple[int, float, FloatArray]] | None = None
+        """When a list, every solve appends ``(component, sign, row duals)`` (see ``HullEstimator.certificates``)."""
 
     def set_window(
         self, k: int, y: FloatArray, u: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray, use_current: bool
@@ -452,6 +454,8 @@ class _CondensedLP:
         dual = np.asarray(self.solver.getSolution().row_dual)
         if dual.size != self.nrow or not np.all(np.isfinite(dual)):
             return -np.inf
+        if self.dual_log is not None:
+            self.dual_log.append((i, sign, dual.copy()))
         return _dual_bound(self, -1, sign, dual, cost)
 
 
@@ -823,6 +827,54 @@ class HullEstimator(Observer):
                 "(empty consistent set): check the noise bounds"
             )
         return lower, upper
+
+    def certificates(
+        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None
+    ) -> dict[tuple[int, float], FloatArray]:
+        r"""The duality certificates of the full-window LPs of a record: one FIR weight set per bound.
+
+        For the bound ``sign * (x_k)_i`` the multipliers :math:`\lambda_j` of the window's measurement
+        rows ``j = 0 … H`` give the linear combination :math:`\sum_j \text{sign}\,\lambda_j^\top y_{k-H+j}`
+        that the certified bound uses (module docstring); any such weights give a sound bound on any
+        record (:class:`~intervalobs.observers.fir.FiniteMemoryObserver` evaluates them rigorously).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Sample times.
+        y : array_like, shape (T, p)
+            Measurements of one record.
+        u : array_like, shape (T, m), optional
+            Known inputs.
+
+        Returns
+        -------
+        dict
+            ``(i, sign)`` → array of shape ``(count, H + 1, p)``: the row multipliers of every solve of
+            the condensed window LP (steps ``k > H``) for that bound.
+        """
+        if self._condensed is None:
+            raise AssumptionError(
+                "certificates: needs the condensed window LP (finite horizon, box noises, stable Φ, "
+                "window_boxes=False); see condensed_allowed()"
+            )
+        _, ys, us = self._signals(t, y, u)
+        if ys.ndim != 2:
+            raise DimensionError(f"y: expected one record of shape (T, {self.p}), got shape {ys.shape}")
+        lp = self._condensed
+        lp.dual_log = []
+        try:
+            self._run_one(ys, us)
+            log = lp.dual_log
+        finally:
+            lp.dual_log = None
+        out: dict[tuple[int, float], FloatArray] = {}
+        shape = (self.horizon + 1, self.p) if self.horizon is not None else (0, self.p)
+        for i in range(self.n):
+            for sign in (1.0, -1.0):
+                rows = [d.reshape(shape) for (j, s, d) in log if j == i and s == sign]
+                out[(i, sign)] = np.array(rows).reshape(len(rows), *shape)
+        return out
 
     def meta(self) -> dict[str, Any]:
         """Facts recorded in every :class:`~intervalobs.estimate.Estimate`.
