@@ -39,6 +39,7 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 	$(BIN)/python benchmarks/tightness.py
+	$(BIN)/python benchmarks/report.py
 
 # API reference + pages into docs/_build/html; fresh environment (-E) and warnings as errors (-W).
 docs: $(DOCS_STAMP)
@@ -46,4 +47,4 @@ docs: $(DOCS_STAMP)
 	@echo "docs: docs/_build/html/index.html"
 
 clean:
-	rm -rf $(VENV) results build *.egg-info docs/_build docs/api docs/benchmarks.md
+	rm -rf $(VENV) results build *.egg-info docs/_build docs/api

@@ -1,17 +1,17 @@
 """Sphinx configuration: markdown pages (MyST), the API reference (autodoc + numpydoc), benchmarks.
 
-``make docs`` builds with ``-W`` (warnings are errors). The API pages and the benchmarks page are
-generated here on every build, from the package itself and from ``benchmarks/results.json``, so a new
-module appears in the reference without editing anything under ``docs/``. Generated files go to
-``docs/api/`` and ``docs/benchmarks.md`` (both git-ignored).
+``make docs`` builds with ``-W`` (warnings are errors). The API pages are generated here on every
+build from the package itself, so a new module appears in the reference without editing anything
+under ``docs/``; they go to ``docs/api/`` (git-ignored). ``docs/benchmarks.md`` is rewritten from the
+benchmark JSON files by ``benchmarks/report.py`` (committed, so it reads on the repository too).
 """
 
 from __future__ import annotations
 
 import importlib
 import inspect
-import json
 import pkgutil
+import runpy
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -182,59 +182,10 @@ def write_api_pages() -> None:
     _write_if_changed(out / "index.rst", "\n".join(index))
 
 
-# ----------------------------------------------------------------------------------------------
-# Benchmarks page: benchmarks/run.py's description and the tables of benchmarks/results.json.
-
-
-def _cell(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    if isinstance(value, (list, dict)):
-        return json.dumps(value)
-    return str(value).replace("|", "\\|")
-
-
-def _table(rows: list[dict[str, Any]]) -> list[str]:
-    columns: list[str] = []
-    for row in rows:
-        columns += [k for k in row if k not in columns]
-    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    lines += ["| " + " | ".join(_cell(row.get(c, "")) for c in columns) + " |" for row in rows]
-    return lines
-
-
-def write_benchmarks_page() -> None:
-    runner = ROOT / "benchmarks" / "run.py"
-    results = ROOT / "benchmarks" / "results.json"
-    lines = ["# Benchmarks", ""]
-    if runner.exists():
-        lines += ["`make bench` runs `benchmarks/run.py`:", "", *_docstring(runner).splitlines(), ""]
-    if not results.exists():
-        lines += ["No results yet: run `make bench`."]
-    else:
-        data = json.loads(results.read_text())
-        lines += ["Results of the last `make bench` (`benchmarks/results.json`):", ""]
-        scalars = {k: v for k, v in data.items() if not isinstance(v, (list, dict))}
-        lines += [f"- **{k}**: {_cell(v)}" for k, v in scalars.items()]
-        lines.append("")
-        for key, value in data.items():
-            if isinstance(value, list) and value and all(isinstance(r, dict) for r in value):
-                lines += [f"## {key}", "", *_table(value), ""]
-            elif isinstance(value, (list, dict)):
-                lines += [f"## {key}", "", "```json", json.dumps(value, indent=2), "```", ""]
-    _write_if_changed(DOCS / "benchmarks.md", "\n".join(lines))
-
-
-def _docstring(path: Path) -> str:
-    import ast
-
-    return ast.get_docstring(ast.parse(path.read_text())) or ""
-
-
 def _write_if_changed(path: Path, text: str) -> None:
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
 
 
 write_api_pages()
-write_benchmarks_page()
+runpy.run_path(str(ROOT / "benchmarks" / "report.py"), run_name="__main__")  # docs/benchmarks.md

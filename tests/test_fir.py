@@ -8,6 +8,7 @@ import pytest
 from intervalobs import AssumptionError, Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import IntervalObserverError
 from intervalobs.observers.fir import FiniteMemoryObserver
+from intervalobs.observers.hull import HullEstimator
 
 STEPS = 60
 A68 = np.array([[0.8, 0.1, 0.3], [0.0, 0.8, 0.2], [0.01, 0.0, 0.8]])
@@ -30,6 +31,10 @@ def observers() -> dict[str, FiniteMemoryObserver]:
     return {
         "default": FiniteMemoryObserver.design(system, bounds, window=30),
         "wide": FiniteMemoryObserver.design(system, bounds, window=30, fallback=wide_fallback(system, bounds)),
+        "bank": FiniteMemoryObserver.learn(system, bounds, window=8, records=2, steps=80),
+        "bank-wide": FiniteMemoryObserver.learn(
+            system, bounds, window=8, records=2, steps=80, size=50, fallback=wide_fallback(system, bounds)
+        ),
     }
 
 
@@ -57,10 +62,10 @@ def test_encloses_truth(observers: dict[str, FiniteMemoryObserver], seed: int, n
         base = obs.fallback.run(t, sim.y, u)  # type: ignore[attr-defined]
         assert np.all(est.lower >= base.lower) and np.all(est.upper <= base.upper), name
     # With the open-loop fallback the filter's own box is active (strictly tighter after N steps).
-    wide = observers["wide"]
-    est = wide.run(t, sim.y, u)  # type: ignore[attr-defined]
-    base = wide.fallback.run(t, sim.y, u)  # type: ignore[attr-defined]
-    assert np.all((est.upper - est.lower)[:, 40:] < (base.upper - base.lower)[:, 40:])
+    for name in ("wide", "bank-wide"):
+        est = observers[name].run(t, sim.y, u)  # type: ignore[attr-defined]
+        base = observers[name].fallback.run(t, sim.y, u)  # type: ignore[attr-defined]
+        assert np.all((est.upper - est.lower)[:, 40:] < (base.upper - base.lower)[:, 40:]), name
 
 
 def test_radius_is_the_evaluated_worst_case(observers: dict[str, FiniteMemoryObserver]) -> None:
@@ -72,17 +77,17 @@ def test_radius_is_the_evaluated_worst_case(observers: dict[str, FiniteMemoryObs
     total = np.zeros(3)
     for i in range(3):
         for l_ in range(N):
-            d = powers[N - 1 - l_][i] - sum(K[i, j] @ C @ powers[j - 1 - l_] for j in range(l_ + 1, N))
+            d = powers[N - 1 - l_][i] - sum(K[i, 0, j] @ C @ powers[j - 1 - l_] for j in range(l_ + 1, N))
             total[i] += np.abs(d) @ r
-        total[i] += np.sum(np.abs(K[i] @ F)) * 1.0
+        total[i] += np.sum(np.abs(K[i, 0] @ F)) * 1.0
     # The model's noise radius is rounded up by 1e-12 and the evaluation by a few ulps: never below.
-    assert np.allclose(obs.radius, total, rtol=1e-10, atol=0)
-    assert np.all(obs.radius >= total)
+    assert np.allclose(obs.radius[:, 0], total, rtol=1e-10, atol=0)
+    assert np.all(obs.radius[:, 0] >= total)
     assert obs.meta()["residual"] < 1e-8
     # Window 80 reaches the worst-case hull of (68) (sup of observed hull widths ≈ [1.99, 1.20, 0.50]).
     system, bounds = small_discrete()
     long = FiniteMemoryObserver.design(system, bounds, window=80)
-    assert np.all(2 * long.radius < np.array([2.01, 1.21, 0.51]))
+    assert np.all(2 * long.radius[:, 0] < np.array([2.01, 1.21, 0.51]))
 
 
 def test_run_matches_repeated_step(observers: dict[str, FiniteMemoryObserver]) -> None:
@@ -118,3 +123,60 @@ def test_errors() -> None:
         obs.step(obs.init(), [1.0, 2.0])
     with pytest.raises(IntervalObserverError):
         FiniteMemoryObserver(system, bounds, np.zeros((3, 4, 2)), obs.fallback)
+
+
+def test_learned_bank_is_between_the_hull_and_the_worst_case_filter(observers: dict[str, FiniteMemoryObserver]) -> None:
+    system, bounds = small_discrete()
+    bank = observers["bank"]
+    assert bank.meta()["bank"] > 50 and bank.K.shape[:3] == (3, bank.meta()["bank"], 8)
+    worst = FiniteMemoryObserver(system, bounds, bank.K[:, :1], bank.fallback)  # its first filter alone
+    np.testing.assert_array_equal(worst.K[:, 0], FiniteMemoryObserver.design(system, bounds, window=8).K[:, 0])
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    widths = []
+    for seed in (5, 6):
+        sim = vertex_record(system, bounds, t, u, seed, 1)
+        y = sim.y[0]
+        exact = HullEstimator(system, bounds, horizon=None).run(t, y, u)
+        learned, alone = bank.run(t, y, u), worst.run(t, y, u)
+        assert learned.enclosure(sim.x[0]).max_violation == 0.0
+        # Never tighter than the exact hull (every sound box contains it), never wider than its own first filter.
+        assert np.all(learned.lower <= exact.lower + 1e-7) and np.all(learned.upper >= exact.upper - 1e-7)
+        assert np.all(learned.lower >= alone.lower - 1e-12) and np.all(learned.upper <= alone.upper + 1e-12)
+        widths.append([np.mean(np.sum(e.upper - e.lower, axis=1)[20:]) for e in (exact, learned, alone)])
+    exact_w, learned_w, alone_w = np.array(widths).T
+    # The data-dependent bank closes most of the gap between the fixed-width filter and the hull.
+    assert np.all(learned_w < exact_w + 0.25 * (alone_w - exact_w))
+
+
+def test_certificate_is_reproduced_by_its_filter() -> None:
+    """The window LP's certified bound is the box of its certificate's filter with the same prior."""
+    system, bounds = small_discrete()
+    t = np.arange(30, dtype=float)
+    u = np.zeros((30, 1))
+    sim = simulate(system, bounds, t, noise="extreme", seed=2)
+    hull = HullEstimator(system, bounds, horizon=6)
+    boxes = hull.run(t, sim.y)
+    lp = hull._condensed
+    assert lp is not None
+    k = 20
+    for i in range(3):
+        for sign in (1.0, -1.0):
+            lp.dual_log = []
+            drive, pad = lp.set_window(k, sim.y, u, boxes.lower[k - 6], boxes.upper[k - 6], False)
+            certified = sign * (lp.certified_min(i, sign, 99) + drive[i] - pad[i])
+            gains = np.zeros((3, 1, 6, 1))
+            gains[:, 0] = sign * lp.dual_log[0][2].reshape(7, 1)[:6]
+            obs = FiniteMemoryObserver(system, bounds, gains, wide_fallback(system, bounds))
+            lo, hi = obs._fir(sim.y[k - 6 : k], u[:6], boxes.lower[k - 6], boxes.upper[k - 6])
+            assert abs((lo[i] if sign > 0 else hi[i]) - certified) < 1e-9
+
+
+def test_learn_errors() -> None:
+    system, bounds = small_discrete()
+    for name, kwargs in (("records", {"records": 0}), ("steps", {"steps": 5}), ("size", {"size": 0})):
+        with pytest.raises(IntervalObserverError, match=name):
+            FiniteMemoryObserver.learn(system, bounds, window=4, **kwargs)  # type: ignore[arg-type]
+    unstable = LTISystem(1.2 * A68, system.C, B=system.B, E=system.E, F=system.F, dt=1.0)
+    with pytest.raises(AssumptionError, match="condensed"):
+        FiniteMemoryObserver.learn(unstable, bounds, window=4, records=1, steps=10)

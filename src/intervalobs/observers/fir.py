@@ -1,4 +1,4 @@
-r"""A worst-case-optimal finite-memory (FIR) estimator: LP at design time, a fixed linear filter online.
+r"""Finite-memory (FIR) estimators: linear filters chosen by LP at design time, evaluated soundly online.
 
 For a point model :math:`x_{k+1} = \Phi x_k + \Gamma u_k + c + \tilde\eta_k`,
 :math:`|\tilde\eta_k| \le r` (the sound sampled model of
@@ -12,17 +12,29 @@ measurements plus a known input term,
 
 with error :math:`x_k - \hat x_k = R x_s + \sum_l D_l \tilde\eta_{s+l} - \sum_j K_j F \tilde v_{s+j}`,
 :math:`D_l = \Phi^{N-1-l} - \sum_{j>l} K_j C \Phi^{j-1-l}`, :math:`R = \Phi^N - \sum_j K_j C\Phi^j`.
-The weights :math:`K` are chosen at design time, one LP per state component, minimising the
-worst-case error ``sum |D| r + sum |K F| r_v`` subject to :math:`R = 0` (the estimate is unbiased in
-the unknown :math:`x_s`). By Smolyak's theorem a linear algorithm attains the radius of information
-of this window, so for large ``N`` the radius approaches the half-width of the exact hull's worst case.
+*Any* weights give a sound box, :math:`\hat x_k + R\,[\underline x_s, \overline x_s] \pm \text{radius}`,
+with a sound box of :math:`x_s`; the observer holds a **bank** of weight sets per component and
+intersects their boxes. Two ways to fill it:
+
+- :meth:`FiniteMemoryObserver.design`: one set per component, by an LP minimising the worst-case error
+  ``sum |D| r + sum |K F| r_v`` subject to :math:`R = 0` (unbiased in the unknown :math:`x_s`). By
+  Smolyak's theorem a linear algorithm attains the radius of information of the window, so for large
+  ``N`` the radius approaches the half-width of the exact hull's *worst case*. Its width does not
+  depend on the data, so it can never beat the largest hull width (docs/tightness.md).
+- :meth:`FiniteMemoryObserver.learn`: that set plus the duality certificates of the exact window hull
+  (:meth:`~intervalobs.observers.hull.HullEstimator.certificates`) on simulated extreme-noise records.
+  The hull's bound for a record *is* the FIR box of its certificate (weak duality, the prior being
+  the box of :math:`x_s`), so the bank reproduces the LP wherever its optimal certificate is in the
+  bank, and is sound everywhere else: the width follows the data without any LP online.
 
 **Soundness.** The LP optimum is never used as a bound. The radius is *evaluated* in NumPy from the
 computed weights and rounded upward; the LP's residual :math:`R` (about 1e-10, not exactly zero) is
-bounded with the fallback observer's own box of :math:`x_s`; the rounding of the online sums is bounded
-by :math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with :math:`\gamma = (2N + 8)\,\varepsilon`; the
-result is intersected with a sound fallback observer (default: the tube :class:`IntervalObserver`),
-which alone gives the first ``N`` boxes. An intersection of sound boxes is sound.
+bounded with the observer's own box of :math:`x_s` (sound by induction); the rounding of the online
+sums is bounded by :math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with
+:math:`\gamma = (2N + 8)\,\varepsilon`; the result is intersected with a sound fallback observer
+(default: the tube :class:`IntervalObserver`), which alone gives the first ``N`` boxes, and with
+the one-step interval prediction of the previous own box (:math:`\Phi` box, plus the input and the
+noise box, inflated). An intersection of sound boxes is sound.
 """
 
 from __future__ import annotations
@@ -38,9 +50,11 @@ from ..design.discretization import sampled_model
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
+from ..simulate import simulate
 from ..systems.lti import Bounds, LTISystem
 from ..validation import as_box
 from .base import Observer, ObserverState
+from .hull import HullEstimator
 from .interval_observer import IntervalObserver
 
 __all__ = ["FiniteMemoryObserver"]
@@ -50,10 +64,12 @@ _EPS = float(np.finfo(float).eps)
 
 
 class FiniteMemoryObserver(Observer):
-    r"""Worst-case-optimal linear FIR estimator of window ``N``, intersected with a sound fallback.
+    r"""A bank of linear FIR estimators of window ``N``, intersected with each other and a sound fallback.
 
-    Row ``k`` of :meth:`run` is the box of :math:`x_k` given :math:`y_{k-N} \dots y_{k-1}` (and the
-    fallback's box); see the module docstring for the equations. Build it with :meth:`design`.
+    Row ``k`` of :meth:`run` is the box of :math:`x_k` given :math:`y_{k-N} \dots y_{k-1}`, the
+    observer's own box of :math:`x_{k-N}` and the fallback's box; see the module docstring for the
+    equations. Build it with :meth:`design` (one worst-case-optimal filter per component) or
+    :meth:`learn` (plus the hull's certificates: data-dependent width).
 
     Parameters
     ----------
@@ -61,10 +77,11 @@ class FiniteMemoryObserver(Observer):
         Point model (no ``dA``); continuous time needs ``h``.
     bounds : Bounds
         Initial-state and noise boxes.
-    gains : numpy.ndarray, shape (n, N, p)
-        Weights ``K_j`` (row ``i``: component ``i``), oldest measurement first.
+    gains : numpy.ndarray, shape (n, B, N, p) or (n, N, p)
+        Weights ``K_j`` of ``B`` filters per component (row ``i``: component ``i``), oldest
+        measurement first; a 3-D array is a bank of one.
     fallback : Observer
-        Sound observer run in parallel; its box is intersected with the filter's.
+        Sound observer run in parallel; its box is intersected with the filters'.
     h : float, optional
         Sampling period of a continuous-time system.
     lp_seconds : float
@@ -88,15 +105,18 @@ class FiniteMemoryObserver(Observer):
         model = sampled_model(system, self.bounds, h)
         self.h = model.h
         k = np.asarray(gains, dtype=float)
-        if k.ndim != 3 or k.shape[0] != self.n or k.shape[2] != self.p or k.shape[1] < 1:
-            raise DataError(f"gains: expected shape (n={self.n}, N, p={self.p}), got {k.shape}")
+        if k.ndim == 3:
+            k = k[:, None]
+        if k.ndim != 4 or k.shape[0] != self.n or k.shape[3] != self.p or min(k.shape[1:3]) < 1:
+            raise DataError(f"gains: expected shape (n={self.n}, B, N, p={self.p}), got {np.shape(gains)}")
         if not np.all(np.isfinite(k)):
             raise DataError("gains: expected finite values")
-        self.window = int(k.shape[1])
+        self.window = int(k.shape[2])
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
         self._setup(model.Phi, model.Gamma, model.noise_center, model.noise_radius)
+        self._model = model
 
     # -- design ----------------------------------------------------------------------------------
     @classmethod
@@ -108,7 +128,7 @@ class FiniteMemoryObserver(Observer):
         h: float | None = None,
         fallback: Observer | None = None,
     ) -> FiniteMemoryObserver:
-        """Weights by one LP per component (minimise the evaluated worst-case error, unbiased in ``x_s``).
+        """One filter per component by LP (minimise the evaluated worst-case error, unbiased in ``x_s``).
 
         Parameters
         ----------
@@ -128,62 +148,102 @@ class FiniteMemoryObserver(Observer):
         -------
         FiniteMemoryObserver
         """
-        if system.dA is not None:
-            raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
-        if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
-            raise DataError(f"window: expected a positive integer, got {window!r}")
+        gains, elapsed = _worst_case_gains(system, bounds, window, h)
+        if fallback is None:
+            fallback = IntervalObserver.design(system, bounds.for_system(system), h=h)
+        return cls(system, bounds, gains, fallback, h=h, lp_seconds=elapsed)
+
+    @classmethod
+    def learn(
+        cls,
+        system: LTISystem,
+        bounds: Bounds,
+        window: int = 10,
+        records: int = 6,
+        steps: int = 200,
+        seed: int = 0,
+        size: int | None = None,
+        h: float | None = None,
+        fallback: Observer | None = None,
+    ) -> FiniteMemoryObserver:
+        """A bank: the worst-case filter plus the exact window hull's certificates on simulated records.
+
+        Each training record is simulated with extreme noise (alternately i.i.d. vertices and the
+        simulator's switching bang-bang noise, which make the consistent set's faces active); the
+        window hull of every step is solved by :class:`~intervalobs.observers.hull.HullEstimator`
+        and its duality certificate becomes a filter of the bank. Every filter is sound on every
+        record; the bank is as tight as the LP on records whose optimal certificates it holds.
+
+        Parameters
+        ----------
+        system : LTISystem
+            Point model (no ``dA``) with a stable sampled matrix (the condensed window LP).
+        bounds : Bounds
+            Initial-state and noise boxes.
+        window : int
+            Memory ``N`` of the filters and horizon of the training hulls.
+        records : int
+            Number of simulated training records.
+        steps : int
+            Length of each training record (at least ``window + 2``).
+        seed : int
+            Seed of the training noise (the bank is deterministic given it).
+        size : int, optional
+            Keep at most this many filters per component (the worst-case one and a random subset of
+            the certificates): online cost against tightness (docs/tightness.md). Default: all.
+        h : float, optional
+            Sampling period of a continuous-time system.
+        fallback : Observer, optional
+            Sound observer to intersect with; default :meth:`IntervalObserver.design`.
+
+        Returns
+        -------
+        FiniteMemoryObserver
+            ``meta()["bank"]`` is the number of filters per component.
+        """
+        least_steps = int(window) + 2 if isinstance(window, (int, np.integer)) else 2  # one full window at least
+        checks = [("records", records, 1), ("steps", steps, least_steps)]
+        checks += [("size", size, 1)] if size is not None else []
+        for name, value, least in checks:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+                raise DataError(f"{name}: expected an integer >= {least}, got {value!r}")
         full = bounds.for_system(system)
-        model = sampled_model(system, full, h)
-        assert full.v is not None
-        n, p, nv, big_n = system.n, system.p, system.F.shape[1], int(window)
-        phi, c_mat, f_mat = model.Phi, system.C, system.F
-        r = model.noise_radius
-        vr = 0.5 * (full.v[1] - full.v[0])
-        powers = [np.eye(n)]
-        for _ in range(big_n):
-            powers.append(phi @ powers[-1])
-        # H maps k (N p, block j = k_j) to the D row (N n, block l): -(sum_{j>l} (C Φ^{j-1-l})^T k_j).
-        hmat = np.zeros((big_n * n, big_n * p))
-        for l_ in range(big_n):
-            for j in range(l_ + 1, big_n):
-                hmat[l_ * n : (l_ + 1) * n, j * p : (j + 1) * p] = (c_mat @ powers[j - 1 - l_]).T
-        vmat = np.kron(np.eye(big_n), f_mat.T)  # (N nv, N p)
-        gmat = np.hstack([(c_mat @ powers[j]).T for j in range(big_n)])  # (n, N p)
-        nk, ne, nvv = big_n * p, big_n * n, big_n * nv
-        cost = np.concatenate([np.zeros(nk), np.tile(r, big_n), np.tile(vr, big_n)])
-        eye_e, eye_v = np.eye(ne), np.eye(nvv)
-        # t_e >= |phi_i - H k|,  t_v >= |V k|
-        a_ub = np.block(
-            [
-                [-hmat, -eye_e, np.zeros((ne, nvv))],
-                [hmat, -eye_e, np.zeros((ne, nvv))],
-                [vmat, np.zeros((nvv, ne)), -eye_v],
-                [-vmat, np.zeros((nvv, ne)), -eye_v],
-            ]
-        )
-        a_eq = np.hstack([gmat, np.zeros((n, ne + nvv))])
-        var_bounds = [(None, None)] * nk + [(0, None)] * (ne + nvv)
-        gains = np.zeros((n, big_n, p))
-        start = time.perf_counter()
-        for i in range(n):
-            phi_row = np.concatenate([powers[big_n - 1 - l_][i] for l_ in range(big_n)])
-            b_ub = np.concatenate([-phi_row, phi_row, np.zeros(2 * nvv)])
-            res = linprog(
-                cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=powers[big_n][i], bounds=var_bounds, method="highs"
+        worst, elapsed = _worst_case_gains(system, full, window, h)
+        hull = HullEstimator(system, full, horizon=int(window), h=h)
+        if not hull.condensed_allowed():
+            raise AssumptionError(
+                "FiniteMemoryObserver.learn: needs the condensed window LP of HullEstimator "
+                "(box process and measurement noise, stable sampled matrix)"
             )
-            if res.status != 0:
-                raise DesignError(
-                    f"FiniteMemoryObserver.design: LP for component {i} failed ({res.message}); "
-                    f"is the pair (Φ, C) observable within window={big_n}?"
-                )
-            gains[i] = res.x[:nk].reshape(big_n, p)
-        elapsed = time.perf_counter() - start
+        period = hull.h if system.continuous else float(system.dt or 1.0)
+        t = np.arange(int(steps)) * period
+        # A stream of its own: training records never coincide with a user's simulate(..., seed=...).
+        rng = np.random.default_rng([int(seed), 0xF1B])
+        bank: list[list[FloatArray]] = [[] for _ in range(system.n)]
+        start = time.perf_counter()
+        for record in range(int(records)):
+            noise = _training_noise(system, full, t.size, record, rng)
+            sim = simulate(system, full, t, noise=noise, seed=int(rng.integers(2**31)))
+            for (i, sign), duals in hull.certificates(t, sim.y).items():
+                bank[i].append(sign * duals[:, : int(window), :])
+        elapsed += time.perf_counter() - start
+        members = []
+        for i, found in enumerate(bank):
+            unique = np.unique(np.concatenate(found), axis=0)
+            if size is not None:
+                unique = unique[np.sort(rng.permutation(unique.shape[0])[: int(size) - 1])]
+            members.append(np.concatenate([worst[i][None], unique]))
+        count = max(m.shape[0] for m in members)
+        # Components with fewer filters repeat their worst-case filter (a duplicate changes nothing).
+        gains = np.stack(
+            [np.concatenate([m, np.repeat(worst[i][None], count - m.shape[0], 0)]) for i, m in enumerate(members)]
+        )
         if fallback is None:
             fallback = IntervalObserver.design(system, full, h=h)
         return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed)
 
     def _setup(self, phi: FloatArray, gamma: FloatArray, c: FloatArray, r: FloatArray) -> None:
-        """Evaluate ``D_l``, ``R``, ``M_l``, ``d`` and the sound radius from the weights."""
+        """Evaluate ``D_l``, ``R``, ``M_l``, ``d`` and the sound radius of every filter from its weights."""
         n, big_n, k = self.n, self.window, self.K
         c_mat, f_mat = self.system.C, self.system.F
         assert self.bounds.v is not None
@@ -192,37 +252,48 @@ class FiniteMemoryObserver(Observer):
         powers = [np.eye(n)]
         for _ in range(big_n):
             powers.append(phi @ powers[-1])
-        d_mats = np.empty((big_n, n, n))
+        c_powers = np.stack([c_mat @ power for power in powers])  # (N + 1, p, n)
+        # D_l = Φ^{N-1-l} - Σ_{j>l} K_j C Φ^{j-1-l}, per component i and filter b: shape (N, n, B, n).
+        d_mats = np.empty((big_n, n, k.shape[1], n))
         for l_ in range(big_n):
-            acc = powers[big_n - 1 - l_].copy()
-            for j in range(l_ + 1, big_n):
-                acc -= k[:, j, :] @ c_mat @ powers[j - 1 - l_]
-            d_mats[l_] = acc
-        kf = np.einsum("ijp,pq->ijq", k, f_mat)
-        self.residual = powers[big_n] - sum(k[:, j, :] @ c_mat @ powers[j] for j in range(big_n))
-        self.M = np.einsum("lij,jm->lim", d_mats, gamma)  # (N, n, m)
-        self.offset = np.einsum("lij,j->i", d_mats, c) - np.einsum("ijq,q->i", kf, v_c)
-        radius = np.einsum("lij,j->i", np.abs(d_mats), r) + np.einsum("ijq,q->i", np.abs(kf), v_r)
+            d_mats[l_] = powers[big_n - 1 - l_][:, None, :]
+            d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: big_n - 1 - l_])
+        kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
+        self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:big_n])
+        self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
+        self.offset = np.einsum("libq,q->ib", d_mats, c) - np.einsum("ibjq,q->ib", kf, v_c)
+        radius = np.einsum("libq,q->ib", np.abs(d_mats), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
         # Upward rounding of the evaluation itself (sums of N (n + nv) nonnegative terms).
         terms = big_n * (n + f_mat.shape[1])
         self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
         self._gamma = (2 * big_n + 8) * _EPS
         self._abs_k, self._abs_m = np.abs(k), np.abs(self.M)
+        self._residual_rows = self.residual.reshape(-1, n)
 
     # -- online ----------------------------------------------------------------------------------
     def _fir(
         self, ys: FloatArray, us: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Box of ``x_k`` from windows ``ys`` (..., N, p), ``us`` (..., N, m) and the box of ``x_s``."""
-        est = np.einsum("...jp,ijp->...i", ys, self.K) + np.einsum("...lm,lim->...i", us, self.M) + self.offset
+        """Box of ``x_k`` from a window ``ys`` (..., N, p), ``us`` (..., N, m) and a box of ``x_s``."""
+        est = np.einsum("...jp,ibjp->...ib", ys, self.K) + np.einsum("...lm,libm->...ib", us, self.M) + self.offset
         mag = (
-            np.einsum("...jp,ijp->...i", np.abs(ys), self._abs_k)
-            + np.einsum("...lm,lim->...i", np.abs(us), self._abs_m)
+            np.einsum("...jp,ibjp->...ib", np.abs(ys), self._abs_k)
+            + np.einsum("...lm,libm->...ib", np.abs(us), self._abs_m)
             + np.abs(self.offset)
         )
-        res_lo, res_hi = matvec_bounds(self.residual, prior_lo, prior_hi)
+        res_lo, res_hi = matvec_bounds(self._residual_rows, prior_lo, prior_hi)
+        shape = (*res_lo.shape[:-1], *self.radius.shape)
         pad = self._gamma * mag + self.radius
-        return inflate(est - pad + res_lo, est + pad + res_hi)
+        lower = np.max(est - pad + res_lo.reshape(shape), axis=-1)
+        upper = np.min(est + pad + res_hi.reshape(shape), axis=-1)
+        return inflate(lower, upper)
+
+    def _predict(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """One-step interval prediction of the own box (Φ box + Γu + noise box), inflated for rounding."""
+        model = self._model
+        lo, hi = matvec_bounds(model.Phi, lower, upper)
+        drive = u @ model.Gamma.T + model.noise_center
+        return inflate(lo + drive - model.noise_radius, hi + drive + model.noise_radius)
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: the fallback's initial state and empty buffers.
@@ -274,19 +345,20 @@ class FiniteMemoryObserver(Observer):
         big_n = self.window
         ys = (old["ys"] + [yk])[-big_n:]
         us = (old["us"] + [uk])[-big_n:]
-        priors = (old["priors"] + [(inner.lower, inner.upper)])[-(big_n + 1) :]
         k = old["k"] + 1
-        lower, upper = inner.lower, inner.upper
-        if k >= big_n:
+        p_lo, p_hi = self._predict(state.lower, state.upper, uk)
+        lower, upper = np.maximum(inner.lower, p_lo), np.minimum(inner.upper, p_hi)
+        if k >= big_n:  # old["priors"][0] is the own box of x_{k-N}
             y_win = np.stack(ys, axis=-2)
             u_win = np.stack([np.broadcast_to(v, (*y_win.shape[:-2], self.m)) for v in us], axis=-2)
-            f_lo, f_hi = self._fir(y_win, u_win, *priors[0])
+            f_lo, f_hi = self._fir(y_win, u_win, *old["priors"][0])
             lower, upper = np.maximum(lower, f_lo), np.minimum(upper, f_hi)
+        priors = (old["priors"] + [(lower, upper)])[-big_n:]
         internal = {"fallback": inner, "k": k, "ys": ys, "us": us, "priors": priors}
         return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record, vectorised over time (sliding windows) and Monte Carlo runs.
+        """Bounds over a whole record, vectorised over Monte Carlo runs (and over the bank).
 
         Parameters
         ----------
@@ -309,15 +381,20 @@ class FiniteMemoryObserver(Observer):
                 raise DataError(f"t: expected uniform spacing h = {self.h:g} (the design's sampling period)")
         base = self.fallback.run(times, ys, us)
         lower, upper = base.lower.copy(), base.upper.copy()
-        big_n, steps = self.window, times.size
-        if steps > big_n:
-            y_win = np.moveaxis(np.lib.stride_tricks.sliding_window_view(ys[..., :-1, :], big_n, axis=-2), -1, -2)
-            u_win = np.moveaxis(np.lib.stride_tricks.sliding_window_view(us[..., :-1, :], big_n, axis=-2), -1, -2)
-            f_lo, f_hi = self._fir(
-                y_win, u_win, base.lower[..., : steps - big_n, :], base.upper[..., : steps - big_n, :]
-            )
-            lower[..., big_n:, :] = np.maximum(lower[..., big_n:, :], f_lo)
-            upper[..., big_n:, :] = np.minimum(upper[..., big_n:, :], f_hi)
+        big_n = self.window
+        for k in range(1, times.size):  # rows k - 1 and k - N are final
+            p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
+            lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
+            upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
+            if k >= big_n:
+                f_lo, f_hi = self._fir(
+                    ys[..., k - big_n : k, :],
+                    us[..., k - big_n : k, :],
+                    lower[..., k - big_n, :],
+                    upper[..., k - big_n, :],
+                )
+                lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
+                upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
         return Estimate(times, lower, upper, meta=self.meta())
 
     def meta(self) -> dict[str, Any]:
@@ -326,16 +403,85 @@ class FiniteMemoryObserver(Observer):
         Returns
         -------
         dict
-            ``method``, ``window``, ``radius`` (evaluated, rounded up), ``residual`` (max ``|R|``),
+            ``method``, ``window``, ``bank`` (filters per component), ``radius`` (evaluated, rounded
+            up) and ``residual`` (max ``|R|``) of each component's first filter (the worst-case one),
             ``lp_seconds``, ``fallback`` (its meta).
         """
         fallback_meta = self.fallback.meta() if hasattr(self.fallback, "meta") else {}
         return {
             "method": "FiniteMemoryObserver",
             "window": self.window,
-            "radius": self.radius.tolist(),
-            "residual": float(np.max(np.abs(self.residual))),
+            "bank": int(self.K.shape[1]),
+            "radius": self.radius[:, 0].tolist(),
+            "residual": float(np.max(np.abs(self.residual[:, 0]))),
             "lp_seconds": self.lp_seconds,
             "fallback": fallback_meta,
             "transient_s": float(self.window * self.h),
         }
+
+
+def _worst_case_gains(system: LTISystem, bounds: Bounds, window: int, h: float | None) -> tuple[FloatArray, float]:
+    """Weights ``(n, N, p)`` minimising each component's evaluated worst-case error with ``R = 0``, and the LP time."""
+    if system.dA is not None:
+        raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
+    if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
+        raise DataError(f"window: expected a positive integer, got {window!r}")
+    full = bounds.for_system(system)
+    model = sampled_model(system, full, h)
+    assert full.v is not None
+    n, p, nv, big_n = system.n, system.p, system.F.shape[1], int(window)
+    phi, c_mat, f_mat = model.Phi, system.C, system.F
+    r = model.noise_radius
+    vr = 0.5 * (full.v[1] - full.v[0])
+    powers = [np.eye(n)]
+    for _ in range(big_n):
+        powers.append(phi @ powers[-1])
+    # H maps k (N p, block j = k_j) to the D row (N n, block l): -(sum_{j>l} (C Φ^{j-1-l})^T k_j).
+    hmat = np.zeros((big_n * n, big_n * p))
+    for l_ in range(big_n):
+        for j in range(l_ + 1, big_n):
+            hmat[l_ * n : (l_ + 1) * n, j * p : (j + 1) * p] = (c_mat @ powers[j - 1 - l_]).T
+    vmat = np.kron(np.eye(big_n), f_mat.T)  # (N nv, N p)
+    gmat = np.hstack([(c_mat @ powers[j]).T for j in range(big_n)])  # (n, N p)
+    nk, ne, nvv = big_n * p, big_n * n, big_n * nv
+    cost = np.concatenate([np.zeros(nk), np.tile(r, big_n), np.tile(vr, big_n)])
+    eye_e, eye_v = np.eye(ne), np.eye(nvv)
+    # t_e >= |phi_i - H k|,  t_v >= |V k|
+    a_ub = np.block(
+        [
+            [-hmat, -eye_e, np.zeros((ne, nvv))],
+            [hmat, -eye_e, np.zeros((ne, nvv))],
+            [vmat, np.zeros((nvv, ne)), -eye_v],
+            [-vmat, np.zeros((nvv, ne)), -eye_v],
+        ]
+    )
+    a_eq = np.hstack([gmat, np.zeros((n, ne + nvv))])
+    var_bounds = [(None, None)] * nk + [(0, None)] * (ne + nvv)
+    gains = np.zeros((n, big_n, p))
+    start = time.perf_counter()
+    for i in range(n):
+        phi_row = np.concatenate([powers[big_n - 1 - l_][i] for l_ in range(big_n)])
+        b_ub = np.concatenate([-phi_row, phi_row, np.zeros(2 * nvv)])
+        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=powers[big_n][i], bounds=var_bounds, method="highs")
+        if res.status != 0:
+            raise DesignError(
+                f"FiniteMemoryObserver.design: LP for component {i} failed ({res.message}); "
+                f"is the pair (Φ, C) observable within window={big_n}?"
+            )
+        gains[i] = res.x[:nk].reshape(big_n, p)
+    elapsed = time.perf_counter() - start
+    return gains, elapsed
+
+
+def _training_noise(system: LTISystem, bounds: Bounds, steps: int, record: int, rng: np.random.Generator) -> Any:
+    """Extreme training noise: i.i.d. vertices (even records) or the simulator's switching bang-bang."""
+    if record % 2:
+        return "extreme"
+    assert bounds.w is not None and bounds.v is not None
+    fine = 10 if system.continuous else 1  # simulate's default substeps
+    w_bits = rng.integers(0, 2, size=(steps * fine, system.nw))
+    v_bits = rng.integers(0, 2, size=(steps, system.nv))
+    return {
+        "w": bounds.w[0] + (bounds.w[1] - bounds.w[0]) * w_bits,
+        "v": bounds.v[0] + (bounds.v[1] - bounds.v[0]) * v_bits,
+    }
