@@ -145,3 +145,22 @@ def test_step_refuses_bad_samples_with_the_argument_name():
         observer.step(state, [0.0, 1.0])
     with pytest.raises(DataError, match="u: expected finite values with last dimension 0"):
         observer.step(state, [0.0], [1.0])
+
+
+def test_first_box_is_never_wider_than_the_prior_in_any_coordinates():
+    # In coordinates T ≠ I the z-box of the prior maps back wider than the prior itself.
+    A = np.array([[0.5, 0.4], [-0.3, 0.6]])
+    system = LTISystem(A, [[1.0, 0.0]], dt=1.0)
+    bounds = Bounds(([-1, -2], [1, 2]), w=([-0.1, -0.1], [0.1, 0.1]), v=([-0.05], [0.05]))
+    T = np.array([[1.0, 1.0], [-1.0, 1.0]])
+    obs = IntervalObserver(system, bounds, [[0.5], [0.0]], T=T, method="framer")
+    t = np.arange(5.0)
+    sim = simulate(system, bounds, t, seed=0, runs=2)
+    est = obs.run(t, sim.y)
+    np.testing.assert_array_equal(est.lower[:, 0], np.broadcast_to([-1.0, -2.0], (2, 2)))
+    np.testing.assert_array_equal(est.upper[:, 0], np.broadcast_to([1.0, 2.0], (2, 2)))
+    state = obs.init()
+    np.testing.assert_array_equal(state.lower, [-1.0, -2.0])
+    assert est.enclosure(sim.x).max_violation == 0.0
+    state = obs.step(state, sim.y[0, 0])
+    np.testing.assert_allclose(state.upper, est.upper[0, 1], rtol=0, atol=1e-12)

@@ -254,7 +254,8 @@ class IntervalObserver(Observer):
                 k=0, rho_queue=np.repeat(z_r[None, :], self.horizon, axis=0), d_history=np.zeros((self.horizon, self.n))
             )
         lower, upper = self._x_box(z_c, z_r)
-        return ObserverState(lower, upper, internal=internal)
+        # In coordinates T ≠ I the z-box maps back wider than the prior: report their intersection.
+        return ObserverState(np.maximum(lower, lo), np.minimum(upper, hi), internal=internal)
 
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
         """Propagate the box from ``t_k`` to ``t_{k+1}`` with ``y_k`` and ``u_k``.
@@ -318,6 +319,7 @@ class IntervalObserver(Observer):
             z_c = self._center_recursion(state.internal["z_center"], drive)
             z_r = np.broadcast_to(self._default_radius(times.size), z_c.shape)
         lower, upper = self._x_box(z_c, z_r)
+        lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
         return Estimate(times, lower, upper, meta=self.meta())
 
     # -- internals -------------------------------------------------------------------------------
