@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -213,3 +217,35 @@ def test_certificates_one_per_condensed_solve_and_refused_otherwise() -> None:
         assert np.all(duals[:, -1] == 0.0)  # predicted hull: y_k is not a row
     with pytest.raises(AssumptionError, match="condensed"):
         HullEstimator(system, bounds, horizon=None).certificates(t, sim.y, u)
+
+
+def test_falls_back_to_the_default_threads_when_highs_runs_with_more() -> None:
+    # HiGHS keeps one scheduler per process: started by another highspy user with 2 threads, it refuses
+    # our one-thread runs; the estimator must then switch to the default and give the same bounds.
+    script = """
+import json
+import numpy as np
+from highspy import _core
+other = _core._Highs()
+other.setOptionValue("output_flag", False)
+other.setOptionValue("threads", 2)
+other.run()
+from intervalobs import Bounds, LTISystem, simulate
+from intervalobs.observers.hull import HullEstimator
+A = np.array([[0.8, 0.1, 0.3], [0.0, 0.8, 0.2], [0.01, 0.0, 0.8]])
+system = LTISystem(A, [[0.0, 0.0, 1.0]], B=[[0.0], [0.0], [1.0]], E=0.08 * np.eye(3), F=[[0.2]], dt=1.0)
+bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(3), np.ones(3)), v=(-np.ones(1), np.ones(1)))
+t = np.arange(20, dtype=float)
+sim = simulate(system, bounds, t, noise="extreme", seed=1)
+est = HullEstimator(system, bounds, horizon=6)
+out = est.run(t, sim.y)
+print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1], "lower": out.lower.tolist()}))
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    result = json.loads(done.stdout)
+    assert result["threads"] == 0
+    system, bounds = small_discrete()
+    t = np.arange(20, dtype=float)
+    sim = simulate(system, bounds, t, noise="extreme", seed=1)
+    here = HullEstimator(system, bounds, horizon=6).run(t, sim.y)
+    np.testing.assert_allclose(np.array(result["lower"]), here.lower, rtol=0, atol=1e-12)
