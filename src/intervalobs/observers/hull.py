@@ -451,7 +451,8 @@ class _CondensedLP:
             _core.HighsBasisStatus.kZero,
         ]
         self._bases: dict[int, tuple[NDArray[np.int8], NDArray[np.bool_], int]] = {}
-        """Per key: status codes of the last optimal basis of each objective, which are valid, window start."""
+        """Per key: status codes of the last bases of the ``2n`` objectives, which are optimal (the others
+        are not restored), and the window start."""
         self.length, self.start, self.full = H, 0, True
         self.solves = 0
         self.iterations = 0
@@ -556,10 +557,6 @@ class _CondensedLP:
         for r, basic in enumerate(basics):
             if basic is not None:
                 codes[r, np.where(basic >= 0, basic, self.ncol - 1 - basic)] = _BASIC
-        old = self._bases.get(key)
-        if old is not None:  # an objective not solved to optimality keeps its older basis
-            codes[~kept] = old[0][~kept]
-            kept |= old[1]
         self._bases[key] = (codes, kept, self.start)
 
     def _start_bases(self, key: int, costs: FloatArray) -> list[Any]:
