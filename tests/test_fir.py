@@ -160,13 +160,15 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
     lp = hull._condensed
     assert lp is not None
     k = 20
+    lp.dual_log = []
+    drive, pad = lp.set_window(k, sim.y, u, boxes.lower[k - 6], boxes.upper[k - 6], False)
+    minima = dict(zip([1.0, -1.0], lp.certified_bounds(99), strict=True))  # min of sign * (x_k - q)
+    duals = {(i, sign): dual for i, sign, dual in lp.dual_log}
     for i in range(3):
         for sign in (1.0, -1.0):
-            lp.dual_log = []
-            drive, pad = lp.set_window(k, sim.y, u, boxes.lower[k - 6], boxes.upper[k - 6], False)
-            certified = sign * (lp.certified_min(i, sign, 99) + drive[i] - pad[i])
+            certified = sign * (minima[sign][i] + drive[i] - pad[i])
             gains = np.zeros((3, 1, 6, 1))
-            gains[:, 0] = sign * lp.dual_log[0][2].reshape(7, 1)[:6]
+            gains[:, 0] = sign * duals[(i, sign)].reshape(7, 1)[:6]
             obs = FiniteMemoryObserver(system, bounds, gains, wide_fallback(system, bounds))
             lo, hi = obs._fir(sim.y[k - 6 : k], u[:6], boxes.lower[k - 6], boxes.upper[k - 6])
             assert abs((lo[i] if sign > 0 else hi[i]) - certified) < 1e-9
