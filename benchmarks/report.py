@@ -43,7 +43,7 @@ def _table(rows: list[dict[str, Any]]) -> list[str]:
 
 
 def _span(values: list[float]) -> str:
-    return f"{min(values):.2f}–{max(values):.2f}"
+    return f"{min(values):.3f}–{max(values):.3f}"
 
 
 def _docstring(path: Path) -> str:

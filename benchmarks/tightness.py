@@ -32,6 +32,7 @@ FIR_WINDOWS = (20, 40, 80)
 PAPER_GAIN = np.array([[0.3], [0.2], [0.8]])
 BANK_WINDOW, BANK_RECORDS = 10, 6
 BANK = f"FIR bank learned from hull certificates (N={BANK_WINDOW}, {BANK_RECORDS} records) ∩ tube"
+BANK_FILTERED = f"FIR bank learned from filtered hull certificates (uses y_k; N={BANK_WINDOW}, {BANK_RECORDS} records)"
 
 
 def nominal_68() -> tuple[LTISystem, Bounds, np.ndarray, np.ndarray]:
@@ -76,6 +77,9 @@ def ratios() -> dict[str, Any]:
     for N, obs in fir.items():
         observers[f"FIR N={N} (worst-case-optimal LP weights) ∩ tube"] = obs
     observers[BANK] = FiniteMemoryObserver.learn(system, bounds, window=BANK_WINDOW, records=BANK_RECORDS)
+    observers[BANK_FILTERED] = FiniteMemoryObserver.learn(
+        system, bounds, window=BANK_WINDOW, records=BANK_RECORDS, filtered=True
+    )
     sup = np.zeros(system.n)
     out: dict[str, Any] = {}
     for kind in ("extreme", "iid-vertex"):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import random_system
 from intervalobs import AssumptionError, Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import IntervalObserverError
 from intervalobs.observers.fir import FiniteMemoryObserver
@@ -182,3 +183,49 @@ def test_learn_errors() -> None:
     unstable = LTISystem(1.2 * A68, system.C, B=system.B, E=system.E, F=system.F, dt=1.0)
     with pytest.raises(AssumptionError, match="condensed"):
         FiniteMemoryObserver.learn(unstable, bounds, window=4, records=1, steps=10)
+
+
+@pytest.mark.parametrize("seed,n,p,continuous", [(1, 3, 1, False), (2, 4, 2, True), (3, 5, 1, False), (4, 2, 1, True)])
+def test_learned_bank_encloses_random_systems_under_extreme_noise(seed: int, n: int, p: int, continuous: bool) -> None:
+    stable, bounds = random_system(seed, n, p, continuous, uncertain=True)
+    system = LTISystem(stable.A, stable.C, dt=stable.dt)  # point model
+    h = 0.1 if continuous else None
+    bank = FiniteMemoryObserver.learn(system, bounds, window=6, records=2, steps=40, h=h)
+    alone = FiniteMemoryObserver(system, bounds, bank.K[:, :1], bank.fallback, h=h)
+    t = np.arange(50) * (h or 1.0)
+    for noise_seed in (0, 1, 2):
+        sim = simulate(system, bounds, t, noise="extreme", seed=noise_seed, runs=8)
+        est = bank.run(t, sim.y)
+        report = est.enclosure(sim.x)
+        assert report.max_violation == 0.0 and report.fraction == 1.0
+        single = alone.run(t, sim.y)
+        assert np.all(est.lower >= single.lower - 1e-12) and np.all(est.upper <= single.upper + 1e-12)
+        fallback = bank.fallback.run(t, sim.y)
+        assert est.width()[:, 10:].mean() < 0.95 * fallback.width()[:, 10:].mean()  # the bank is active
+
+
+def test_filtered_bank_uses_the_current_measurement() -> None:
+    system, bounds = small_discrete()
+    predicted = FiniteMemoryObserver.learn(system, bounds, window=8, records=2, steps=80)
+    filtered = FiniteMemoryObserver.learn(system, bounds, window=8, records=2, steps=80, filtered=True)
+    assert filtered.K.shape[2] == 9 and filtered.meta()["filtered"] and filtered.window == 8
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    widths = []
+    for seed in (7, 8):
+        sim = vertex_record(system, bounds, t, u, seed, 4)
+        est = filtered.run(t, sim.y, u)
+        report = est.enclosure(sim.x)
+        assert report.max_violation == 0.0 and report.fraction == 1.0
+        exact = HullEstimator(system, bounds, horizon=None, filtered=True).run(t, sim.y[0], u)
+        assert np.all(est.lower[0] <= exact.lower + 1e-7) and np.all(est.upper[0] >= exact.upper - 1e-7)
+        widths.append([est.width()[:, 20:].mean(), predicted.run(t, sim.y, u).width()[:, 20:].mean()])
+        # step: the state's box is the prediction, internal["filtered_*"] is row k
+        state = filtered.init()
+        for k in range(STEPS - 1):
+            state = filtered.step(state, sim.y[:, k], np.broadcast_to(u[k], (4, 1)))
+            assert np.max(np.abs(state.internal["filtered_lower"] - est.lower[:, k])) < 1e-12
+            assert np.max(np.abs(state.internal["filtered_upper"] - est.upper[:, k])) < 1e-12
+    assert all(f < 0.95 * p for f, p in widths)  # y_k is informative on (68): x₃ = y − 0.2υ
+    with pytest.raises(IntervalObserverError, match="at least 2 weights"):
+        FiniteMemoryObserver(system, bounds, np.zeros((3, 1, 1, 1)), predicted.fallback, filtered=True)

@@ -66,10 +66,11 @@ _EPS = float(np.finfo(float).eps)
 class FiniteMemoryObserver(Observer):
     r"""A bank of linear FIR estimators of window ``N``, intersected with each other and a sound fallback.
 
-    Row ``k`` of :meth:`run` is the box of :math:`x_k` given :math:`y_{k-N} \dots y_{k-1}`, the
-    observer's own box of :math:`x_{k-N}` and the fallback's box; see the module docstring for the
-    equations. Build it with :meth:`design` (one worst-case-optimal filter per component) or
-    :meth:`learn` (plus the hull's certificates: data-dependent width).
+    Row ``k`` of :meth:`run` is the box of :math:`x_k` given :math:`y_{k-N} \dots y_{k-1}` (and
+    :math:`y_k` when ``filtered``), the observer's own box of :math:`x_{k-N}`, the prediction of its
+    previous box and the fallback's box; see the module docstring for the equations. Build it with
+    :meth:`design` (one worst-case-optimal filter per component) or :meth:`learn` (plus the hull's
+    certificates: data-dependent width).
 
     Parameters
     ----------
@@ -77,7 +78,7 @@ class FiniteMemoryObserver(Observer):
         Point model (no ``dA``); continuous time needs ``h``.
     bounds : Bounds
         Initial-state and noise boxes.
-    gains : numpy.ndarray, shape (n, B, N, p) or (n, N, p)
+    gains : numpy.ndarray, shape (n, B, N, p) or (n, N, p); ``N + 1`` instead of ``N`` when filtered
         Weights ``K_j`` of ``B`` filters per component (row ``i``: component ``i``), oldest
         measurement first; a 3-D array is a bank of one.
     fallback : Observer
@@ -86,6 +87,9 @@ class FiniteMemoryObserver(Observer):
         Sampling period of a continuous-time system.
     lp_seconds : float
         Design-time LP cost (recorded in :meth:`meta`).
+    filtered : bool
+        Whether the last weight multiplies :math:`y_k` (rows of :meth:`run` are then filtered boxes,
+        like :class:`~intervalobs.observers.hull.HullEstimator` with ``filtered=True``).
     """
 
     def __init__(
@@ -96,6 +100,7 @@ class FiniteMemoryObserver(Observer):
         fallback: Observer,
         h: float | None = None,
         lp_seconds: float = 0.0,
+        filtered: bool = False,
     ) -> None:
         if system.dA is not None:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
@@ -111,7 +116,10 @@ class FiniteMemoryObserver(Observer):
             raise DataError(f"gains: expected shape (n={self.n}, B, N, p={self.p}), got {np.shape(gains)}")
         if not np.all(np.isfinite(k)):
             raise DataError("gains: expected finite values")
-        self.window = int(k.shape[2])
+        self.filtered = bool(filtered)
+        self.window = int(k.shape[2]) - self.filtered
+        if self.window < 1:
+            raise DataError(f"gains: a filtered bank needs at least 2 weights (N + 1), got {k.shape[2]}")
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
@@ -165,6 +173,7 @@ class FiniteMemoryObserver(Observer):
         size: int | None = None,
         h: float | None = None,
         fallback: Observer | None = None,
+        filtered: bool = False,
     ) -> FiniteMemoryObserver:
         """A bank: the worst-case filter plus the exact window hull's certificates on simulated records.
 
@@ -195,6 +204,9 @@ class FiniteMemoryObserver(Observer):
             Sampling period of a continuous-time system.
         fallback : Observer, optional
             Sound observer to intersect with; default :meth:`IntervalObserver.design`.
+        filtered : bool
+            Learn filters that also use :math:`y_k` (certificates of the filtered window hull; the
+            worst-case filter gets a zero weight on :math:`y_k`): rows are filtered boxes.
 
         Returns
         -------
@@ -209,7 +221,9 @@ class FiniteMemoryObserver(Observer):
                 raise DataError(f"{name}: expected an integer >= {least}, got {value!r}")
         full = bounds.for_system(system)
         worst, elapsed = _worst_case_gains(system, full, window, h)
-        hull = HullEstimator(system, full, horizon=int(window), h=h)
+        if filtered:  # a predicted filter is a filtered one with no weight on y_k
+            worst = np.concatenate([worst, np.zeros_like(worst[:, :1])], axis=1)
+        hull = HullEstimator(system, full, horizon=int(window), h=h, filtered=filtered)
         if not hull.condensed_allowed():
             raise AssumptionError(
                 "FiniteMemoryObserver.learn: needs the condensed window LP of HullEstimator "
@@ -225,7 +239,7 @@ class FiniteMemoryObserver(Observer):
             noise = _training_noise(system, full, t.size, record, rng)
             sim = simulate(system, full, t, noise=noise, seed=int(rng.integers(2**31)))
             for (i, sign), duals in hull.certificates(t, sim.y).items():
-                bank[i].append(sign * duals[:, : int(window), :])
+                bank[i].append(sign * duals[:, : int(window) + bool(filtered), :])
         elapsed += time.perf_counter() - start
         members = []
         for i, found in enumerate(bank):
@@ -240,11 +254,12 @@ class FiniteMemoryObserver(Observer):
         )
         if fallback is None:
             fallback = IntervalObserver.design(system, full, h=h)
-        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed)
+        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered)
 
     def _setup(self, phi: FloatArray, gamma: FloatArray, c: FloatArray, r: FloatArray) -> None:
         """Evaluate ``D_l``, ``R``, ``M_l``, ``d`` and the sound radius of every filter from its weights."""
         n, big_n, k = self.n, self.window, self.K
+        weights = k.shape[2]  # N, or N + 1 when y_k is used
         c_mat, f_mat = self.system.C, self.system.F
         assert self.bounds.v is not None
         v_c = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
@@ -257,16 +272,16 @@ class FiniteMemoryObserver(Observer):
         d_mats = np.empty((big_n, n, k.shape[1], n))
         for l_ in range(big_n):
             d_mats[l_] = powers[big_n - 1 - l_][:, None, :]
-            d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: big_n - 1 - l_])
+            d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: weights - 1 - l_])
         kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
-        self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:big_n])
+        self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
         self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
         self.offset = np.einsum("libq,q->ib", d_mats, c) - np.einsum("ibjq,q->ib", kf, v_c)
         radius = np.einsum("libq,q->ib", np.abs(d_mats), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
         # Upward rounding of the evaluation itself (sums of N (n + nv) nonnegative terms).
-        terms = big_n * (n + f_mat.shape[1])
+        terms = weights * (n + f_mat.shape[1])
         self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
-        self._gamma = (2 * big_n + 8) * _EPS
+        self._gamma = (2 * weights + 8) * _EPS
         self._abs_k, self._abs_m = np.abs(k), np.abs(self.M)
         self._residual_rows = self.residual.reshape(-1, n)
 
@@ -295,6 +310,17 @@ class FiniteMemoryObserver(Observer):
         drive = u @ model.Gamma.T + model.noise_center
         return inflate(lo + drive - model.noise_radius, hi + drive + model.noise_radius)
 
+    def _measured(
+        self, ys: list[FloatArray], us: list[FloatArray], rows: list[Any], lower: FloatArray, upper: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Intersect a box with the bank's, once ``rows`` holds the ``N`` rows before it (``rows[0]``: ``x_{k-N}``)."""
+        if len(rows) < self.window:
+            return lower, upper
+        y_win = np.stack(ys[-(self.window + self.filtered) :], axis=-2)
+        u_win = np.stack([np.broadcast_to(v, (*y_win.shape[:-2], self.m)) for v in us[-self.window :]], axis=-2)
+        f_lo, f_hi = self._fir(y_win, u_win, *rows[0])
+        return np.maximum(lower, f_lo), np.minimum(upper, f_hi)
+
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: the fallback's initial state and empty buffers.
 
@@ -312,17 +338,13 @@ class FiniteMemoryObserver(Observer):
         if x0_lower is not None and x0_upper is not None:
             as_box("x0", (x0_lower, x0_upper), self.n)
         inner = self.fallback.init(x0_lower, x0_upper)
-        internal: dict[str, Any] = {
-            "fallback": inner,
-            "k": 0,
-            "ys": [],
-            "us": [],
-            "priors": [(inner.lower, inner.upper)],
-        }
+        # "rows": the last N rows before the next one to compute (row 1, or row 0 when filtered).
+        rows = [] if self.filtered else [(inner.lower, inner.upper)]
+        internal: dict[str, Any] = {"fallback": inner, "k": 0, "ys": [], "us": [], "rows": rows}
         return ObserverState(inner.lower, inner.upper, internal=internal)
 
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume ``y_k``, ``u_k``; return the box of ``x_{k+1}`` (fallback ∩ filter once ``k+1 >= N``).
+        """Consume ``y_k``, ``u_k``; return the box of ``x_{k+1}`` (fallback ∩ prediction ∩ bank).
 
         Parameters
         ----------
@@ -336,25 +358,28 @@ class FiniteMemoryObserver(Observer):
         Returns
         -------
         ObserverState
+            When ``filtered``, ``internal["filtered_lower"/"filtered_upper"]`` hold the box of ``x_k``
+            given ``y_k`` too (row ``k`` of :meth:`run`); the state's box is then the prediction.
         """
         yk, uk = self._sample(y, u)
         if uk.shape[-1:] != (self.m,) or not np.all(np.isfinite(uk)):
             raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
         old = state.internal
+        keep = self.window + 1
+        ys, us, rows = (old["ys"] + [yk])[-keep:], (old["us"] + [uk])[-keep:], old["rows"]
+        lower, upper = state.lower, state.upper
+        internal: dict[str, Any] = {}
+        if self.filtered:  # row k uses y_k and the inputs up to u_{k-1}
+            lower, upper = self._measured(ys, us[:-1], rows, lower, upper)
+            rows = [*rows, (lower, upper)][-self.window :]
+            internal.update(filtered_lower=lower, filtered_upper=upper)
         inner = self.fallback.step(old["fallback"], yk, uk)
-        big_n = self.window
-        ys = (old["ys"] + [yk])[-big_n:]
-        us = (old["us"] + [uk])[-big_n:]
-        k = old["k"] + 1
-        p_lo, p_hi = self._predict(state.lower, state.upper, uk)
+        p_lo, p_hi = self._predict(lower, upper, uk)
         lower, upper = np.maximum(inner.lower, p_lo), np.minimum(inner.upper, p_hi)
-        if k >= big_n:  # old["priors"][0] is the own box of x_{k-N}
-            y_win = np.stack(ys, axis=-2)
-            u_win = np.stack([np.broadcast_to(v, (*y_win.shape[:-2], self.m)) for v in us], axis=-2)
-            f_lo, f_hi = self._fir(y_win, u_win, *old["priors"][0])
-            lower, upper = np.maximum(lower, f_lo), np.minimum(upper, f_hi)
-        priors = (old["priors"] + [(lower, upper)])[-big_n:]
-        internal = {"fallback": inner, "k": k, "ys": ys, "us": us, "priors": priors}
+        if not self.filtered:  # row k + 1 uses y_{k+1-N} … y_k
+            lower, upper = self._measured(ys, us, rows, lower, upper)
+            rows = [*rows, (lower, upper)][-self.window :]
+        internal.update(fallback=inner, k=old["k"] + 1, ys=ys, us=us, rows=rows)
         return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
@@ -372,7 +397,7 @@ class FiniteMemoryObserver(Observer):
         Returns
         -------
         Estimate
-            Row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_{k-1}``.
+            Row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_{k-1}`` (``… y_k`` when ``filtered``).
         """
         times, ys, us = self._signals(t, y, u)
         if self.system.continuous and times.size > 1:
@@ -381,14 +406,15 @@ class FiniteMemoryObserver(Observer):
                 raise DataError(f"t: expected uniform spacing h = {self.h:g} (the design's sampling period)")
         base = self.fallback.run(times, ys, us)
         lower, upper = base.lower.copy(), base.upper.copy()
-        big_n = self.window
-        for k in range(1, times.size):  # rows k - 1 and k - N are final
-            p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
-            lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
-            upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
+        big_n, last = self.window, int(self.filtered)
+        for k in range(times.size):  # rows k - 1 and k - N are final
+            if k >= 1:
+                p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
+                lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
+                upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
             if k >= big_n:
                 f_lo, f_hi = self._fir(
-                    ys[..., k - big_n : k, :],
+                    ys[..., k - big_n : k + last, :],
                     us[..., k - big_n : k, :],
                     lower[..., k - big_n, :],
                     upper[..., k - big_n, :],
@@ -403,7 +429,7 @@ class FiniteMemoryObserver(Observer):
         Returns
         -------
         dict
-            ``method``, ``window``, ``bank`` (filters per component), ``radius`` (evaluated, rounded
+            ``method``, ``window``, ``filtered``, ``bank`` (filters per component), ``radius`` (evaluated, rounded
             up) and ``residual`` (max ``|R|``) of each component's first filter (the worst-case one),
             ``lp_seconds``, ``fallback`` (its meta).
         """
@@ -411,6 +437,7 @@ class FiniteMemoryObserver(Observer):
         return {
             "method": "FiniteMemoryObserver",
             "window": self.window,
+            "filtered": self.filtered,
             "bank": int(self.K.shape[1]),
             "radius": self.radius[:, 0].tolist(),
             "residual": float(np.max(np.abs(self.residual[:, 0]))),

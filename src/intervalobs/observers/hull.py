@@ -975,7 +975,8 @@ class HullEstimator(Observer):
         -------
         dict
             ``(i, sign)`` → array of shape ``(count, H + 1, p)``: the row multipliers of every solve of
-            the condensed window LP (steps ``k > H``) for that bound.
+            the condensed window LP (steps ``k > H``) for that bound; with ``filtered`` both the
+            predicted and the filtered solves (row ``H``, the weight of :math:`y_k`, is zero in the first).
         """
         if self._condensed is None:
             raise AssumptionError(
