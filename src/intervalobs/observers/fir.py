@@ -43,6 +43,7 @@ import time
 from typing import Any
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
@@ -282,26 +283,42 @@ class FiniteMemoryObserver(Observer):
         terms = weights * (n + f_mat.shape[1])
         self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
         self._gamma = (2 * weights + 8) * _EPS
-        self._abs_k, self._abs_m = np.abs(k), np.abs(self.M)
-        self._residual_rows = self.residual.reshape(-1, n)
+        # One matrix for a whole window z = (y_s … y_{s+W-1}, u_s … u_{s+N-1}) → every filter's estimate.
+        rows = n * k.shape[1]
+        window_weights = [k.reshape(rows, -1), np.moveaxis(self.M, 0, 2).reshape(rows, -1)]
+        self._window_weights = np.concatenate(window_weights, axis=1).T  # (W p + N m, n B)
+        self._abs_window_weights = np.abs(self._window_weights)
+        self._offset_flat, self._radius_flat = self.offset.ravel(), self.radius.ravel()
+        self._residual_t = self.residual.reshape(rows, n).T  # (n, n B)
+        self._abs_residual_t = np.abs(self._residual_t)
+        self._gamma_residual = (2 * n + 8) * _EPS
 
     # -- online ----------------------------------------------------------------------------------
+    def _window_terms(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Every filter's estimate and pad (radius + rounding of the sums), shape (..., n B), from windows
+        ``ys`` (..., W, p) and ``us`` (..., N, m): two matrix products for any number of windows."""
+        z = np.concatenate([ys.reshape(*ys.shape[:-2], -1), us.reshape(*us.shape[:-2], -1)], axis=-1)
+        est = z @ self._window_weights + self._offset_flat
+        pad = self._gamma * (np.abs(z) @ self._abs_window_weights + np.abs(self._offset_flat)) + self._radius_flat
+        return est, pad
+
+    def _bank_box(
+        self, est: FloatArray, pad: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Intersection of the filters' boxes, given their window terms and a box of ``x_s`` (for ``R x_s``)."""
+        centre, half = 0.5 * (prior_lo + prior_hi), 0.5 * (prior_hi - prior_lo)
+        # R x_s ∈ R c ± |R| r, the radius padded for the rounding of c, r and of both products.
+        spread = (1 + self._gamma_residual) * half + self._gamma_residual * np.abs(centre)
+        res_c, res_r = centre @ self._residual_t, spread @ self._abs_residual_t
+        low, high = est - pad + res_c - res_r, est + pad + res_c + res_r  # broadcast over runs
+        shape = (*low.shape[:-1], self.n, -1)
+        return inflate(np.max(low.reshape(shape), axis=-1), np.min(high.reshape(shape), axis=-1))
+
     def _fir(
         self, ys: FloatArray, us: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Box of ``x_k`` from a window ``ys`` (..., N, p), ``us`` (..., N, m) and a box of ``x_s``."""
-        est = np.einsum("...jp,ibjp->...ib", ys, self.K) + np.einsum("...lm,libm->...ib", us, self.M) + self.offset
-        mag = (
-            np.einsum("...jp,ibjp->...ib", np.abs(ys), self._abs_k)
-            + np.einsum("...lm,libm->...ib", np.abs(us), self._abs_m)
-            + np.abs(self.offset)
-        )
-        res_lo, res_hi = matvec_bounds(self._residual_rows, prior_lo, prior_hi)
-        shape = (*res_lo.shape[:-1], *self.radius.shape)
-        pad = self._gamma * mag + self.radius
-        lower = np.max(est - pad + res_lo.reshape(shape), axis=-1)
-        upper = np.min(est + pad + res_hi.reshape(shape), axis=-1)
-        return inflate(lower, upper)
+        """Box of ``x_k`` from a window ``ys`` (..., W, p), ``us`` (..., N, m) and a box of ``x_s``."""
+        return self._bank_box(*self._window_terms(ys, us), prior_lo, prior_hi)
 
     def _predict(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """One-step interval prediction of the own box (Φ box + Γu + noise box), inflated for rounding."""
@@ -406,21 +423,27 @@ class FiniteMemoryObserver(Observer):
                 raise DataError(f"t: expected uniform spacing h = {self.h:g} (the design's sampling period)")
         base = self.fallback.run(times, ys, us)
         lower, upper = base.lower.copy(), base.upper.copy()
-        big_n, last = self.window, int(self.filtered)
-        for k in range(times.size):  # rows k - 1 and k - N are final
-            if k >= 1:
-                p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
-                lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
-                upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
-            if k >= big_n:
-                f_lo, f_hi = self._fir(
-                    ys[..., k - big_n : k + last, :],
-                    us[..., k - big_n : k, :],
-                    lower[..., k - big_n, :],
-                    upper[..., k - big_n, :],
-                )
-                lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
-                upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
+        big_n, last, steps = self.window, int(self.filtered), times.size
+        # Window terms of a block of rows at a time (two matrix products), at most ~2e6 numbers each.
+        block = max(1, 2_000_000 // (max(1, ys[..., 0, 0].size) * self._offset_flat.size))
+        first = stop = big_n
+        est = pad = np.empty(0)
+        for k in range(1, steps):  # rows k - 1 and k - N are final
+            p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
+            lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
+            upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
+            if k < big_n:
+                continue
+            if k >= stop:
+                first, stop = k, min(k + block, steps)
+                y_win = sliding_window_view(ys[..., first - big_n : stop - 1 + last, :], big_n + last, axis=-2)
+                u_win = sliding_window_view(us[..., first - big_n : stop - 1, :], big_n, axis=-2)
+                est, pad = self._window_terms(np.swapaxes(y_win, -1, -2), np.swapaxes(u_win, -1, -2))
+            f_lo, f_hi = self._bank_box(
+                est[..., k - first, :], pad[..., k - first, :], lower[..., k - big_n, :], upper[..., k - big_n, :]
+            )
+            lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
+            upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
         return Estimate(times, lower, upper, meta=self.meta())
 
     def meta(self) -> dict[str, Any]:
