@@ -94,12 +94,17 @@ def _solve(solver: Any) -> None:
 
     HiGHS keeps one task scheduler per process: when another user of highspy has started it with more
     threads, a run with ``threads = 1`` returns an error, and the default (0: use that scheduler) works.
+    An error can also come from a restored basis (an alien one that HiGHS completed badly): the run is
+    first repeated from scratch, and only an error that persists is taken for the thread refusal.
     """
     from highspy import _core
 
-    if solver.run() == _core.HighsStatus.kError and solver.getOptionValue("threads")[1] == 1:
-        solver.setOptionValue("threads", 0)
-        solver.run()
+    error = _core.HighsStatus.kError
+    if solver.run() == error and solver.getOptionValue("threads")[1] == 1:
+        solver.clearSolver()
+        if solver.run() == error:
+            solver.setOptionValue("threads", 0)
+            solver.run()
 
 
 def _single_support(matrix: FloatArray) -> bool:
@@ -384,7 +389,9 @@ class _CondensedLP:
     it is shifted by one step before being restored, so that each variable and row keeps the status it
     had *at the same time* (the active measurements are a property of the data, not of the lag); the
     noise entering at the new end starts at the bound its cost prefers. This needs 4–5× fewer simplex
-    pivots than restoring the basis column by column.
+    pivots than restoring the basis column by column. A shifted basis with the wrong number of basic
+    variables is passed as alien (HiGHS completes it); when no optimum is reached from a restored
+    basis, the LP is solved again from scratch.
 
     **Rounding.** The powers :math:`\Phi^j` (repeated products), the drive (one product of the
     stacked inputs with the precomputed powers) and the magnitudes are computed in floating point: each
@@ -529,6 +536,9 @@ class _CondensedLP:
             if starts[r] is not None:
                 self.solver.setBasis(starts[r])
             _solve(self.solver)
+            if starts[r] is not None and self.solver.getModelStatus() != self._optimal:
+                self.solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
+                _solve(self.solver)
             self.solves += 1
             self.iterations += int(self.solver.getInfoValue("simplex_iteration_count")[1])
             solution = self.solver.getSolution()
