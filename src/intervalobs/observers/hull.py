@@ -360,11 +360,13 @@ def _dual_bounds(lp: Any, costs: FloatArray, duals: FloatArray) -> FloatArray:
     reduced = costs - (lp.matrix_t @ y.T).T
     col_bound = np.where(reduced > 0, lp.col_lo, lp.col_hi)
     active = reduced != 0
-    unbounded = np.any(active & ~np.isfinite(col_bound), axis=1)
-    col_terms = np.multiply(reduced, col_bound, out=np.zeros(reduced.shape), where=active & ~unbounded[:, None])
-    magnitude = np.maximum(np.abs(lp.col_lo), np.abs(lp.col_hi))
-    magnitude[~np.isfinite(magnitude)] = 0.0
     reduced_error = (lp.col_nnz + 2) * _EPS * (np.abs(costs) + (lp.abs_matrix_t @ np.abs(y).T).T)
+    magnitude = np.maximum(np.abs(lp.col_lo), np.abs(lp.col_hi))
+    infinite = ~np.isfinite(magnitude)
+    # An infinite column is harmless only if its reduced cost is zero even after rounding.
+    unbounded = np.any(active & ~np.isfinite(col_bound), axis=1) | np.any((reduced_error > 0) & infinite, axis=1)
+    col_terms = np.multiply(reduced, col_bound, out=np.zeros(reduced.shape), where=active & ~unbounded[:, None])
+    magnitude[infinite] = 0.0
     terms = row_terms.shape[1] + col_terms.shape[1] + 2
     error = reduced_error @ magnitude + terms * _EPS * (np.abs(row_terms).sum(axis=1) + np.abs(col_terms).sum(axis=1))
     value = row_terms.sum(axis=1) + col_terms.sum(axis=1) - 2.0 * error
