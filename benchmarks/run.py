@@ -44,6 +44,7 @@ def plain_loop(observer: IntervalObserver, y: np.ndarray) -> tuple[np.ndarray, n
         lower[k], upper[k] = x_c - x_r, x_c + x_r
         z_c = M @ z_c + TL @ y[k] + offset
         z_r = abs_M @ z_r + radius_in
+    lower[0], upper[0] = np.maximum(lower[0], lo0), np.minimum(upper[0], hi0)  # the first box is the prior's
     return lower, upper
 
 
