@@ -28,10 +28,16 @@ intersects their boxes. Two ways to fill it:
   bank, and is sound everywhere else: the width follows the data without any LP online.
 
 **Soundness.** The LP optimum is never used as a bound. The radius is *evaluated* in NumPy from the
-computed weights and rounded upward; the LP's residual :math:`R` (about 1e-10, not exactly zero) is
-bounded with the observer's own box of :math:`x_s` (sound by induction); the rounding of the online
-sums is bounded by :math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with
-:math:`\gamma = (2N + 8)\,\varepsilon`; the result is intersected with a sound fallback observer
+weights and rounded upward; the residual :math:`R` (about 1e-10 for the worst-case filter, not
+exactly zero; large for certificates) is bounded with the observer's own box of :math:`x_s` (sound by
+induction). :math:`D_l`, :math:`R`, :math:`M_l` and :math:`d` are themselves computed in floating
+point (powers of :math:`\Phi` by repeated products, then sums over the window): their error is at
+most :math:`\gamma_D` times the same expressions with every matrix replaced by its absolute value,
+:math:`\gamma_D = 4(N + 1)(n + p + 2)\,\varepsilon` (first-order bound of ``N n + n + W p`` roundings
+per entry, with a factor 4 to spare), and that error times the magnitudes of the noise box, the
+input and the prior box is added to the radius. The rounding of the online sums is bounded by
+:math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with :math:`\gamma = (2W + 8)\,\varepsilon`
+(``W`` weights); the result is intersected with a sound fallback observer
 (default: the tube :class:`IntervalObserver`), which alone gives the first ``N`` boxes, and with
 the one-step interval prediction of the previous own box (:math:`\Phi` box, plus the input and the
 noise box, inflated). An intersection of sound boxes is sound.
@@ -265,20 +271,30 @@ class FiniteMemoryObserver(Observer):
         assert self.bounds.v is not None
         v_c = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
         v_r = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
-        powers = [np.eye(n)]
+        powers, abs_powers = [np.eye(n)], [np.eye(n)]
         for _ in range(big_n):
             powers.append(phi @ powers[-1])
+            abs_powers.append(np.abs(phi) @ abs_powers[-1])
         c_powers = np.stack([c_mat @ power for power in powers])  # (N + 1, p, n)
+        abs_c_powers = np.stack([np.abs(c_mat) @ power for power in abs_powers])
+        abs_k = np.abs(k)
+        # Magnitudes bounding the rounding of D_l and R (module docstring): γ_D times these.
+        d_mag = np.empty((big_n, n, k.shape[1], n))
         # D_l = Φ^{N-1-l} - Σ_{j>l} K_j C Φ^{j-1-l}, per component i and filter b: shape (N, n, B, n).
         d_mats = np.empty((big_n, n, k.shape[1], n))
         for l_ in range(big_n):
             d_mats[l_] = powers[big_n - 1 - l_][:, None, :]
             d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: weights - 1 - l_])
+            d_mag[l_] = abs_powers[big_n - 1 - l_][:, None, :]
+            d_mag[l_] += np.einsum("ibjp,jpq->ibq", abs_k[:, :, l_ + 1 :, :], abs_c_powers[: weights - 1 - l_])
         kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
         self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
+        r_mag = abs_powers[big_n][:, None, :] + np.einsum("ibjp,jpq->ibq", abs_k, abs_c_powers[:weights])
+        gamma_d = 4.0 * (big_n + 1) * (n + self.p + 2) * _EPS
         self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
         self.offset = np.einsum("libq,q->ib", d_mats, c) - np.einsum("ibjq,q->ib", kf, v_c)
         radius = np.einsum("libq,q->ib", np.abs(d_mats), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
+        radius += gamma_d * np.einsum("libq,q->ib", d_mag, r + np.abs(c))  # rounding of D_l (noise, d)
         # Upward rounding of the evaluation itself (sums of N (n + nv) nonnegative terms).
         terms = weights * (n + f_mat.shape[1])
         self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
@@ -287,29 +303,33 @@ class FiniteMemoryObserver(Observer):
         rows = n * k.shape[1]
         window_weights = [k.reshape(rows, -1), np.moveaxis(self.M, 0, 2).reshape(rows, -1)]
         self._window_weights = np.concatenate(window_weights, axis=1).T  # (W p + N m, n B)
-        self._abs_window_weights = np.abs(self._window_weights)
-        self._offset_flat, self._radius_flat = self.offset.ravel(), self.radius.ravel()
+        # pad = |z| @ pad_weights + pad_const: rounding of the sums, and of M_l = D_l Γ times |u|.
+        input_mag = gamma_d * np.moveaxis(np.einsum("libq,qm->libm", d_mag, np.abs(gamma)), 0, 2).reshape(rows, -1)
+        self._pad_weights = self._gamma * np.abs(self._window_weights)
+        self._pad_weights[k.shape[2] * self.p :] += input_mag.T
+        self._pad_const = (self._gamma * np.abs(self.offset) + self.radius).ravel()
+        self._offset_flat = self.offset.ravel()
+        # R x_s ∈ R c ± (|R| r + rounding of c, r, both products and of R itself): half @ A + |c| @ B.
+        gamma_res = (2 * n + 8) * _EPS
+        abs_residual, residual_mag = np.abs(self.residual).reshape(rows, n).T, gamma_d * r_mag.reshape(rows, n).T
         self._residual_t = self.residual.reshape(rows, n).T  # (n, n B)
-        self._abs_residual_t = np.abs(self._residual_t)
-        self._gamma_residual = (2 * n + 8) * _EPS
+        self._half_weights = (1 + gamma_res) * abs_residual + residual_mag
+        self._centre_weights = gamma_res * abs_residual + residual_mag
 
     # -- online ----------------------------------------------------------------------------------
     def _window_terms(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Every filter's estimate and pad (radius + rounding of the sums), shape (..., n B), from windows
         ``ys`` (..., W, p) and ``us`` (..., N, m): two matrix products for any number of windows."""
         z = np.concatenate([ys.reshape(*ys.shape[:-2], -1), us.reshape(*us.shape[:-2], -1)], axis=-1)
-        est = z @ self._window_weights + self._offset_flat
-        pad = self._gamma * (np.abs(z) @ self._abs_window_weights + np.abs(self._offset_flat)) + self._radius_flat
-        return est, pad
+        return z @ self._window_weights + self._offset_flat, np.abs(z) @ self._pad_weights + self._pad_const
 
     def _bank_box(
         self, est: FloatArray, pad: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """Intersection of the filters' boxes, given their window terms and a box of ``x_s`` (for ``R x_s``)."""
         centre, half = 0.5 * (prior_lo + prior_hi), 0.5 * (prior_hi - prior_lo)
-        # R x_s ∈ R c ± |R| r, the radius padded for the rounding of c, r and of both products.
-        spread = (1 + self._gamma_residual) * half + self._gamma_residual * np.abs(centre)
-        res_c, res_r = centre @ self._residual_t, spread @ self._abs_residual_t
+        res_c = centre @ self._residual_t
+        res_r = half @ self._half_weights + np.abs(centre) @ self._centre_weights
         low, high = est - pad + res_c - res_r, est + pad + res_c + res_r  # broadcast over runs
         shape = (*low.shape[:-1], self.n, -1)
         return inflate(np.max(low.reshape(shape), axis=-1), np.min(high.reshape(shape), axis=-1))
