@@ -19,6 +19,7 @@ REPEATS = 3
 CASES: list[tuple[str, int | None, dict[str, Any]]] = [
     ("H=10", 10, {}),
     ("H=40", 40, {}),
+    ("H=40 workers=2", 40, {"workers": 2}),
     ("H=50", 50, {}),
     ("full", None, {}),
     ("H=40 window_boxes", 40, {"window_boxes": True}),

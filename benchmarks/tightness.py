@@ -167,6 +167,11 @@ def lp_costs() -> dict[str, Any]:
     start = time.perf_counter()
     est.run(t, sim.y, u)
     costs["hull H=40 window_boxes ms/step"] = round(1e3 * (time.perf_counter() - start) / t.size, 3)
+    for kind in ("extreme", "iid-vertex"):  # workers=2: two HiGHS instances in parallel threads (2 cores here)
+        noisy = record(system, bounds, t, u, kind, 0)
+        for workers in (1, 2):
+            hull = HullEstimator(system, bounds, horizon=40, workers=workers)
+            costs[f"hull H=40 workers={workers} ms/step ({kind})"] = _timed(hull, t, noisy, u)
     costs["hull H=40 filtered ms/step"] = _timed(HullEstimator(system, bounds, horizon=40, filtered=True), t, sim, u)
     costs["scipy linprog, H=40, 6 LPs ms/step"] = round(_linprog_window(system, sim.y, u, 40), 3)
     plain = IntervalObserver(system, bounds, PAPER_GAIN, method="framer")

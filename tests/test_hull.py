@@ -11,6 +11,7 @@ import pytest
 
 from conftest import random_system
 from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import IntervalObserverError
 from intervalobs.observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 
 STEPS = 40
@@ -295,3 +296,19 @@ def test_duality_bound_refuses_free_columns_it_cannot_bound() -> None:
     assert -1e-12 < bounded <= 0.0  # min of x0 + 0.1 x1 on the row is exactly 0
     # With x1 free, a rounding error of its reduced cost times an infinite bound is not a number.
     assert _dual_bounds(lp(np.inf), costs, duals)[0] == -np.inf
+
+
+def test_parallel_workers_give_the_same_certified_box() -> None:
+    system, bounds = small_discrete()
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=5)
+    one = HullEstimator(system, bounds, horizon=8).run(t, sim.y, u)
+    two = HullEstimator(system, bounds, horizon=8, workers=2)
+    both = two.run(t, sim.y, u)
+    assert two.meta()["workers"] == 2 and both.enclosure(sim.x).max_violation == 0.0
+    np.testing.assert_allclose(both.lower, one.lower, atol=SLACK)
+    np.testing.assert_allclose(both.upper, one.upper, atol=SLACK)
+    for bad in (0, 1.5, True):
+        with pytest.raises(IntervalObserverError, match="workers"):
+            HullEstimator(system, bounds, horizon=8, workers=bad)  # type: ignore[arg-type]

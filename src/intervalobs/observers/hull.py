@@ -45,6 +45,7 @@ estimator**, never an estimate (it is not an :class:`~intervalobs.estimate.Estim
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -377,6 +378,10 @@ _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
 """Basis status codes of the bases kept by :class:`_CondensedLP` (``_ZERO``: a nonbasic free row)."""
 
 
+_Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArray, int]
+"""One objective's outcome: optimal?, basic variables, primal values (columns, rows), row duals, pivots."""
+
+
 class _CondensedLP:
     r"""The window LP with the states eliminated (box noise and box measurement noise only).
 
@@ -403,7 +408,7 @@ class _CondensedLP:
     product of at most ``H n`` nonzero terms, and of the magnitudes' own evaluation (nonnegative terms).
     """
 
-    def __init__(self, model: _LinearModel, horizon: int) -> None:
+    def __init__(self, model: _LinearModel, horizon: int, workers: int = 1) -> None:
         from highspy import _core
 
         self.model, self.horizon = model, horizon
@@ -435,9 +440,10 @@ class _CondensedLP:
         self.abs_matrix_t = np.abs(self.matrix_t)
         self.col_nnz = self.nrow  # dense products: every row counts in the rounding of a reduced cost
         self.e_max = np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
-        self.solver = _new_highs()
-        # Devex pricing: after each restored basis, steepest-edge weights would be recomputed (3-7 % slower).
-        self.solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
+        # One HiGHS instance per worker; objective r is always solved by instance r % workers.
+        self.solvers = [_new_highs() for _ in range(workers)]
+        self.solver = self.solvers[0]
+        self._pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 else None
         self.inf = float(self.solver.getInfinity())
         sparse_matrix = sparse.csc_matrix(matrix)
         lp = _core.HighsLp()
@@ -451,7 +457,10 @@ class _CondensedLP:
         lp.a_matrix_.start_ = sparse_matrix.indptr.astype(np.int32)
         lp.a_matrix_.index_ = sparse_matrix.indices.astype(np.int32)
         lp.a_matrix_.value_ = sparse_matrix.data.astype(float)
-        self.solver.passModel(lp)
+        for solver in self.solvers:
+            # Devex pricing: after each restored basis, steepest-edge weights would be recomputed (3-7 % slower).
+            solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
+            solver.passModel(lp)
         self._cols = np.arange(self.ncol, dtype=np.int32)
         self._rows = np.arange(self.nrow, dtype=np.int32)
         self._optimal = _core.HighsModelStatus.kOptimal
@@ -505,8 +514,9 @@ class _CondensedLP:
         self.col_lo = np.concatenate([prior_lo, np.tile(m.w_lo, L), idle])
         self.col_hi = np.concatenate([prior_hi, np.tile(m.w_hi, L), idle])
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()
-        self.solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
-        self.solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
+        for solver in self.solvers:
+            solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
+            solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
         return q[L], x_error[L] + rounding[L]
 
     def certified_bounds(self, key: int) -> tuple[FloatArray, FloatArray]:
@@ -533,22 +543,17 @@ class _CondensedLP:
         values = np.zeros((2 * n, ncol + nrow))
         basics: list[NDArray[np.int64] | None] = [None] * (2 * n)
         usable = np.ones(2 * n, dtype=bool)
-        for r in range(2 * n):
-            self.solver.changeColsCost(ncol, self._cols, costs[r])
-            if starts[r] is not None:
-                self.solver.setBasis(starts[r])
-            _solve(self.solver)
-            if starts[r] is not None and self.solver.getModelStatus() != self._optimal:
-                self.solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
-                _solve(self.solver)
+        workers = len(self.solvers)
+
+        def solve_group(w: int) -> list[tuple[int, _Solved]]:
+            return [(r, self._solve_one(self.solvers[w], costs[r], starts[r])) for r in range(w, 2 * n, workers)]
+
+        groups = [solve_group(0)] if self._pool is None else list(self._pool.map(solve_group, range(workers)))
+        for r, (optimal, basic, value, dual, iterations) in sorted((i for g in groups for i in g), key=lambda i: i[0]):
             self.solves += 1
-            self.iterations += int(self.solver.getInfoValue("simplex_iteration_count")[1])
-            solution = self.solver.getSolution()
-            if self.solver.getModelStatus() == self._optimal:
-                basics[r] = np.asarray(self.solver.getBasicVariables()[1])
-                values[r, :ncol] = solution.col_value
-                values[r, ncol:] = solution.row_value
-            dual = np.asarray(solution.row_dual, dtype=float)
+            self.iterations += iterations
+            if optimal:
+                basics[r], values[r] = basic, value
             if dual.shape != (nrow,) or not np.all(np.isfinite(dual)):
                 usable[r] = False
                 continue
@@ -558,6 +563,22 @@ class _CondensedLP:
         self._keep_bases(key, values, basics)
         bounds = np.where(usable, _dual_bounds(self, costs, duals), -np.inf)
         return bounds[0::2], bounds[1::2]
+
+    def _solve_one(self, solver: Any, cost: FloatArray, start: Any) -> _Solved:
+        """Solve one objective on one HiGHS instance from a kept basis (or from scratch)."""
+        solver.changeColsCost(self.ncol, self._cols, cost)
+        if start is not None:
+            solver.setBasis(start)
+        _solve(solver)
+        if start is not None and solver.getModelStatus() != self._optimal:
+            solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
+            _solve(solver)
+        iterations = int(solver.getInfoValue("simplex_iteration_count")[1])
+        solution = solver.getSolution()
+        optimal = solver.getModelStatus() == self._optimal
+        basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
+        value = np.concatenate([solution.col_value, solution.row_value]) if optimal else None
+        return optimal, basic, value, np.asarray(solution.row_dual, dtype=float), iterations
 
     def _keep_bases(self, key: int, values: FloatArray, basics: list[NDArray[np.int64] | None]) -> None:
         """Store the optimal bases as status codes (the nonbasic side read from the solution values)."""
@@ -709,6 +730,10 @@ class HullEstimator(Observer):
         Also bound every state inside the window by its earlier box (not only the first one, the
         prior). Slightly tighter for short windows (0.4 % at H = 10 on seed 002's (68), nothing at
         H = 40) but about 1.5× more simplex pivots; redundant for the full history.
+    workers : int
+        HiGHS instances solving the ``2n`` LPs of a step in parallel threads (condensed LP only; HiGHS
+        releases the GIL while it solves). The bounds do not depend on it; use at most the number of
+        free cores.
 
     Notes
     -----
@@ -731,6 +756,7 @@ class HullEstimator(Observer):
         h: float | None = None,
         filtered: bool = False,
         window_boxes: bool = False,
+        workers: int = 1,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -748,13 +774,16 @@ class HullEstimator(Observer):
         self.horizon = None if horizon is None else int(horizon)
         self.filtered = bool(filtered)
         self.window_boxes = bool(window_boxes)
+        if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+            raise DataError(f"workers: expected a positive integer, got {workers!r}")
+        self.workers = int(workers)
         self.model = _outer_model(system, self.bounds, h)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, _Window] = {}
         self._condensed: _CondensedLP | None = None
         if self.condensed_allowed():
             assert self.horizon is not None
-            self._condensed = _CondensedLP(self.model, self.horizon)
+            self._condensed = _CondensedLP(self.model, self.horizon, self.workers)
         self.solves = 0
 
     def condensed_allowed(self) -> bool:
@@ -1028,6 +1057,7 @@ class HullEstimator(Observer):
             "horizon": "full" if self.horizon is None else self.horizon,
             "filtered": self.filtered,
             "window_boxes": self.window_boxes,
+            "workers": self.workers,
             "h": self.h,
             "transient_s": 0.0,
             "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
