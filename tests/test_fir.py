@@ -229,3 +229,22 @@ def test_filtered_bank_uses_the_current_measurement() -> None:
     assert all(f < 0.95 * p for f, p in widths)  # y_k is informative on (68): x₃ = y − 0.2υ
     with pytest.raises(IntervalObserverError, match="at least 2 weights"):
         FiniteMemoryObserver(system, bounds, np.zeros((3, 1, 1, 1)), predicted.fallback, filtered=True)
+
+
+def test_learned_bank_with_shared_noise_channels() -> None:
+    E = np.array([[0.08, 0.02], [0.0, 0.05], [0.03, 0.0]])  # each channel drives two states
+    system = LTISystem(A68, [[0.0, 0.0, 1.0]], B=[[0.0], [0.0], [1.0]], E=E, F=[[0.2]], dt=1.0)
+    bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(2), np.ones(2)), v=(-np.ones(1), np.ones(1)))
+    bank = FiniteMemoryObserver.learn(system, bounds, window=8, records=2, steps=80)
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    for seed in (0, 1, 2):
+        sim = simulate(system, bounds, t, u=u, noise="extreme", seed=seed)
+        est = bank.run(t, sim.y, u)
+        report = est.enclosure(sim.x)
+        assert report.max_violation == 0.0 and report.fraction == 1.0
+        exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y, u)
+        assert np.all(est.lower <= exact.lower + 1e-7) and np.all(est.upper >= exact.upper - 1e-7)
+        fallback = bank.fallback.run(t, sim.y, u)
+        assert est.width()[20:].mean() < 0.8 * fallback.width()[20:].mean()
+        assert est.width()[20:].mean() < 1.1 * exact.width()[20:].mean()

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from scipy.optimize import linprog
 
 from conftest import random_system
 from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
@@ -312,3 +313,42 @@ def test_parallel_workers_give_the_same_certified_box() -> None:
     for bad in (0, 1.5, True):
         with pytest.raises(IntervalObserverError, match="workers"):
             HullEstimator(system, bounds, horizon=8, workers=bad)  # type: ignore[arg-type]
+
+
+def test_condensed_window_with_a_shared_noise_channel_is_the_window_lp() -> None:
+    A = np.array([[0.8, 0.1, 0.3], [0.0, 0.8, 0.2], [0.01, 0.0, 0.8]])
+    E = np.array([[0.08, 0.02], [0.0, 0.05], [0.03, 0.0]])  # each channel drives two states
+    B, C = np.array([[0.0], [0.0], [1.0]]), np.array([[0.0, 0.0, 1.0]])
+    system = LTISystem(A, C, B=B, E=E, F=[[0.2]], dt=1.0)
+    bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(2), np.ones(2)), v=(-np.ones(1), np.ones(1)))
+    t = np.arange(STEPS, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=3)
+    hull = HullEstimator(system, bounds, horizon=6)
+    assert hull.condensed_allowed() and hull.model.G is not None
+    est = hull.run(t, sim.y, u)
+    assert est.enclosure(sim.x).max_violation == 0.0
+    # The sparse form also puts the propagated box of x_k inside the LP: never looser, nearly equal here.
+    sparse_form = HullEstimator(system, bounds, horizon=6)
+    sparse_form._condensed = None
+    other = sparse_form.run(t, sim.y, u)
+    assert np.all(est.lower <= other.lower + SLACK) and np.all(est.upper >= other.upper - SLACK)
+    assert np.mean(est.width()) < 1.01 * np.mean(other.width())
+    # At a full window the bound is the LP over (x_s, w_s … w_{k-1}) with the box of x_s as prior.
+    k, s = 20, 14
+    powers = [np.linalg.matrix_power(A, j) for j in range(7)]
+
+    def state(j: int) -> tuple[np.ndarray, np.ndarray]:  # x_{s+j} = M z + q
+        M = np.hstack([powers[j]] + [powers[j - 1 - i] @ E for i in range(j)] + [np.zeros((3, 2 * (6 - j)))])
+        return M, sum((powers[j - 1 - i] @ B @ u[s + i] for i in range(j)), np.zeros(3))
+
+    rows = [(C @ state(j)[0])[0] for j in range(6)]
+    centres = np.array([sim.y[s + j, 0] - (C @ state(j)[1])[0] for j in range(6)])
+    a_ub, b_ub = np.vstack([rows, np.negative(rows)]), np.concatenate([centres + 0.2, 0.2 - centres])
+    box = list(zip(est.lower[s], est.upper[s], strict=True)) + [(-1.0, 1.0)] * 12
+    M, q = state(6)
+    for i in range(3):
+        low = linprog(M[i], A_ub=a_ub, b_ub=b_ub, bounds=box, method="highs").fun + q[i]
+        high = q[i] - linprog(-M[i], A_ub=a_ub, b_ub=b_ub, bounds=box, method="highs").fun
+        # At least as tight as this window LP (tighter only where the propagated box of x_{k-1} cuts).
+        assert est.lower[k, i] >= low - 1e-7 and est.upper[k, i] <= high + 1e-7

@@ -130,7 +130,13 @@ class FiniteMemoryObserver(Observer):
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
-        self._setup(model.Phi, model.Gamma, model.noise_center, model.noise_radius)
+        if system.continuous:  # the sound sampled model's noise is a box
+            noise = (np.eye(self.n), model.noise_center, model.noise_radius)
+        else:  # x+ = Ax + Bu + Ew exactly: keep the channels (tighter than the box of Ew when E mixes)
+            assert self.bounds.w is not None
+            w_lo, w_hi = self.bounds.w
+            noise = (system.E, 0.5 * (w_lo + w_hi), 0.5 * (w_hi - w_lo))
+        self._setup(model.Phi, model.Gamma, *noise)
         self._model = model
 
     # -- design ----------------------------------------------------------------------------------
@@ -234,7 +240,7 @@ class FiniteMemoryObserver(Observer):
         if not hull.condensed_allowed():
             raise AssumptionError(
                 "FiniteMemoryObserver.learn: needs the condensed window LP of HullEstimator "
-                "(box process and measurement noise, stable sampled matrix)"
+                "(box measurement noise: F with one nonzero per column; stable sampled matrix)"
             )
         period = hull.h if system.continuous else float(system.dt or 1.0)
         t = np.arange(int(steps)) * period
@@ -263,7 +269,7 @@ class FiniteMemoryObserver(Observer):
             fallback = IntervalObserver.design(system, full, h=h)
         return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered)
 
-    def _setup(self, phi: FloatArray, gamma: FloatArray, c: FloatArray, r: FloatArray) -> None:
+    def _setup(self, phi: FloatArray, gamma: FloatArray, noise_map: FloatArray, c: FloatArray, r: FloatArray) -> None:
         """Evaluate ``D_l``, ``R``, ``M_l``, ``d`` and the sound radius of every filter from its weights."""
         n, big_n, k = self.n, self.window, self.K
         weights = k.shape[2]  # N, or N + 1 when y_k is used
@@ -290,11 +296,13 @@ class FiniteMemoryObserver(Observer):
         kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
         self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
         r_mag = abs_powers[big_n][:, None, :] + np.einsum("ibjp,jpq->ibq", abs_k, abs_c_powers[:weights])
-        gamma_d = 4.0 * (big_n + 1) * (n + self.p + 2) * _EPS
+        gamma_d = 4.0 * (big_n + 1) * (n + self.p + noise_map.shape[1] + 2) * _EPS
         self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
-        self.offset = np.einsum("libq,q->ib", d_mats, c) - np.einsum("ibjq,q->ib", kf, v_c)
-        radius = np.einsum("libq,q->ib", np.abs(d_mats), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
-        radius += gamma_d * np.einsum("libq,q->ib", d_mag, r + np.abs(c))  # rounding of D_l (noise, d)
+        d_noise = np.einsum("libq,qw->libw", d_mats, noise_map)  # D_l G: the process noise enters as G w_l
+        self.offset = np.einsum("libw,w->ib", d_noise, c) - np.einsum("ibjq,q->ib", kf, v_c)
+        radius = np.einsum("libw,w->ib", np.abs(d_noise), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
+        noise_mag = np.einsum("libq,qw->libw", d_mag, np.abs(noise_map))
+        radius += gamma_d * np.einsum("libw,w->ib", noise_mag, r + np.abs(c))  # rounding of D_l G (noise, d)
         # Upward rounding of the evaluation itself (sums of N (n + nv) nonnegative terms).
         terms = weights * (n + f_mat.shape[1])
         self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius

@@ -383,13 +383,14 @@ _Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArra
 
 
 class _CondensedLP:
-    r"""The window LP with the states eliminated (box noise and box measurement noise only).
+    r"""The window LP with the states eliminated (box measurement noise only).
 
-    Variables :math:`z = (x_s, e_0, \dots, e_{H-1})` with :math:`x_s` the first state of the window
-    (in its prior box) and :math:`e_i = x_{i+1} - \Phi x_i - \Gamma u_i` in the noise box, so
-    :math:`x_j = \Phi^j x_s + \sum_{i<j}\Phi^{j-1-i}e_i + q_j` with the known drive :math:`q_j`. Only the
+    Variables :math:`z = (x_s, w_0, \dots, w_{H-1})` with :math:`x_s` the first state of the window
+    (in its prior box) and :math:`e_i = x_{i+1} - \Phi x_i - \Gamma u_i = G w_i`, :math:`w_i` in its box
+    (:math:`G = I` and :math:`w_i = e_i` when the process noise is a box), so
+    :math:`x_j = \Phi^j x_s + \sum_{i<j}\Phi^{j-1-i}G w_i + q_j` with the known drive :math:`q_j`. Only the
     ``H + 1`` measurement rows remain (instead of ``(H + 1)(n + p)`` rows). A window shorter than ``H``
-    (the first steps, ``s = 0``) uses the same LP with ``e_L … e_{H-1}`` fixed at 0 and the rows after
+    (the first steps, ``s = 0``) uses the same LP with ``w_L … w_{H-1}`` fixed at 0 and the rows after
     its last state free.
 
     **Warm start.** The optimal basis of each objective is kept. When the window has moved by one step,
@@ -421,25 +422,30 @@ class _CondensedLP:
         for _ in range(H):
             powers.append(model.Phi @ powers[-1])
             abs_powers.append(abs_phi @ abs_powers[-1])
-        self.ncol = n + H * n
+        noise_map = np.eye(n) if model.G is None else model.G  # e_i = G w_i (a box of e_i when G is None)
+        self.nw = nw = noise_map.shape[1]
+        self.ncol = n + H * nw
         self.nrow = (H + 1) * p
-        # Block row j: x_j (without the drive) as a function of z; |Φ|^j in place of Φ^j for magnitudes.
+        # Block row j: x_j (without the drive) as a function of z. The drive and the magnitudes use the
+        # same recursion in state space, (x_s, e_0 … e_{H-1}), with |Φ|^j in place of Φ^j for magnitudes.
         state_map = np.zeros((H + 1, n, self.ncol))
-        abs_map = np.zeros((H + 1, n, self.ncol))
+        step_map = np.zeros((H + 1, n, n + H * n))
+        abs_map = np.zeros((H + 1, n, n + H * n))
         for j in range(H + 1):
-            state_map[j, :, :n], abs_map[j, :, :n] = powers[j], abs_powers[j]
+            state_map[j, :, :n], step_map[j, :, :n], abs_map[j, :, :n] = powers[j], powers[j], abs_powers[j]
             for i in range(j):
-                state_map[j, :, n + i * n : n + (i + 1) * n] = powers[j - 1 - i]
+                state_map[j, :, n + i * nw : n + (i + 1) * nw] = powers[j - 1 - i] @ noise_map
+                step_map[j, :, n + i * n : n + (i + 1) * n] = powers[j - 1 - i]
                 abs_map[j, :, n + i * n : n + (i + 1) * n] = abs_powers[j - 1 - i]
         self.objectives = state_map
         """``objectives[L, i]``: the cost of ``(x_{s+L})_i`` for a window of ``L`` steps."""
-        self.transfer = state_map.reshape((H + 1) * n, self.ncol)[:, n:]
-        self.abs_map = abs_map.reshape((H + 1) * n, self.ncol)
+        self.transfer = step_map.reshape((H + 1) * n, n + H * n)[:, n:]
+        self.abs_map = abs_map.reshape((H + 1) * n, n + H * n)
         matrix = np.einsum("pn,jnc->jpc", model.C, state_map).reshape(self.nrow, self.ncol)
         self.matrix_t = np.ascontiguousarray(matrix.T)
         self.abs_matrix_t = np.abs(self.matrix_t)
         self.col_nnz = self.nrow  # dense products: every row counts in the rounding of a reduced cost
-        self.e_max = np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
+        self.e_max = np.abs(noise_map) @ np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
         # One HiGHS instance per worker; objective r is always solved by instance r % workers.
         self.solvers = [_new_highs() for _ in range(workers)]
         self.solver = self.solvers[0]
@@ -499,7 +505,7 @@ class _CondensedLP:
         growth[:L] = self.e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1])
         start_mag = np.maximum(np.abs(prior_lo), np.abs(prior_hi))
         mag = (self.abs_map @ np.concatenate([start_mag, growth.ravel()])).reshape(H + 1, n)
-        width = n + m.Gamma.shape[1] + 2  # terms per inner product of the powers and the drive
+        width = n + m.Gamma.shape[1] + self.nw + 2  # terms per inner product of the powers, G and the drive
         rounding = width * eps * mag
         x_error = 4.0 * (H + 1) * rounding  # |computed x_j - exact x_j| for every z in the box
         row_pad = (x_error + rounding) @ np.abs(m.C).T
@@ -510,7 +516,7 @@ class _CondensedLP:
         centre = q @ m.C.T
         lo = np.where(measured[:, None], yt - m.v_hi - centre - row_pad, -self.inf)
         hi = np.where(measured[:, None], yt - m.v_lo - centre + row_pad, self.inf)
-        idle = np.zeros((H - L) * n)
+        idle = np.zeros((H - L) * self.nw)
         self.col_lo = np.concatenate([prior_lo, np.tile(m.w_lo, L), idle])
         self.col_hi = np.concatenate([prior_hi, np.tile(m.w_hi, L), idle])
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()
@@ -600,11 +606,11 @@ class _CondensedLP:
         if kept is None:
             return [None] * costs.shape[0]
         codes, valid, start = kept
-        n, p, ncol = self.n, self.p, self.ncol
+        n, nw, p, ncol = self.n, self.nw, self.p, self.ncol
         if start + 1 == self.start:
-            entering = np.where(costs[:, ncol - n :] >= 0.0, _LOWER, _UPPER).astype(np.int8)
+            entering = np.where(costs[:, ncol - nw :] >= 0.0, _LOWER, _UPPER).astype(np.int8)
             fresh_rows = np.full((codes.shape[0], p), _BASIC, dtype=np.int8)
-            codes = np.hstack([codes[:, :n], codes[:, 2 * n : ncol], entering, codes[:, ncol + p :], fresh_rows])
+            codes = np.hstack([codes[:, :n], codes[:, n + nw : ncol], entering, codes[:, ncol + p :], fresh_rows])
         alien = np.count_nonzero(codes == _BASIC, axis=1) != self.nrow  # HiGHS completes an alien basis
         from highspy import _core
 
@@ -739,7 +745,7 @@ class HullEstimator(Observer):
     -----
     Each step solves ``2n`` LPs with HiGHS (dual simplex, warm-started per objective from the previous
     step's basis; the model is built once per window length and only bounds and costs change). With a
-    finite horizon, a stable (ρ(Φ) ≤ 1) model with box noises uses the condensed LP at every step
+    finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the condensed LP at every step
     (states eliminated, :class:`_CondensedLP`; the first ``H`` steps as shorter windows from ``x_0``):
     the same set with ``H + 1`` rows, and bases restored aligned by time: on seed 002's (68) with
     ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead of 16 and 63
@@ -787,7 +793,7 @@ class HullEstimator(Observer):
         self.solves = 0
 
     def condensed_allowed(self) -> bool:
-        """Whether the condensed LP is used (box noises, finite horizon, prior-only boxes, stable Φ).
+        """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ).
 
         Returns
         -------
@@ -795,7 +801,6 @@ class HullEstimator(Observer):
         """
         return (
             self.horizon is not None
-            and self.model.G is None
             and self.model.F is None
             and not self.window_boxes
             and bool(np.max(np.abs(np.linalg.eigvals(self.model.Phi))) <= 1.0)
@@ -1023,7 +1028,7 @@ class HullEstimator(Observer):
         """
         if self._condensed is None:
             raise AssumptionError(
-                "certificates: needs the condensed window LP (finite horizon, box noises, stable Φ, "
+                "certificates: needs the condensed window LP (finite horizon, box measurement noise, stable Φ, "
                 "window_boxes=False); see condensed_allowed()"
             )
         _, ys, us = self._signals(t, y, u)
