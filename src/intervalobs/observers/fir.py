@@ -1,23 +1,26 @@
 r"""Finite-memory (FIR) estimators: linear filters chosen by LP at design time, evaluated soundly online.
 
-For a point model :math:`x_{k+1} = \Phi x_k + \Gamma u_k + c + \tilde\eta_k`,
-:math:`|\tilde\eta_k| \le r` (the sound sampled model of
-:mod:`intervalobs.design.discretization`; for seed 002's (68) :math:`\Phi = A`, :math:`r = |E|\bar w`),
-and :math:`y_k = C x_k + F v_k`, write :math:`s = k - N`. Then :math:`x_k` and the window's
+For a point model :math:`x_{k+1} = \Phi x_k + \Gamma u_k + G\,\eta_k`, :math:`\eta_k` in a box of
+centre :math:`c` and radius :math:`r` (discrete time: :math:`G = E` and the box of :math:`w`, so noise
+channels that drive several states keep their structure; continuous time: :math:`G = I` and the box
+of the sound sampled model of :mod:`intervalobs.design.discretization`), and
+:math:`y_k = C x_k + F v_k`, write :math:`s = k - N`. Then :math:`x_k` and the window's
 measurements :math:`y_{s+j}`, :math:`j = 0 \dots N-1`, are affine in :math:`x_s`, the noises and the
 known inputs. The estimate of every component is a fixed linear combination of the :math:`N` last
 measurements plus a known input term,
 
 .. math:: \hat x_k = \sum_{j<N} K_j y_{s+j} + \sum_{l<N} M_l u_{s+l} + d,
 
-with error :math:`x_k - \hat x_k = R x_s + \sum_l D_l \tilde\eta_{s+l} - \sum_j K_j F \tilde v_{s+j}`,
+with error :math:`x_k - \hat x_k = R x_s + \sum_l D_l G \tilde\eta_{s+l} - \sum_j K_j F \tilde v_{s+j}`
+(tildes: deviations from the box centres),
 :math:`D_l = \Phi^{N-1-l} - \sum_{j>l} K_j C \Phi^{j-1-l}`, :math:`R = \Phi^N - \sum_j K_j C\Phi^j`.
 *Any* weights give a sound box, :math:`\hat x_k + R\,[\underline x_s, \overline x_s] \pm \text{radius}`,
 with a sound box of :math:`x_s`; the observer holds a **bank** of weight sets per component and
-intersects their boxes. Two ways to fill it:
+intersects their boxes. With ``filtered=True`` the weights also multiply :math:`y_k` (``W = N + 1``
+weights instead of ``W = N``; :math:`j` runs to :math:`N`). Two ways to fill it:
 
 - :meth:`FiniteMemoryObserver.design`: one set per component, by an LP minimising the worst-case error
-  ``sum |D| r + sum |K F| r_v`` subject to :math:`R = 0` (unbiased in the unknown :math:`x_s`). By
+  ``sum |D| |G| r + sum |K F| r_v`` subject to :math:`R = 0` (unbiased in the unknown :math:`x_s`). By
   Smolyak's theorem a linear algorithm attains the radius of information of the window, so for large
   ``N`` the radius approaches the half-width of the exact hull's *worst case*. Its width does not
   depend on the data, so it can never beat the largest hull width (docs/tightness.md).
@@ -33,7 +36,7 @@ exactly zero; large for certificates) is bounded with the observer's own box of 
 induction). :math:`D_l`, :math:`R`, :math:`M_l` and :math:`d` are themselves computed in floating
 point (powers of :math:`\Phi` by repeated products, then sums over the window): their error is at
 most :math:`\gamma_D` times the same expressions with every matrix replaced by its absolute value,
-:math:`\gamma_D = 4(N + 1)(n + p + 2)\,\varepsilon` (first-order bound of ``N n + n + W p`` roundings
+:math:`\gamma_D = 4(N + 1)(n + p + n_G + 2)\,\varepsilon` (first-order bound of ``N n + n + W p + n_G`` roundings
 per entry, with a factor 4 to spare), and that error times the magnitudes of the noise box, the
 input and the prior box is added to the radius. The rounding of the online sums is bounded by
 :math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with :math:`\gamma = (2W + 8)\,\varepsilon`
