@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DataError
 from ..estimate import Estimate
-from ..validation import as_signal, as_time
+from ..validation import as_box, as_signal, as_time
 
 __all__ = ["Observer", "ObserverState"]
 
@@ -132,3 +132,21 @@ class Observer(ABC):
             if us.ndim < ys.ndim:
                 us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
         return times, ys, us
+
+    def _prior_box(
+        self, default: tuple[FloatArray, FloatArray], x0_lower: ArrayLike | None, x0_upper: ArrayLike | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """The prior box of ``x(t_0)`` for :meth:`init`: the given one (validated) or ``default``."""
+        if x0_lower is None or x0_upper is None:
+            return default
+        return as_box("x0", (x0_lower, x0_upper), self.n)
+
+    def _check_spacing(self, times: FloatArray, h: float) -> None:
+        """A continuous-time record must be sampled every ``h`` (the design's sampling period)."""
+        if times.size > 1:
+            spacing = np.diff(times)
+            if np.max(np.abs(spacing - h)) > 1e-9 * h:
+                raise DataError(
+                    f"t: expected uniform spacing h = {h:g} (the design's sampling period), "
+                    f"got spacings in [{spacing.min():g}, {spacing.max():g}]"
+                )

@@ -448,10 +448,8 @@ class FiniteMemoryObserver(Observer):
             Row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_{k-1}`` (``… y_k`` when ``filtered``).
         """
         times, ys, us = self._signals(t, y, u)
-        if self.system.continuous and times.size > 1:
-            spacing = np.diff(times)
-            if np.max(np.abs(spacing - self.h)) > 1e-9 * self.h:
-                raise DataError(f"t: expected uniform spacing h = {self.h:g} (the design's sampling period)")
+        if self.system.continuous:
+            self._check_spacing(times, self.h)
         base = self.fallback.run(times, ys, us)
         lower, upper = base.lower.copy(), base.upper.copy()
         big_n, last, steps = self.window, int(self.filtered), times.size

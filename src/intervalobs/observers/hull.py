@@ -59,7 +59,7 @@ from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_signal, as_time, as_vector
+from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
 
 __all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
@@ -828,10 +828,7 @@ class HullEstimator(Observer):
         -------
         ObserverState
         """
-        if x0_lower is None or x0_upper is None:
-            lo, hi = self.bounds.x0
-        else:
-            lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         internal: dict[str, Any] = {
             "k": 0,
             "x0": (lo.copy(), hi.copy()),
@@ -959,15 +956,7 @@ class HullEstimator(Observer):
             col = lp.newest_column(i)
             lower[i] = max(lower[i], lp.certified_min(col, 1.0, key + i))
             upper[i] = min(upper[i], -lp.certified_min(col, -1.0, key + i))
-        self.solves += 2 * self.n
-        lower, upper = inflate(lower, upper)
-        bad = lower > upper  # only possible when the data contradict the model's bounds
-        if np.any(bad):
-            raise DataError(
-                f"y: the measurements are inconsistent with the model and its bounds at step {k} "
-                "(empty consistent set): check the noise bounds"
-            )
-        return lower, upper
+        return self._consistent(k, lower, upper)
 
     def _condensed_hull(
         self,
@@ -986,11 +975,11 @@ class HullEstimator(Observer):
         s = max(k - self.horizon, 0)
         prior = (np.asarray(box_lo[s]), np.asarray(box_hi[s])) if s < k else (last_lo, last_hi)
         drive, pad = lp.set_window(k, ys, us, prior[0], prior[1], use_current)
-        lower = last_lo.copy()
-        upper = last_hi.copy()
         low, high = lp.certified_bounds(int(use_current))
-        lower = np.maximum(lower, low + drive - pad)
-        upper = np.minimum(upper, -high + drive + pad)
+        return self._consistent(k, np.maximum(last_lo, low + drive - pad), np.minimum(last_hi, -high + drive + pad))
+
+    def _consistent(self, k: int, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Count the step's ``2n`` solves, inflate the box, and refuse an empty one (data contradict the bounds)."""
         self.solves += 2 * self.n
         lower, upper = inflate(lower, upper)
         if np.any(lower > upper):

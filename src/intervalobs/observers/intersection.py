@@ -32,7 +32,6 @@ from ..errors import DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
 
@@ -215,10 +214,7 @@ class IntersectionObserver(Observer):
         -------
         ObserverState
         """
-        if x0_lower is None or x0_upper is None:
-            lo, hi = self.bounds.x0
-        else:
-            lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         states = [obs.init(lo, hi) for obs in self.members]
         lower, upper = self._intersect(states)
         return ObserverState(lower, upper, internal={"members": states})

@@ -15,12 +15,12 @@ from numpy.typing import ArrayLike, NDArray
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable
 from ..design.discretization import SampledModel, sampled_model
 from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
-from ..errors import DataError, DesignError, DimensionError
+from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN
 from ..recursion import LinearRecursion
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_matrix, check_no_kwargs
+from ..validation import as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["METHODS", "IntervalObserver"]
@@ -242,10 +242,7 @@ class IntervalObserver(Observer):
         -------
         ObserverState
         """
-        if x0_lower is None or x0_upper is None:
-            lo, hi = self.bounds.x0
-        else:
-            lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         z_c = self.T @ (0.5 * (lo + hi))
         z_r = self._abs_T @ (0.5 * (hi - lo))
         internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r}
@@ -295,13 +292,8 @@ class IntervalObserver(Observer):
         Estimate
         """
         times, ys, us = self._signals(t, y, u)
-        if self.system.continuous and times.size > 1:
-            spacing = np.diff(times)
-            if np.max(np.abs(spacing - self.h)) > 1e-9 * self.h:
-                raise DataError(
-                    f"t: expected uniform spacing h = {self.h:g} (the design's sampling period), "
-                    f"got spacings in [{spacing.min():g}, {spacing.max():g}]"
-                )
+        if self.system.continuous:
+            self._check_spacing(times, self.h)
         state = self.init()
         if self.model.uncertain:
             z_c = np.empty((*ys.shape[:-1], self.n))

@@ -41,7 +41,7 @@ from ..errors import AssumptionError, DesignError
 from ..estimate import Estimate
 from ..interval import inflate
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_matrix, check_no_kwargs
+from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
@@ -193,10 +193,7 @@ class ZonotopicObserver(Observer):
         ObserverState
             ``internal`` holds ``center`` (n,) and ``generators`` (n, n).
         """
-        if x0_lower is None or x0_upper is None:
-            lo, hi = self.bounds.x0
-        else:
-            lo, hi = as_box("x0", (x0_lower, x0_upper), self.n)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         center = 0.5 * (lo + hi)
         generators = np.diag(0.5 * (hi - lo))
         return ObserverState(lo.copy(), hi.copy(), internal={"center": center, "generators": generators})
