@@ -2,25 +2,24 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
-DOCS_STAMP := $(VENV)/.installed-docs
+# Exact versions of everything `make` installs (runtime, dev and docs extras), compiled from pyproject.toml.
+LOCK := requirements-lock.txt
+LATEST := .venv-latest
 # The observers multiply many tiny matrices: BLAS threads only fight over the cores (10-20x slower under load).
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: demo test test-slow lint bench docs clean
+.PHONY: demo test test-slow test-latest lint bench docs lock clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 
-$(STAMP): $(BIN)/python pyproject.toml
-	$(BIN)/pip install --quiet -e ".[dev]"
+$(STAMP): $(BIN)/python pyproject.toml $(LOCK)
+	$(BIN)/pip install --quiet -r $(LOCK)
+	$(BIN)/pip install --quiet --no-deps -e .
 	touch $(STAMP)
-
-$(DOCS_STAMP): $(STAMP)
-	$(BIN)/pip install --quiet -e ".[dev,docs]"
-	touch $(DOCS_STAMP)
 
 demo: $(STAMP)
 	$(BIN)/intervalobs reproduce all
@@ -36,15 +35,30 @@ test: lint
 test-slow: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 -m slow
 
+# The suite against the newest releases that pyproject.toml admits (not the lock): drift shows here first.
+test-latest:
+	$(PY) -m venv $(LATEST)
+	$(LATEST)/bin/pip install --quiet --upgrade pip
+	$(LATEST)/bin/pip install --quiet --upgrade --upgrade-strategy eager -e ".[dev,docs]"
+	$(LATEST)/bin/pip freeze --exclude-editable > $(LATEST)/versions.txt
+	INTERVALOBS_UNLOCKED=1 MPLBACKEND=Agg $(LATEST)/bin/python -m pytest -q -n 2
+
+# Refresh the lock to the newest releases pyproject.toml admits (then run `make test` and commit both).
+lock:
+	$(PY) -m venv .venv-lock
+	.venv-lock/bin/pip install --quiet --upgrade pip pip-tools
+	.venv-lock/bin/pip-compile --quiet --upgrade --strip-extras --no-emit-index-url --no-emit-find-links \
+		--extra dev --extra docs -o $(LOCK) pyproject.toml
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 	$(BIN)/python benchmarks/tightness.py
 	$(BIN)/python benchmarks/report.py
 
 # API reference + pages into docs/_build/html; fresh environment (-E) and warnings as errors (-W).
-docs: $(DOCS_STAMP)
+docs: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/sphinx-build -E -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
 
 clean:
-	rm -rf $(VENV) results build *.egg-info docs/_build docs/api
+	rm -rf $(VENV) $(LATEST) .venv-lock results build *.egg-info docs/_build docs/api

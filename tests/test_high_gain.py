@@ -7,6 +7,7 @@ import pytest
 
 from intervalobs.design.high_gain import euler_radius_factor, theta_design
 from intervalobs.design.regions import modal_decomposition
+from intervalobs.errors import DimensionError
 from intervalobs.examples import hgio as example
 
 L1 = np.array(example.PAPER["L1"])[:, None]
@@ -15,7 +16,23 @@ L1 = np.array(example.PAPER["L1"])[:, None]
 @pytest.fixture(scope="module")
 def printed() -> object:
     modal = modal_decomposition(example.A, example.C, L1, order=[d.center for d in example.DISKS])
-    return theta_design(modal, L1, example.C, [0.1, 1, 1], [0.1], example.ALPHA_D, example.ALPHA_N)
+    return theta_design(
+        modal, L1, example.C, [0.1, 1, 1], [0.1], example.ALPHA_D, example.ALPHA_N, paper_v1=example.PAPER["v1"]
+    )
+
+
+def test_paper_alpha_depends_on_the_phase_of_v1() -> None:
+    """(43) takes the complex log of v1 d^r: with the canonical phase (v1 = -printed here) it is another α."""
+    modal = modal_decomposition(example.A, example.C, L1, order=[d.center for d in example.DISKS])
+    canonical = theta_design(modal, L1, example.C, [0.1, 1, 1], [0.1], example.ALPHA_D, example.ALPHA_N)
+    assert canonical.alpha_paper == pytest.approx(9.767, abs=1e-3)  # quoted in docs/paper-notes.md
+    assert canonical.mat_abscissa_paper == pytest.approx(8.27, abs=5e-3)
+    rotated = theta_design(
+        modal, L1, example.C, [0.1, 1, 1], [0.1], example.ALPHA_D, example.ALPHA_N, paper_v1=-1j * modal.v1
+    )
+    assert rotated.theta_sound == canonical.theta_sound  # the sound reading uses moduli only
+    with pytest.raises(DimensionError, match="paper_v1"):
+        theta_design(modal, L1, example.C, [0.1, 1, 1], [0.1], example.ALPHA_D, example.ALPHA_N, paper_v1=[[1.0]])
 
 
 def test_paper_alpha_needs_the_modulus_of_a_negative_log(printed: object) -> None:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from intervalobs import AssumptionError, DesignError
-from intervalobs.design.regions import Disk, modal_decomposition, place_in_disks, radius_matrix
+from intervalobs.design.regions import Disk, canonical_eigenvectors, modal_decomposition, place_in_disks, radius_matrix
 from intervalobs.examples import hgio as example
 
 A, C = example.A, example.C
@@ -49,7 +49,12 @@ def test_printed_gain_reproduces_the_printed_eigenvalues_and_v1() -> None:
     modal = modal_decomposition(A, C, np.array(example.PAPER["L1"])[:, None], order=[d.center for d in example.DISKS])
     np.testing.assert_allclose(modal.p1, example.PAPER["p1"], atol=1e-4)
     np.testing.assert_allclose(modal.omega1, example.PAPER["omega1"], atol=1e-4)
-    np.testing.assert_allclose(modal.v1, np.array(example.PAPER["v1"]), atol=1e-4)
+    # the printed v1 equals ours up to a unit factor per row (LAPACK's arbitrary phase; ours is canonical)
+    printed = np.array(example.PAPER["v1"])
+    np.testing.assert_allclose(np.abs(modal.v1), np.abs(printed), atol=1e-4)
+    rows = np.sum(np.conj(modal.v1) * printed, axis=1) / np.sum(np.abs(modal.v1) ** 2, axis=1)
+    np.testing.assert_allclose(np.abs(rows), 1.0, atol=1e-4)
+    np.testing.assert_allclose(rows[:, None] * modal.v1, printed, atol=2e-4)
     closed = modal.v1_inv @ np.diag(modal.eigenvalues) @ modal.v1
     np.testing.assert_allclose(closed, A - np.array(example.PAPER["L1"])[:, None] @ C, atol=1e-12)
 
@@ -82,3 +87,19 @@ def test_disk_validation_and_repeated_eigenvalues() -> None:
         modal_decomposition(-np.eye(2), np.array([[1.0, 0.0]]), np.zeros((2, 1)))
     with pytest.raises(DesignError, match="Hurwitz"):
         modal_decomposition(A, C, -np.array([[10.0], [0.0], [0.0]]))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_canonical_eigenvectors_do_not_depend_on_the_phase_lapack_returns(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(5, 5))
+    _, vecs = np.linalg.eig(a)
+    phases = np.exp(2j * np.pi * rng.random(5)) * rng.uniform(0.5, 2.0, 5)  # any phase, any scale
+    reference = canonical_eigenvectors(vecs)
+    np.testing.assert_allclose(canonical_eigenvectors(vecs * phases[None, :]), reference, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(reference, axis=0), 1.0, rtol=0, atol=1e-12)
+    pivot = np.argmax(np.abs(reference) >= (1 - 1e-6) * np.max(np.abs(reference), axis=0), axis=0)
+    entry = reference[pivot, np.arange(5)]
+    assert np.all(entry.real > 0) and np.all(entry.imag == 0)
+    modal = modal_decomposition(a - 10 * np.eye(5), np.eye(1, 5), np.zeros((5, 1)))
+    np.testing.assert_allclose(modal.v1_inv, canonical_eigenvectors(modal.v1_inv), rtol=0, atol=1e-12)

@@ -37,7 +37,7 @@ import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import DesignError
+from ..errors import DesignError, DimensionError
 from ..validation import as_matrix, as_vector
 from .regions import ModalDecomposition, radius_matrix
 
@@ -139,6 +139,7 @@ def theta_design(
     alpha_d: float,
     alpha_n: float,
     lambda_min: float | None = None,
+    paper_v1: ArrayLike | None = None,
 ) -> ThetaDesign:
     r"""Theorem 4.4: :math:`\lambda_{\min}(M_2)`, :math:`\alpha` and :math:`\theta`, as printed and as sound.
 
@@ -159,6 +160,11 @@ def theta_design(
     lambda_min : float, optional
         Use this :math:`\lambda_{\min}(M_2)` instead of solving LMI (32) (its value depends only on
         the LMI's normalisation; the paper's numbers imply -1).
+    paper_v1 : array_like, shape (n, n), optional
+        The :math:`v_1` to use in the paper's reading of (43) only, e.g. the paper's printed one. That
+        reading takes the complex logarithm of :math:`(v_1d^r)_j`, which depends on the arbitrary phase of
+        row :math:`j` of :math:`v_1`; the sound reading uses moduli only and always takes ``modal.v1``.
+        Default: ``modal.v1`` (canonical phase, :func:`~intervalobs.design.regions.canonical_eigenvectors`).
 
     Returns
     -------
@@ -176,10 +182,15 @@ def theta_design(
     omega = modal.omega1
     vd = modal.v1 @ dr
     vl = modal.v1 @ gain * vr[None, :]
+    v1_read = modal.v1 if paper_v1 is None else np.asarray(paper_v1, dtype=complex)
+    if v1_read.shape != (n, n) or not np.all(np.isfinite(v1_read)):
+        raise DimensionError(f"paper_v1: expected a finite {n}×{n} matrix, got shape {v1_read.shape}")
+    vd_read = v1_read @ dr
+    vl_read = v1_read @ gain * vr[None, :]
     # paper (43): modulus of the complex expression; zeros (log 0) are ignored
     with np.errstate(divide="ignore"):
-        terms_d = np.abs(np.log(vd.astype(complex)) - np.log(alpha_d) + lam - 1j * omega)
-        terms_n = np.abs(np.log(vl.astype(complex)) - np.log(alpha_n) + lam - 1j * omega[:, None])
+        terms_d = np.abs(np.log(vd_read) - np.log(alpha_d) + lam - 1j * omega)
+        terms_n = np.abs(np.log(vl_read) - np.log(alpha_n) + lam - 1j * omega[:, None])
         ratio_d = np.log(np.abs(vd) / alpha_d)
         ratio_n = np.log(np.abs(vl) / alpha_n)
     finite = [x[np.isfinite(x)] for x in (terms_d, terms_n)]

@@ -45,6 +45,7 @@ __all__ = [
     "Disk",
     "ModalDecomposition",
     "RegionPlacement",
+    "canonical_eigenvectors",
     "modal_decomposition",
     "place_in_disks",
     "radius_matrix",
@@ -133,8 +134,9 @@ class ModalDecomposition:
     eigenvalues : numpy.ndarray, shape (n,), complex
         :math:`p_1 + i\omega_1`.
     v1 : numpy.ndarray, shape (n, n), complex
-        Inverse of the eigenvector matrix whose columns have unit 2-norm (the MATLAB/NumPy
-        convention, which reproduces the paper's printed :math:`v_1`).
+        Inverse of the eigenvector matrix in the canonical normalisation of :func:`canonical_eigenvectors`
+        (unit 2-norm columns, largest-modulus entry real positive). The paper's printed :math:`v_1`
+        (MATLAB's LAPACK output) equals it up to a unit complex factor per row.
     v1_inv : numpy.ndarray, shape (n, n), complex
         The eigenvector matrix.
     condition : float
@@ -158,6 +160,40 @@ class ModalDecomposition:
     def omega1(self) -> FloatArray:
         """Imaginary parts of the eigenvalues."""
         return np.asarray(self.eigenvalues.imag, dtype=float)
+
+
+def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
+    r"""Eigenvectors in one normalisation that does not depend on the LAPACK build.
+
+    LAPACK returns each eigenvector up to an arbitrary factor :math:`e^{i\varphi}` (and scale), and
+    everything computed from :math:`v_1` in a fixed basis (the modal box of the observer, the complex
+    logarithm of the paper's (43)) inherits that phase. Here each column is scaled to unit 2-norm and
+    multiplied by the unit complex number that makes its *pivot* real and positive; the pivot is the
+    first entry whose modulus is at least :math:`1 - 10^{-6}` times the column's largest modulus (the
+    tolerance makes near-ties resolve the same way whatever the rounding of the eigensolver, whose
+    relative error is of order :math:`n\varepsilon\kappa`, far below :math:`10^{-6}` for the condition
+    numbers :func:`modal_decomposition` accepts). Conjugate eigenvalues get conjugate eigenvectors, so
+    real eigenvalues get real eigenvectors.
+
+    Parameters
+    ----------
+    vectors : array_like, shape (n, n)
+        Eigenvectors as columns, any phase and nonzero scale.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n), complex
+        The same eigenvectors, normalised.
+    """
+    vecs = np.asarray(vectors, dtype=complex)
+    vecs = vecs / np.linalg.norm(vecs, axis=0, keepdims=True)
+    moduli = np.abs(vecs)
+    pivot = np.argmax(moduli >= (1.0 - 1e-6) * np.max(moduli, axis=0, keepdims=True), axis=0)
+    columns = np.arange(vecs.shape[1])
+    entry = vecs[pivot, columns]
+    vecs = vecs * (np.conj(entry) / np.abs(entry))[None, :]
+    vecs[pivot, columns] = np.abs(entry)  # exactly real (the product above leaves a rounding-sized imaginary part)
+    return np.asarray(vecs, dtype=complex)
 
 
 def modal_decomposition(
@@ -191,6 +227,7 @@ def modal_decomposition(
     gain = as_matrix("L", L, (n, c.shape[0]))
     closed = a - gain @ c
     vals, vecs = np.linalg.eig(closed)
+    vecs = canonical_eigenvectors(vecs)
     if order is not None:
         targets = np.asarray(list(order), dtype=complex)
         if targets.size != n:

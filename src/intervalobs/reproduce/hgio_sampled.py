@@ -93,7 +93,16 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     placement, ours = constructive.placement, constructive.theta_design
     printed_l1 = np.array(example.PAPER["L1"])[:, None]
     printed_modal = modal_decomposition(system.A, system.C, printed_l1, order=order)
-    printed = theta_design(printed_modal, printed_l1, system.C, d_radius, delta, example.ALPHA_D, example.ALPHA_N)
+    printed = theta_design(
+        printed_modal,
+        printed_l1,
+        system.C,
+        d_radius,
+        delta,
+        example.ALPHA_D,
+        example.ALPHA_N,
+        paper_v1=np.array(example.PAPER["v1"]),
+    )
     l_arbitrary = high_gain_gain(THETA_ARBITRARY, K_ARBITRARY)
     arbitrary = HighGainIntervalObserver(
         system,
