@@ -7,6 +7,7 @@ import pytest
 
 from intervalobs.errors import AssumptionError, BoundsError, DataError, DimensionError
 from intervalobs.examples import gsisio
+from intervalobs.inclusion import interval_matrix
 from intervalobs.systems import NonlinearSystem, simulate_nonlinear
 
 
@@ -41,8 +42,8 @@ def test_dimensions_and_defaults():
         ({"G": [[1.0], [0.0]], "H": [[0.5]], "w": ([0.1, 0.1], [0.0, 0.0])}, BoundsError, "lower <= upper"),
         (
             {"G": [[1.0], [0.0]], "H": [[0.5]], "f_jacobian": lambda x: [[0.5, 0.0], [0.0, 0.5]]},
-            AssumptionError,
-            "finite",
+            DataError,
+            r"f_jacobian: entry \(2,2\)",
         ),
         ({"G": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "H": [[0.5, 0, 0]]}, DimensionError, "f"),
     ],
@@ -53,10 +54,29 @@ def test_invalid_models_are_rejected(kwargs, error, match):
         NonlinearSystem(f, g, **kwargs)
 
 
-def test_missing_jacobian_is_named():
-    s = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]])
-    with pytest.raises(AssumptionError, match="f_jacobian"):
-        s.require_jacobians()
+def test_jacobians_default_to_the_automatic_ones_and_bound_the_user_ones():
+    auto = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]])
+    user = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]], f_jacobian=jf, g_jacobian=jg)
+    assert auto.jacobian_source == {"f": "automatic", "g": "automatic"}
+    assert user.jacobian_source == {"f": "user", "g": "user"}
+    lo, hi = np.array([-1.0, -0.5]), np.array([2.0, 3.0])
+    a_lo, a_hi = interval_matrix(auto.jacobians()[0], lo, hi)
+    u_lo, u_hi = interval_matrix(user.jacobians()[0], lo, hi)
+    # same formula as jf: the same range up to the outward rounding of a few operations (<= 4 ulp)
+    ulp = 4 * np.finfo(float).eps
+    assert a_lo[0, 1] == 0.0 and a_hi[0, 1] == 0.0 and a_lo[1, 0] == 0.0  # structural zeros stay exact
+    assert a_lo[0, 0] <= 0.5 <= a_hi[0, 0] and a_hi[0, 0] - a_lo[0, 0] <= ulp
+    np.testing.assert_allclose(a_lo, u_lo, rtol=ulp, atol=0)
+    np.testing.assert_allclose(a_hi, u_hi, rtol=ulp, atol=0)
+    np.testing.assert_allclose([a_lo[1, 1], a_hi[1, 1]], [0.5 * np.cos(3.0), 0.5], rtol=ulp)
+
+
+def test_a_jacobian_wrong_only_away_from_the_origin_is_caught():
+    def bad(x):
+        return [[0.5, 0.0], [0.0, 0.5 * np.cos(x[1]) + 0.01 * x[0] ** 2]]
+
+    with pytest.raises(DataError, match="derivative of f is in"):
+        NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]], f_jacobian=bad)
 
 
 def test_simulation_satisfies_the_model_equations_and_noise_bounds():

@@ -117,7 +117,7 @@ class _ComposedRange:
         self.system = system
         self.Zinv = Zinv
         self.splits = splits
-        self.f_jac, self.g_jac = system.require_jacobians()
+        self.f_jac, self.g_jac = system.jacobians()
         self.n, self.p = system.n, system.p
 
     def point(self, Phi: FloatArray, z: FloatArray) -> FloatArray:
@@ -461,7 +461,7 @@ def gsisio_design(system: NonlinearSystem, jacobian_domain: tuple[ArrayLike, Arr
     GSISIODesign
     """
     n, p = system.n, system.p
-    f_jac, g_jac = system.require_jacobians()
+    f_jac, g_jac = system.jacobians()
     if jacobian_domain is None:
         dom_lo, dom_hi = np.full(n, -np.inf), np.full(n, np.inf)
     else:
@@ -618,7 +618,7 @@ class GSISIO(Observer):
                 f"got {d.correctness_radius:.4g}"
             )
         dom = box if abstraction_domain is None else as_box("abstraction_domain", abstraction_domain, n)
-        f_jac, g_jac = system.require_jacobians()
+        f_jac, g_jac = system.jacobians()
         jf = jacobian_bounds(f_jac, dom[0], dom[1], (n, n))
         jg = jacobian_bounds(g_jac, dom[0], dom[1], (system.p, n))
         abs_f = affine_abstraction(system.f, dom[0], dom[1], abstraction_sigma(dom[0], dom[1], *jf), n)
@@ -824,7 +824,7 @@ class NullSpaceGSISIO(Observer):
         self.gain_factors = tuple(float(c) for c in gain_factors)
         self.newton_steps = int(newton_steps)
         n, p, q = system.n, system.p, system.q
-        _, g_jac = system.require_jacobians()
+        _, g_jac = system.jacobians()
         U, S, Vt = np.linalg.svd(system.H)
         rank = int(np.sum(S > (S.max() if S.size else 0.0) * 1e-10))
         self.sigma = S[:rank]
@@ -923,7 +923,7 @@ class NullSpaceGSISIO(Observer):
             ell = np.broadcast_to(self.ell0, (*lead, *self.ell0.shape))
             kap = np.broadcast_to(self.kappa0[None, :], (*lead, 1, self.p))
             return [ell], [kap]
-        f_jac, g_jac = sysm.require_jacobians()
+        f_jac, g_jac = sysm.jacobians()
         xc = (0.5 * (zlo + zhi)) @ self.Zinv.T
         jf = evaluate_matrix(f_jac, xc, (self.n, self.n))
         jg = evaluate_matrix(g_jac, xc, (self.p, self.n))

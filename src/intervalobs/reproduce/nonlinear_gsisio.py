@@ -72,7 +72,7 @@ def _jacobian_norm_range(jac: Any, grid: FloatArray) -> tuple[float, float]:
 def _paper_constants_check() -> dict[str, Any]:
     """Numbers that show the printed constants cannot be reproduced."""
     system = ex.paper_system()
-    f_jac, g_jac = system.require_jacobians()
+    f_jac, g_jac = system.jacobians()
     # Df depends on x only through 0.3 x2 - 0.2 x1 (one full period covers R^2); Dg through (0.3x1+0.2x2, x1).
     theta = np.linspace(0.0, 2 * np.pi, 2001)
     grid_f = np.stack([-theta / 0.2, np.zeros_like(theta)], -1)
