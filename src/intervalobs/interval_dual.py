@@ -184,12 +184,8 @@ class IntervalDual:
 
     # --- elementary functions through NumPy's ufunc protocol -----------------------------------------
     def __array_ufunc__(self, ufunc: Any, method: str, *inputs: Any, **kwargs: Any) -> Any:
-        if method != "__call__" or kwargs:
-            return NotImplemented
-        handler = _RULES.get(ufunc)
-        if handler is None:
-            return NotImplemented
-        return handler(*inputs)
+        handler = _RULES.get(ufunc) if method == "__call__" and not kwargs else None
+        return NotImplemented if handler is None else handler(*inputs)
 
 
 def _chain(fn: Callable[[Interval], tuple[Interval, Interval]]) -> Callable[[IntervalDual], IntervalDual]:
@@ -228,13 +224,9 @@ def _log(u: Interval) -> tuple[Interval, Interval]:
     return np.log(u), _reciprocal_nonnegative(u)
 
 
-def _binary(
-    op: Callable[[Any, Any], IntervalDual], reflected: Callable[[Any, Any], IntervalDual]
-) -> Callable[..., Any]:
-    def apply(a: Any, b: Any) -> IntervalDual:
-        return op(a, b) if isinstance(a, IntervalDual) else reflected(b, a)
-
-    return apply
+def _binary(name: str, reflected: str) -> Callable[[Any, Any], IntervalDual]:
+    """``np.add(a, b)`` and friends: the dual operand's method, reflected when the dual is second."""
+    return lambda a, b: getattr(a, name)(b) if isinstance(a, IntervalDual) else getattr(b, reflected)(a)
 
 
 _RULES: dict[Any, Callable[..., IntervalDual]] = {
@@ -248,10 +240,10 @@ _RULES: dict[Any, Callable[..., IntervalDual]] = {
     np.absolute: _chain(_abs),
     np.square: lambda u: u**2,
     np.negative: lambda u: -u,
-    np.add: _binary(IntervalDual.__add__, IntervalDual.__radd__),
-    np.subtract: _binary(IntervalDual.__sub__, IntervalDual.__rsub__),
-    np.multiply: _binary(IntervalDual.__mul__, IntervalDual.__rmul__),
-    np.true_divide: _binary(IntervalDual.__truediv__, IntervalDual.__rtruediv__),
+    np.add: _binary("__add__", "__radd__"),
+    np.subtract: _binary("__sub__", "__rsub__"),
+    np.multiply: _binary("__mul__", "__rmul__"),
+    np.true_divide: _binary("__truediv__", "__rtruediv__"),
 }
 
 
