@@ -157,7 +157,7 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
     u = np.zeros((30, 1))
     sim = simulate(system, bounds, t, noise="extreme", seed=2)
     hull = HullEstimator(system, bounds, horizon=6)
-    boxes = hull.run(t, sim.y)
+    boxes = hull.run(t, sim.y, sim.u)
     lp = hull._condensed
     assert lp is not None
     k = 20
@@ -195,12 +195,12 @@ def test_learned_bank_encloses_random_systems_under_extreme_noise(seed: int, n: 
     t = np.arange(50) * (h or 1.0)
     for noise_seed in (0, 1, 2):
         sim = simulate(system, bounds, t, noise="extreme", seed=noise_seed, runs=8)
-        est = bank.run(t, sim.y)
+        est = bank.run(t, sim.y, sim.u)
         report = est.enclosure(sim.x)
         assert report.max_violation == 0.0 and report.fraction == 1.0
-        single = alone.run(t, sim.y)
+        single = alone.run(t, sim.y, sim.u)
         assert np.all(est.lower >= single.lower - 1e-12) and np.all(est.upper <= single.upper + 1e-12)
-        fallback = bank.fallback.run(t, sim.y)
+        fallback = bank.fallback.run(t, sim.y, sim.u)
         assert est.width()[:, 10:].mean() < 0.95 * fallback.width()[:, 10:].mean()  # the bank is active
 
 

@@ -103,13 +103,13 @@ def test_bad_inputs_raise(gains: dict[str, np.ndarray]) -> None:
     observer = _observer(gains["constructive"])
     t = np.arange(0.0, 0.01 + 1e-12, example.STEP)
     y = np.full((t.size, 1), np.nan)
-    with pytest.raises(DataError, match="uniform grid"):
+    with pytest.raises(DataError, match="t: expected uniform spacing"):
         observer.run(t * 2, y)
     with pytest.raises(DataError, match="inf"):
         observer.run(t, np.where(np.arange(t.size)[:, None] == 0, np.inf, y))
     y[0] = 100.0
     with pytest.raises(AssumptionError, match="inconsistent"):
-        observer.run(t, y)
+        observer.run(t, y, example.input_signal(t))
     with pytest.raises(AssumptionError, match="not Hurwitz"):
         _observer(np.array([[1000.0], [0.0], [0.0]]))  # the output observer cannot take a high gain
 

@@ -51,7 +51,7 @@ def test_hull_continuous_time_sound_with_switching_noise() -> None:
     h = 0.1
     t = np.arange(30) * h
     sim = simulate(system, bounds, t, noise="extreme", seed=5, substeps=10)
-    est = HullEstimator(system, bounds, horizon=8, h=h).run(t, sim.y)
+    est = HullEstimator(system, bounds, horizon=8, h=h).run(t, sim.y, sim.u)
     assert est.enclosure(sim.x).max_violation == 0.0
 
 
@@ -60,14 +60,14 @@ def test_hull_inside_every_sound_observer(seed: int) -> None:
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=seed)
-    hull = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
+    hull = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
     observers = {
         "tube": IntervalObserver.design(system, bounds),
         "framer": IntervalObserver.design(system, bounds, method="framer"),
         "paper gain": IntervalObserver(system, bounds, [[0.3], [0.2], [0.8]], method="framer"),
     }
     for name, obs in observers.items():
-        est = obs.run(t, sim.y)
+        est = obs.run(t, sim.y, sim.u)
         tol = SLACK * scale(est.lower, est.upper)
         assert np.all(est.lower <= hull.lower + tol), name
         assert np.all(est.upper >= hull.upper - tol), name
@@ -80,8 +80,8 @@ def test_short_horizon_is_sound_and_contains_the_exact_hull(horizon: int, window
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=7)
-    exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
-    windowed = HullEstimator(system, bounds, horizon=horizon, window_boxes=window_boxes).run(t, sim.y)
+    exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
+    windowed = HullEstimator(system, bounds, horizon=horizon, window_boxes=window_boxes).run(t, sim.y, sim.u)
     assert windowed.enclosure(sim.x).max_violation == 0.0
     tol = SLACK * scale(exact.lower, exact.upper)
     assert np.all(windowed.lower <= exact.lower + tol)
@@ -92,8 +92,8 @@ def test_full_horizon_is_exact_and_certificate_is_tight() -> None:
     system, bounds = small_discrete()
     t = np.arange(25, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=3)
-    full = HullEstimator(system, bounds, horizon=None).run(t, sim.y)
-    long_window = HullEstimator(system, bounds, horizon=30).run(t, sim.y)
+    full = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
+    long_window = HullEstimator(system, bounds, horizon=30).run(t, sim.y, sim.u)
     np.testing.assert_allclose(full.lower, long_window.lower, atol=1e-7)
     np.testing.assert_allclose(full.upper, long_window.upper, atol=1e-7)
     # The certified bound is outward of the exact optimum by at most the solver's tolerance.
@@ -157,9 +157,9 @@ def test_general_noise_matrices_use_noise_variables() -> None:
     bounds = Bounds((-np.ones(2), np.ones(2)), w=([-0.1], [0.1]), v=([-0.05, -0.05], [0.05, 0.05]))
     t = np.arange(30, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=4)
-    est = HullEstimator(system, bounds, horizon=6).run(t, sim.y)
+    est = HullEstimator(system, bounds, horizon=6).run(t, sim.y, sim.u)
     assert est.enclosure(sim.x).max_violation == 0.0
-    obs = IntervalObserver.design(system, bounds).run(t, sim.y)
+    obs = IntervalObserver.design(system, bounds).run(t, sim.y, sim.u)
     assert np.all(obs.lower <= est.lower + SLACK) and np.all(obs.upper >= est.upper - SLACK)
 
 
@@ -175,19 +175,19 @@ def test_lower_bound_is_inside_sound_observers_and_not_an_estimate() -> None:
     uncertain = LTISystem(system.A, system.C, B=system.B, E=system.E, F=system.F, dt=1.0, dA=(-d, d))
     t = np.arange(30, dtype=float)
     sim = simulate(uncertain, bounds, t, noise="extreme", seed=1)
-    bound = hull_lower_bound(uncertain, bounds, t, sim.y, samples=2, horizon=10, truth=(sim.dA, sim.x))
+    bound = hull_lower_bound(uncertain, bounds, t, sim.y, sim.u, samples=2, horizon=10, truth=(sim.dA, sim.x))
     assert isinstance(bound, HullLowerBound) and not isinstance(bound, Estimate)
     assert "not an estimate" in bound.label
     assert bound.alive[0]  # the true ΔA with its truth anchor stays consistent
-    est = IntervalObserver.design(uncertain, bounds).run(t, sim.y)
+    est = IntervalObserver.design(uncertain, bounds).run(t, sim.y, sim.u)
     ok = np.isfinite(bound.lower)
     assert ok.all()
     assert np.all(est.lower[ok] <= bound.lower[ok]) and np.all(est.upper[ok] >= bound.upper[ok])
     # With the true ΔA alone, the inner hull lies inside the (outer, certified) hull of that model.
-    alone = hull_lower_bound(uncertain, bounds, t, sim.y, samples=0, horizon=10, truth=(sim.dA, sim.x))
+    alone = hull_lower_bound(uncertain, bounds, t, sim.y, sim.u, samples=0, horizon=10, truth=(sim.dA, sim.x))
     exact_known = HullEstimator(
         LTISystem(system.A + sim.dA, system.C, B=system.B, E=system.E, F=system.F, dt=1.0), bounds, horizon=None
-    ).run(t, sim.y)
+    ).run(t, sim.y, sim.u)
     assert np.all(alone.lower >= exact_known.lower - SLACK) and np.all(alone.upper <= exact_known.upper + SLACK)
     assert np.all(alone.width() <= bound.width() + 1e-12)
 
@@ -260,7 +260,7 @@ bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(3), np.ones(3)), v=(-np.o
 t = np.arange(20, dtype=float)
 sim = simulate(system, bounds, t, noise="extreme", seed=1)
 est = HullEstimator(system, bounds, horizon=6)
-out = est.run(t, sim.y)
+out = est.run(t, sim.y, sim.u)
 print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1], "lower": out.lower.tolist()}))
 """
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
@@ -269,7 +269,7 @@ print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1],
     system, bounds = small_discrete()
     t = np.arange(20, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=1)
-    here = HullEstimator(system, bounds, horizon=6).run(t, sim.y)
+    here = HullEstimator(system, bounds, horizon=6).run(t, sim.y, sim.u)
     np.testing.assert_allclose(np.array(result["lower"]), here.lower, rtol=0, atol=1e-12)
 
 

@@ -277,7 +277,7 @@ def test_observer_input_validation(model):
     t = np.arange(0, 0.01, H)
     with pytest.raises(Exception, match="expected shape"):
         obs.run(t, np.zeros((t.size, 3)))
-    with pytest.raises(Exception, match="uniform samples"):
+    with pytest.raises(Exception, match="t: expected uniform spacing"):
         obs.run(np.array([0.0, 0.002, 0.003]), np.zeros((3, 4)))
 
 

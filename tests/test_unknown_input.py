@@ -109,7 +109,7 @@ def test_paper_hosm_setting_violates_its_claimed_input_bounds() -> None:
 def test_bad_input_is_rejected(observer) -> None:
     t = np.arange(100) * H
     y = ac.simulate_aircraft(t).y
-    with pytest.raises(DataError, match="spaced"):
+    with pytest.raises(DataError, match="t: expected uniform spacing"):
         observer.run(t * 1.5, y)
     with pytest.raises(DataError):
         observer.run(t, y[:, :3])

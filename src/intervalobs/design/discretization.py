@@ -124,6 +124,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         a_mid = system.A + 0.5 * (system.dA[0] + system.dA[1])
         a_rad = 0.5 * (system.dA[1] - system.dA[0])
     if not system.continuous:
+        system.sampling_period(h)  # refuses an h other than dt
         phi, gamma, d_phi, d_gamma = a_mid, system.B, a_rad, np.zeros((n, m))
         center = system.E @ w_center
         radius = np.abs(system.E) @ w_radius

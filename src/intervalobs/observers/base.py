@@ -24,6 +24,9 @@ __all__ = ["Observer", "ObserverState"]
 
 FloatArray = NDArray[np.float64]
 
+SPACING_TOLERANCE = 1e-9
+"""Relative deviation of a record's sample spacing from ``h`` that :meth:`Observer._check_spacing` accepts."""
+
 
 @dataclass
 class ObserverState:
@@ -49,13 +52,16 @@ class ObserverState:
 class Observer(ABC):
     """Base class of all observers.
 
-    Subclasses set ``n`` (states), ``p`` (outputs), ``m`` (known inputs) and implement :meth:`init`,
-    :meth:`step` and :meth:`run`. :meth:`_signals` validates a record once, at the boundary.
+    Subclasses set ``n`` (states), ``p`` (outputs), ``m`` (known inputs), ``h`` (the sampling period
+    their bounds assume, when they assume one) and implement :meth:`init`, :meth:`step` and :meth:`run`.
+    :meth:`_signals` validates a record once, at the boundary.
     """
 
     n: int
     p: int
     m: int
+    h: float | None = None
+    """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
 
     @abstractmethod
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -82,7 +88,7 @@ class Observer(ABC):
         y : array_like, shape (p,) or (M, p)
             Measurement at ``t_k``.
         u : array_like, shape (m,) or (M, m), optional
-            Known input at ``t_k``.
+            Known input at ``t_k``; required when the system has inputs (m > 0).
 
         Returns
         -------
@@ -101,7 +107,7 @@ class Observer(ABC):
         y : array_like, shape (T, p) or (M, T, p)
             Measurements; a leading axis holds Monte Carlo runs.
         u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
+            Known inputs; required when the system has inputs (m > 0).
 
         Returns
         -------
@@ -110,28 +116,57 @@ class Observer(ABC):
         """
 
     def _sample(self, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
-        """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,), (M, m) or None (zeros)."""
+        """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,) or (M, m) (None only if m = 0)."""
         yk = np.asarray(y, dtype=float).reshape(-1) if np.ndim(y) == 0 else np.asarray(y, dtype=float)
         if yk.ndim not in (1, 2) or yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
             raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
+        return yk, self._input(u, yk.shape[:-1])
+
+    def _input(self, u: ArrayLike | None, lead: tuple[int, ...]) -> FloatArray:
+        """The known input of one sample, validated and broadcast to ``(*lead, m)``.
+
+        A missing ``u`` is zero only for a system without inputs: with ``m > 0`` the bounds would
+        silently assume ``u = 0`` and lose the guarantee, so it is refused (pass zeros explicitly).
+        """
         if u is None:
-            return yk, np.zeros(self.m)
+            if self.m > 0:
+                raise DataError(
+                    f"u: expected the known input, shape ({self.m},) or (M, {self.m}) (the system has "
+                    f"m = {self.m}; pass zeros for u = 0), got None"
+                )
+            return np.zeros((*lead, 0))
         uk = np.asarray(u, dtype=float).reshape(-1) if np.ndim(u) == 0 else np.asarray(u, dtype=float)
         if uk.ndim not in (1, 2) or uk.shape[-1] != self.m or not np.all(np.isfinite(uk)):
             raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
-        return yk, uk
+        try:
+            return np.broadcast_to(uk, (*np.broadcast_shapes(lead, uk.shape[:-1]), self.m))
+        except ValueError:
+            raise DataError(f"u: expected leading shape {lead} (that of y), got shape {uk.shape}") from None
 
     def _signals(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Validate ``t``, ``y``, ``u``; return them with ``u`` broadcast to ``y``'s leading axes."""
         times = as_time("t", t)
+        if self.h is not None:
+            self._check_spacing(times, self.h)
         ys = as_signal("y", y, times.size, self.p)
+        return times, ys, self._record_input(u, ys)
+
+    def _record_input(self, u: ArrayLike | None, ys: FloatArray) -> FloatArray:
+        """The known input of a record, validated and broadcast to the leading axes of ``ys``.
+
+        As in :meth:`_input`, a missing ``u`` is zero only when the system has no inputs.
+        """
         if u is None:
-            us = np.zeros((*ys.shape[:-1], self.m))
-        else:
-            us = as_signal("u", u, times.size, self.m)
-            if us.ndim < ys.ndim:
-                us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
-        return times, ys, us
+            if self.m > 0:
+                raise DataError(
+                    f"u: expected the known input, shape ({ys.shape[-2]}, {self.m}) or (M, {ys.shape[-2]}, "
+                    f"{self.m}) (the system has m = {self.m}; pass zeros for u = 0), got None"
+                )
+            return np.zeros((*ys.shape[:-1], 0))
+        us = as_signal("u", u, ys.shape[-2], self.m)
+        if us.ndim < ys.ndim:
+            us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
+        return us
 
     def _prior_box(
         self, default: tuple[FloatArray, FloatArray], x0_lower: ArrayLike | None, x0_upper: ArrayLike | None
@@ -142,10 +177,10 @@ class Observer(ABC):
         return as_box("x0", (x0_lower, x0_upper), self.n)
 
     def _check_spacing(self, times: FloatArray, h: float) -> None:
-        """A continuous-time record must be sampled every ``h`` (the design's sampling period)."""
+        """A record must be sampled every ``h``, the period the design assumed (``dt`` in discrete time)."""
         if times.size > 1:
             spacing = np.diff(times)
-            if np.max(np.abs(spacing - h)) > 1e-9 * h:
+            if np.max(np.abs(spacing - h)) > SPACING_TOLERANCE * h:
                 raise DataError(
                     f"t: expected uniform spacing h = {h:g} (the design's sampling period), "
                     f"got spacings in [{spacing.min():g}, {spacing.max():g}]"

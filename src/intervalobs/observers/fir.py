@@ -102,6 +102,8 @@ class FiniteMemoryObserver(Observer):
         like :class:`~intervalobs.observers.hull.HullEstimator` with ``filtered=True``).
     """
 
+    h: float
+
     def __init__(
         self,
         system: LTISystem,
@@ -118,7 +120,7 @@ class FiniteMemoryObserver(Observer):
         self.bounds = bounds.for_system(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         model = sampled_model(system, self.bounds, h)
-        self.h = model.h
+        self.h = model.h if system.continuous else float(system.dt or 1.0)
         k = np.asarray(gains, dtype=float)
         if k.ndim == 3:
             k = k[:, None]
@@ -254,7 +256,7 @@ class FiniteMemoryObserver(Observer):
         for record in range(int(records)):
             noise = _training_noise(system, full, t.size, record, rng)
             sim = simulate(system, full, t, noise=noise, seed=int(rng.integers(2**31)))
-            for (i, sign), duals in hull.certificates(t, sim.y).items():
+            for (i, sign), duals in hull.certificates(t, sim.y, sim.u).items():
                 bank[i].append(sign * duals[:, : int(window) + bool(filtered), :])
         elapsed += time.perf_counter() - start
         members = []
@@ -448,8 +450,6 @@ class FiniteMemoryObserver(Observer):
             Row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_{k-1}`` (``… y_k`` when ``filtered``).
         """
         times, ys, us = self._signals(t, y, u)
-        if self.system.continuous:
-            self._check_spacing(times, self.h)
         base = self.fallback.run(times, ys, us)
         lower, upper = base.lower.copy(), base.upper.copy()
         big_n, last, steps = self.window, int(self.filtered), times.size

@@ -681,7 +681,7 @@ class GSISIO(Observer):
         yk = np.asarray(y, dtype=float)
         if yk.shape[-1] != self.p:
             raise DimensionError(f"y: expected {self.p} components, got shape {yk.shape}")
-        uk = np.zeros((*yk.shape[:-1], self.m)) if u is None else np.asarray(u, dtype=float)
+        uk = self._input(u, yk.shape[:-1])
         d, sysm = self.design_result, self.system
         (f_lo, f_hi), (g_lo, g_hi) = self._fg_bounds(lo, hi)
         bu, du = uk @ sysm.B.T, uk @ sysm.D.T
@@ -1031,7 +1031,7 @@ class NullSpaceGSISIO(Observer):
         yk = np.asarray(y, dtype=float)
         if yk.shape[-1] != self.p:
             raise DimensionError(f"y: expected {self.p} components, got shape {yk.shape}")
-        uk = np.zeros((*yk.shape[:-1], self.m)) if u is None else np.asarray(u, dtype=float)
+        uk = self._input(u, yk.shape[:-1])
         zlo = np.asarray(state.internal["z_lower"], float)
         zhi = np.asarray(state.internal["z_upper"], float)
         lead = yk.shape[:-1]

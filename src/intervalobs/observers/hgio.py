@@ -52,7 +52,7 @@ from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.lti import Bounds
 from ..systems.sampled import SampledSystem
-from ..validation import as_box, as_matrix, as_signal, as_time
+from ..validation import as_box, as_matrix, as_time
 from .base import Observer, ObserverState
 
 if TYPE_CHECKING:
@@ -190,6 +190,8 @@ class HighGainIntervalObserver(Observer):
         (evaluated rescaled, so it cannot overflow), with every input bounded at ``t_k`` only. The
         latter is NOT sound; it exists to measure what θ and the Euler step do to the paper's bounds.
     """
+
+    h: float
 
     def __init__(
         self,
@@ -405,7 +407,7 @@ class HighGainIntervalObserver(Observer):
         """
         t = float(state.internal["t"])
         yk = self._check_y(np.asarray(y, dtype=float))
-        uk = np.zeros(self.m) if u is None else np.asarray(u, dtype=float)
+        uk = self._input(u, yk.shape[:-1])
         rot_s = self.state_modal.rotations(np.array([t, t + self.h]))
         rot_w = self.output_modal.rotations(np.array([t, t + self.h]))
         new, _ = self._advance(state, yk, uk, t, rot_s, rot_w, 0)
@@ -431,20 +433,14 @@ class HighGainIntervalObserver(Observer):
         """
         times = as_time("t", t)
         steps = times.size
-        if steps > 1 and np.max(np.abs(np.diff(times) - self.h)) > 1e-9 * self.h:
-            raise DataError(f"t: expected a uniform grid of step h = {self.h:g}")
+        self._check_spacing(times, self.h)
         ys = np.asarray(y, dtype=float)
         if ys.ndim == 1 and self.p == 1:
             ys = ys[:, None]
         if ys.ndim not in (2, 3) or ys.shape[-2:] != (steps, self.p):
             raise DataError(f"y: expected shape ({steps}, {self.p}) or (runs, {steps}, {self.p}), got {ys.shape}")
         self._check_y(ys)
-        if u is None:
-            us = np.zeros((*ys.shape[:-1], self.m))
-        else:
-            us = as_signal("u", u, steps, self.m)
-            if us.ndim < ys.ndim:
-                us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
+        us = self._record_input(u, ys)
         lead = ys.shape[:-2]
         lo0, hi0 = self.bounds.x0
         state = self._initial(

@@ -754,6 +754,8 @@ class HullEstimator(Observer):
     Carlo axis of ``y`` is processed run by run (LPs do not vectorise).
     """
 
+    h: float
+
     def __init__(
         self,
         system: LTISystem,
@@ -858,7 +860,7 @@ class HullEstimator(Observer):
             when ``filtered`` is True.
         """
         yk = as_vector("y", y, self.p)
-        uk = np.zeros(self.m) if u is None else as_vector("u", u, self.m)
+        uk = self._input(u, ())
         old = state.internal
         k = int(old["k"])
         ys = np.array([*old["y"], yk])
@@ -1177,6 +1179,8 @@ def hull_lower_bound(
     ys = as_signal("y", y, times.size, system.p)
     if ys.ndim != 2:
         raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
+    if u is None and system.m > 0:
+        raise DataError(f"u: expected the known input, shape ({times.size}, {system.m}), got None")
     us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
     full = bounds.for_system(system)
     if np.ndim(samples) == 0:

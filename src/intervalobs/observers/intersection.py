@@ -133,7 +133,11 @@ class IntersectionObserver(Observer):
                     f"members: expected observers with (n, p, m) = {(system.n, system.p, system.m)}, "
                     f"got {(obs.n, obs.p, obs.m)}"
                 )
+        periods = {obs.h for obs in members}
+        if len(periods) > 1:
+            raise DataError(f"members: expected one sampling period, got {sorted(map(str, periods))}")
         self.members = list(members)
+        self.h = periods.pop()
         self.system = system
         self.bounds = bounds.for_system(system)
         self.n, self.p, self.m = system.n, system.p, system.m

@@ -86,6 +86,8 @@ class IntervalObserver(Observer):
     realisation, inside the sampling intervals too.
     """
 
+    h: float
+
     def __init__(
         self,
         system: LTISystem,
@@ -292,8 +294,6 @@ class IntervalObserver(Observer):
         Estimate
         """
         times, ys, us = self._signals(t, y, u)
-        if self.system.continuous:
-            self._check_spacing(times, self.h)
         state = self.init()
         if self.model.uncertain:
             z_c = np.empty((*ys.shape[:-1], self.n))

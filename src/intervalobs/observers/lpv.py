@@ -130,6 +130,8 @@ class LPVIntervalObserver(Observer):
         If F is not Hurwitz.
     """
 
+    h: float
+
     method = "lpv-interval-observer"
 
     def __init__(
@@ -265,11 +267,7 @@ class LPVIntervalObserver(Observer):
         y2 = np.atleast_2d(ys)
         if y2.shape[-1] != self.p or not np.all(np.isfinite(y2)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {ys.shape}")
-        u2 = (
-            np.zeros((y2.shape[0], self.m))
-            if u is None
-            else np.broadcast_to(np.atleast_2d(np.asarray(u, float)), (y2.shape[0], self.m))
-        )
+        u2 = self._input(u, y2.shape[:-1])
         zl = np.atleast_2d(state.internal["z_lower"])
         zu = np.atleast_2d(state.internal["z_upper"])
         x_lo, x_hi, e_lo, e_hi, zl, zu = self.advance(zl, zu, y2, np.asarray(u2, dtype=float))
@@ -308,8 +306,6 @@ class LPVIntervalObserver(Observer):
         eps_lower, eps_upper : numpy.ndarray, shape like ``estimate.lower``
         """
         times, ys, us = self._signals(t, y, u)
-        if times.size > 1 and not np.allclose(np.diff(times), self.h, rtol=1e-9, atol=0.0):
-            raise DataError(f"t: expected uniform samples every h = {self.h:g} s")
         squeeze = ys.ndim == 2
         y3 = ys[None] if squeeze else ys
         u3 = np.broadcast_to(us[None] if us.ndim == 2 else us, (*y3.shape[:-1], self.m))

@@ -98,6 +98,8 @@ class ZonotopicObserver(Observer):
         When :math:`\rho(A_0 + \mathrm{mid}\,\Delta A - LC) \ge 1` and not ``allow_unstable``.
     """
 
+    h: float
+
     def __init__(
         self,
         system: LTISystem,
@@ -115,6 +117,7 @@ class ZonotopicObserver(Observer):
         self.system = system
         self.bounds = bounds.for_system(system)
         self.n, self.p, self.m = system.n, system.p, system.m
+        self.h = float(system.dt or 1.0)
         self.L = as_matrix("L", L, (self.n, self.p))
         self.order = 5 * self.n if order is None else int(order)
         if self.order < self.n:
@@ -334,8 +337,8 @@ class IntegratedObserver(IntervalObserver):
             Discrete-time model.
         bounds : Bounds
             Boxes of ``x0``, ``w``, ``v``.
-        h : None
-            Unused (discrete time); present for signature compatibility.
+        h : float, optional
+            None or the system's ``dt`` (discrete time); present for signature compatibility.
         **options
             ``E_theta`` (array, default identity): direction matrix of Lemma A.2 used in (19).
             ``fallback`` (``"raise"`` default, or ``"hinf"``): when :math:`A_0 - LC \\ge 0` is
@@ -349,6 +352,8 @@ class IntegratedObserver(IntervalObserver):
         check_no_kwargs("IntegratedObserver.design", options, ("E_theta", "fallback"))
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        if not system.continuous:
+            system.sampling_period(h)  # refuses an h other than dt
         fallback: Literal["raise", "hinf"] = options.get("fallback", "raise")
         if fallback not in ("raise", "hinf"):
             raise DesignError(f"fallback: expected 'raise' or 'hinf', got {fallback!r}")

@@ -117,6 +117,29 @@ class LTISystem:
         """True for a continuous-time system."""
         return self.dt is None
 
+    def sampling_period(self, h: float | None) -> float:
+        """The sampling period a design with step ``h`` assumes: ``dt`` in discrete time, ``h`` in continuous.
+
+        A discrete-time system is sampled every ``dt``: an ``h`` that differs (by more than 1e-9
+        relative) is refused rather than ignored, since the bounds would not hold for it.
+
+        Parameters
+        ----------
+        h : float or None
+            The step the caller asked for; required in continuous time.
+
+        Returns
+        -------
+        float
+        """
+        if self.dt is not None:
+            if h is not None and not abs(float(h) - self.dt) <= 1e-9 * self.dt:
+                raise BoundsError(f"h: expected None or the system's dt = {self.dt:g} (discrete time), got {h!r}")
+            return self.dt
+        if h is None or not (np.isfinite(h) and h > 0):
+            raise BoundsError(f"h: expected a positive step for a continuous-time system, got {h!r}")
+        return float(h)
+
     @classmethod
     def from_control(cls, sys: Any, **kwargs: Any) -> LTISystem:
         """Build from a python-control ``StateSpace`` (its A, B, C; D must be zero).
