@@ -3,27 +3,19 @@
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from intervalobs.reproduce import registry
-
-CHECKER = "/work/shared/tools/check_reproduction.py"
+from intervalobs.reproduce.contract import check_reproduction
 
 
 @pytest.mark.slow
 def test_nonlinear_gsisio(tmp_path: Path) -> None:
     registry()["nonlinear-gsisio"].run(tmp_path / "nonlinear-gsisio", 0, False)
-    if os.path.exists(CHECKER):
-        result = subprocess.run(
-            [sys.executable, CHECKER, str(tmp_path / "nonlinear-gsisio")], capture_output=True, text=True
-        )
-        assert result.returncode == 0, result.stdout
+    assert check_reproduction(tmp_path / "nonlinear-gsisio") == []
     s = json.loads((tmp_path / "nonlinear-gsisio" / "summary.json").read_text())
     assert s["enclosure"] == {
         "state": {"fraction": 1.0, "max_violation": 0.0},

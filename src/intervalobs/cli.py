@@ -39,6 +39,8 @@ def _parser() -> argparse.ArgumentParser:
         "--results", default=None, help="read DIR/NAME/summary.json if it has a tightness report (else run it)"
     )
     tightness.add_argument("--seed", type=int, default=0, help="random seed when the example is run (default: 0)")
+    check = commands.add_parser("check", help="check reproduction folders against the file contract")
+    check.add_argument("folders", nargs="+", metavar="DIR", help="folders written by reproduce, e.g. results/NAME")
     campaign = commands.add_parser("campaign", help="Monte Carlo performance campaign of an example, on Dask")
     campaign.add_argument("name", help="example with a campaign (e.g. manipulator-lpv)")
     campaign.add_argument("--runs", type=int, default=None, help="Monte Carlo runs per cell (default: the paper's)")
@@ -108,6 +110,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     if args.command == "campaign":
         return _campaign(args)
+    if args.command == "check":
+        return _check(args.folders)
     examples = registry()
     if args.command == "list":
         for example in examples.values():
@@ -136,6 +140,20 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stdout,
         )
     return 0
+
+
+def _check(folders: Sequence[str]) -> int:
+    """``intervalobs check DIR ...``: exit code 0 when every folder meets the contract, 1 otherwise."""
+    from .reproduce.contract import check_reproduction
+
+    failed = 0
+    for folder in folders:
+        problems = check_reproduction(Path(folder))
+        print(f"{folder}: {'ok' if not problems else 'FALLS SHORT'}")
+        for problem in problems:
+            print(f"  - {problem}")
+        failed += bool(problems)
+    return 1 if failed else 0
 
 
 def _tightness(examples: dict[str, Any], name: str, results: str | None, seed: int) -> int:

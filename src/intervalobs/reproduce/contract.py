@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 
 from ..estimate import enclosure_report
 
-__all__ = ["Example", "base_summary", "to_json", "write_reproduction"]
+__all__ = ["SUMMARY_KEYS", "Example", "base_summary", "check_reproduction", "to_json", "write_reproduction"]
 
 
 @dataclass(frozen=True)
@@ -167,3 +167,89 @@ def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: Map
     (out_dir / "summary.json").write_text(json.dumps(to_json(summary), indent=2) + "\n")
     arrays: dict[str, Any] = {k: np.asarray(v) for k, v in trajectories.items()}
     np.savez_compressed(out_dir / "trajectories.npz", **arrays)
+
+
+SUMMARY_KEYS = (
+    "example",
+    "seed",
+    "observer",
+    "dt",
+    "t_final",
+    "steps",
+    "transient_s",
+    "enclosure",
+    "width",
+    "design",
+    "paper",
+    "runtime_s",
+)
+"""Keys every ``summary.json`` has."""
+
+
+def check_reproduction(folder: Path) -> list[str]:
+    """Check a reproduction folder against the file contract, recomputing enclosure from the trajectories.
+
+    The contract: ``summary.json`` has :data:`SUMMARY_KEYS`; ``trajectories.npz`` has ``t``, ``x``,
+    ``x_lower``, ``x_upper``; after ``transient_s`` the recommended bounds and every other
+    ``NAME_x_lower``/``NAME_x_upper`` pair (except those whose name contains ``naive``, kept to show how a
+    naive method fails) are finite and contain ``x`` by the rule of
+    :func:`~intervalobs.estimate.enclosure_report`; so do ``d_lower``/``d_upper`` around ``d`` where finite;
+    and the state enclosure fraction in ``summary.json`` is the one the trajectories give.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        A folder written by ``intervalobs reproduce NAME``, e.g. ``results/aircraft-uio``.
+
+    Returns
+    -------
+    list of str
+        One line per problem found; empty when the folder meets the contract.
+    """
+    try:
+        summary = json.loads((folder / "summary.json").read_text())
+        with np.load(folder / "trajectories.npz") as npz:
+            arrays = {key: npz[key] for key in npz.files}
+    except (OSError, ValueError) as exc:
+        return [f"{folder}: cannot read summary.json and trajectories.npz ({exc})"]
+    problems = [f"summary.json: no key {key!r}" for key in SUMMARY_KEYS if key not in summary]
+    problems += [f"trajectories.npz: no array {key!r}" for key in ("t", "x", "x_lower", "x_upper") if key not in arrays]
+    if problems:
+        return problems
+    t, x = arrays["t"], arrays["x"]
+    transient = float(summary["transient_s"])
+    after = t >= transient
+    pairs = {"recommended": ("x_lower", "x_upper")}
+    for key in arrays:
+        if key.endswith("_x_lower") and "naive" not in key:
+            pairs[key[: -len("_x_lower")]] = (key, key[: -len("_x_lower")] + "_x_upper")
+    for name, (lower_key, upper_key) in pairs.items():
+        if upper_key not in arrays:
+            problems.append(f"{name}: {lower_key} has no {upper_key}")
+            continue
+        lower, upper = arrays[lower_key], arrays[upper_key]
+        if not lower.shape == upper.shape == x.shape or x.shape[0] != t.size:
+            problems.append(f"{name}: bounds of shape {lower.shape}, {upper.shape} for x {x.shape} and t {t.shape}")
+            continue
+        if not (np.all(np.isfinite(lower[after])) and np.all(np.isfinite(upper[after]))):
+            problems.append(f"{name}: bounds not finite after the transient ({transient:g} s)")
+            continue
+        report = enclosure_report(t, lower, x, upper, transient)
+        if report.fraction < 1.0:
+            problems.append(
+                f"{name}: truth outside the bounds by up to {report.max_violation:.3g} "
+                f"(first at t = {report.first_violation_time:.6g})"
+            )
+        if name == "recommended":
+            claimed = summary["enclosure"].get("state", {}).get("fraction")
+            if claimed is None or abs(float(claimed) - report.fraction) > 1e-12:
+                problems.append(
+                    f"summary.json: state enclosure fraction {claimed}, the trajectories give {report.fraction:.12g}"
+                )
+    if {"d", "d_lower", "d_upper"} <= arrays.keys():
+        d_lower, d, d_upper = arrays["d_lower"], arrays["d"], arrays["d_upper"]
+        known = after & np.all(np.isfinite(d_lower) & np.isfinite(d_upper), axis=1)
+        report = enclosure_report(t[known], d_lower[known], d[known], d_upper[known])
+        if report.fraction < 1.0:
+            problems.append(f"input bounds: truth outside by up to {report.max_violation:.3g}")
+    return problems
