@@ -173,3 +173,79 @@ def test_nullspace_variant_long_horizon_stays_bounded(paper, seed):
     assert est.enclosure(sim.x).max_violation == 0.0
     assert est.input_enclosure(delayed(sim.d)).max_violation == 0.0
     assert np.linalg.norm(est.width(), axis=-1)[..., 10:].max() < 4.0
+
+
+@pytest.fixture(scope="module")
+def two_hidden():
+    return ex.two_hidden_system()
+
+
+def test_two_hidden_directions_without_jacobians_are_enclosed_below_the_certified_bound(two_hidden):
+    """Five seeds, bang-bang noise, random vertex x0; the truth from the model equations, not the observer."""
+    assert two_hidden.jacobian_source == {"f": "automatic", "g": "automatic"}
+    obs = NullSpaceGSISIO.design(two_hidden, ex.TWO_HIDDEN_X0_BOX)
+    assert obs.hidden == 2
+    cert = obs.width_certificate()
+    assert cert.holds and cert.spectral_radius < 1.0 and np.all(cert.Gamma >= 0)
+    steps = 100
+    sims = [simulate_nonlinear(two_hidden, ex.TWO_HIDDEN_X0_BOX, ex.two_hidden_input(steps), seed=s) for s in range(5)]
+    x = np.stack([s.x for s in sims])
+    d = delayed(np.stack([s.d for s in sims]))
+    est = obs.run(np.arange(float(steps)), np.stack([s.y for s in sims]))
+    rep, rep_d = est.enclosure(x), est.input_enclosure(d)
+    assert rep.fraction == 1.0 and rep.max_violation == 0.0
+    assert rep_d.fraction == 1.0 and rep_d.max_violation == 0.0
+    z0 = obs.init().internal["z_upper"] - obs.init().internal["z_lower"]
+    x_bound, d_bound = cert.width_bounds(z0, steps)
+    # bounds hold up to the documented rounding margins (relative 1e-12 of |bounds| <= 10 per step)
+    assert np.all(est.width() <= x_bound + 1e-9)
+    assert np.all((est.input_upper - est.input_lower)[:, 1:] <= d_bound[1:] + 1e-9)
+    assert np.all(est.width()[:, 30:] <= cert.x_width_steady)
+    assert np.all((est.input_upper - est.input_lower)[:, 30:] <= cert.d_width_steady)
+
+
+def test_two_hidden_run_equals_step(two_hidden):
+    obs = NullSpaceGSISIO.design(two_hidden, ex.TWO_HIDDEN_X0_BOX)
+    sim = simulate_nonlinear(two_hidden, ex.TWO_HIDDEN_X0_BOX, ex.two_hidden_input(8), seed=3)
+    est = obs.run(np.arange(8.0), sim.y)
+    state = obs.init()
+    for k in range(8):
+        state = obs.step(state, sim.y[k])
+        np.testing.assert_allclose(state.lower, est.lower[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.input_upper, est.input_upper[k], rtol=0, atol=1e-12)
+
+
+def _hidden_pair(g, p):
+    def f(x):
+        return (0.5 * x[0], 0.5 * x[1], 0.5 * x[2])
+
+    G = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
+    return NonlinearSystem(f, g, G=G, H=np.zeros((p, 2)))
+
+
+def test_existence_condition_needs_as_many_d_free_outputs_as_hidden_directions():
+    system = _hidden_pair(lambda x: (x[0] + x[2],), 1)
+    with pytest.raises(AssumptionError, match=r"1 d-free outputs \(p - rk H\) for 2 hidden input directions"):
+        NullSpaceGSISIO.design(system, (-np.ones(3), np.ones(3)))
+
+
+def test_existence_condition_needs_an_h_matrix_slope():
+    # d-free outputs sin(x1), sin(x3): their slopes along the hidden directions take both signs
+    system = _hidden_pair(lambda x: (np.sin(x[0]), np.sin(x[2])), 2)
+    with pytest.raises(AssumptionError, match="is not an H-matrix under any preconditioner"):
+        NullSpaceGSISIO.design(system, (-np.ones(3), np.ones(3)))
+    # the same structure with monotone outputs is accepted
+    ok = _hidden_pair(lambda x: (x[0] + 0.3 * np.sin(x[2]), x[2] + 0.3 * np.tanh(x[0])), 2)
+    assert NullSpaceGSISIO.design(ok, (-np.ones(3), np.ones(3))).hidden == 2
+
+
+def test_certificate_states_why_none_exists_on_the_paper_example(paper, fullrank):
+    cert = NullSpaceGSISIO.design(paper, ex.X0_BOX).width_certificate()
+    assert not cert.holds and cert.spectral_radius >= 1.0 and "rho(Gamma)" in cert.reason
+    assert np.all(np.isnan(cert.x_width_steady))
+    full = NullSpaceGSISIO.design(fullrank, ex.FULLRANK_X0_BOX)
+    cert = full.width_certificate()
+    assert cert.holds
+    sim = simulate_nonlinear(fullrank, ex.FULLRANK_X0_BOX, ex.fullrank_input(80), seed=2, runs=3)
+    est = full.run(np.arange(80.0), sim.y)
+    assert np.all(est.width()[:, 20:] <= cert.x_width_steady)

@@ -18,6 +18,10 @@ steps) and the noise (bang-bang between the bounds).
 
 Our own system (:func:`fullrank_system`) has a full-column-rank H (q = 1 unknown input, p = 2 outputs),
 so that the paper's existence condition (8) holds and the paper's construction can be demonstrated.
+
+Our own system with two hidden input directions (:func:`two_hidden_system`): three states, three
+unknown inputs of which two never reach the outputs (rk H = 1), written as f, g and boxes only — its
+Jacobian bounds come from :mod:`intervalobs.interval_dual`.
 """
 
 from __future__ import annotations
@@ -38,6 +42,8 @@ __all__ = [
     "H",
     "fullrank_input",
     "fullrank_system",
+    "two_hidden_input",
+    "two_hidden_system",
     "paper_input",
     "paper_system",
 ]
@@ -173,3 +179,56 @@ def fullrank_input(steps: int = 200) -> FloatArray:
     """
     k = np.arange(steps, dtype=float)
     return (2.0 * np.sin(0.07 * k) + np.where((k > 60) & (k < 120), 1.5, 0.0))[:, None]
+
+
+# --- our own system with two hidden input directions (no Jacobians written) ---------------------------
+
+TWO_HIDDEN_G = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.2], [0.0, 1.0, 0.0]])
+TWO_HIDDEN_H = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+TWO_HIDDEN_X0_BOX = (-np.ones(3), np.ones(3))
+TWO_HIDDEN_NOISE = 0.02
+
+
+def _f_two_hidden(x: Sequence[Any]) -> tuple[Any, Any, Any]:
+    return (
+        0.5 * x[0] + 0.2 * np.tanh(x[1]),
+        0.4 * x[1] - 0.15 * np.sin(x[0]) + 0.1 * x[2],
+        0.3 * x[2] + 0.2 * np.tanh(x[0] - x[1]),
+    )
+
+
+def _g_two_hidden(x: Sequence[Any]) -> tuple[Any, Any, Any]:
+    return x[0] + 0.2 * np.tanh(x[1]), x[2] + 0.1 * np.sin(x[0]), x[1] + 0.1 * x[2]
+
+
+def two_hidden_system() -> NonlinearSystem:
+    r"""Our own three-state system with three unknown inputs, two of them hidden from the outputs.
+
+    :math:`f = (0.5x_1 + 0.2\tanh x_2,\ 0.4x_2 - 0.15\sin x_1 + 0.1x_3,\ 0.3x_3 + 0.2\tanh(x_1 - x_2))`,
+    :math:`g = (x_1 + 0.2\tanh x_2,\ x_3 + 0.1\sin x_1,\ x_2 + 0.1x_3)`; :math:`d_1, d_2` push
+    :math:`x_1, x_3` and appear in no output, :math:`d_3` pushes :math:`x_2` and enters :math:`y_3`
+    (``H`` has rank 1, so q - rk H = 2 hidden directions); :math:`|w|, |v| \le 0.02`. No Jacobian is
+    given: the observers use the automatic ones.
+
+    Returns
+    -------
+    NonlinearSystem
+    """
+    noise = (-TWO_HIDDEN_NOISE * np.ones(3), TWO_HIDDEN_NOISE * np.ones(3))
+    return NonlinearSystem(_f_two_hidden, _g_two_hidden, TWO_HIDDEN_G, TWO_HIDDEN_H, w=noise, v=noise)
+
+
+def two_hidden_input(steps: int = 150) -> FloatArray:
+    """Unknown inputs for :func:`two_hidden_system`: a sinusoid, a step and a slow cosine (unbounded for the observer).
+
+    Parameters
+    ----------
+    steps : int
+        Number of samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (steps, 3)
+    """
+    k = np.arange(steps, dtype=float)
+    return np.stack([1.5 * np.sin(0.1 * k), np.where(k > 60, 1.0, -0.5), 0.8 * np.cos(0.05 * k)], axis=1)
