@@ -32,6 +32,17 @@ def test_nonlinear_gsisio(tmp_path: Path) -> None:
     full = d["fullrank_example"]
     assert full["width_state_below_delta_x"] and full["width_input_below_delta_d"]
     assert full["gsisio_design"]["stability_condition"] == "(i)"
+    two = d["two_hidden_example"]
+    assert two["jacobian_source"] == {"f": "automatic", "g": "automatic"} and two["hidden_directions"] == 2
+    assert two["width_certificate"]["holds"]
+    assert two["enclosure_state"]["fraction"] == 1.0 and two["enclosure_input"]["fraction"] == 1.0
+    assert two["state_width_below_certified_sequence"] and two["input_width_below_certified_sequence"]
+    assert two["state_width_below_steady_bound_after_30_steps"]
+    assert not sv["width_certificate"]["holds"] and "rho(Gamma)" in sv["width_certificate"]["reason"]
+    for example in ("paper_example", "two_hidden_example"):
+        for part in ("state", "input"):
+            ratio = s["tightness"][example][part]["ratio_norm"]
+            assert 1.0 <= ratio < 2.0  # a lower bound (>= 1 by soundness) and the measured gap
     z = np.load(tmp_path / "nonlinear-gsisio" / "trajectories.npz")
     assert np.all(np.isnan(z["d_lower"][0])) and np.all(np.isnan(z["delta_x"]))
     assert np.all(np.isfinite(z["fullrank_delta_x"]))

@@ -42,10 +42,10 @@ __all__ = [
     "H",
     "fullrank_input",
     "fullrank_system",
-    "two_hidden_input",
-    "two_hidden_system",
     "paper_input",
     "paper_system",
+    "two_hidden_input",
+    "two_hidden_system",
 ]
 
 FloatArray = NDArray[np.float64]

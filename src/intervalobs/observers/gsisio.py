@@ -1066,7 +1066,7 @@ class NullSpaceGSISIO(Observer):
                 )
             # fixed certificate gains: cancel the t-sensitivity at the centre of x0
             lam, mu = self._cancelling(centre)
-            self.ell_c = self.ell0 + lam @ self.U2.T
+            self.ell_c = self._certificate_gain(self.ell0 + lam @ self.U2.T)
             self.kappa_c = self.kappa0 + mu @ self.U2.T
         else:
             self.slope = (np.zeros((r2, 0)), np.zeros((r2, 0)))
@@ -1214,6 +1214,59 @@ class NullSpaceGSISIO(Observer):
         return t_lo, t_hi
 
     # ---- the width certificate ---------------------------------------------------------------------
+    def _small_gain(self, ell: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None:
+        """Gamma, gamma, W_a, W_F, <M>^-1 of the certificate for the a-prediction gain ``ell`` (None: unbounded)."""
+        sysm = self.system
+        n, na, h = self.n, self.n_a, self.hidden
+        ja = self._range.global_jacobian(np.concatenate([self.R, -ell], axis=1))
+        if ja is None:
+            return None
+        W_a = width_matrix(*ja)
+        dw, dv = sysm.w[1] - sysm.w[0], sysm.v[1] - sysm.v[0]
+        omega_a = np.abs(self.R) @ dw + np.abs(ell) @ dv
+        if h == 0:
+            return W_a, omega_a, W_a, np.zeros((0, na)), np.zeros((0, 0))
+        P, minv = self.preconditioners[0], self._m_inverse[0]
+        jfz = self._range.global_jacobian(np.concatenate([np.zeros((h, n)), P @ self.U2.T], axis=1))
+        assert jfz is not None
+        W_F = width_matrix(*jfz)[:, :na]
+        omega_t = np.abs(P @ self.U2.T) @ dv + 1e-12
+        Gamma = np.vstack([W_a, 2.0 * minv @ W_F @ W_a])
+        gamma = np.concatenate([omega_a, 2.0 * minv @ (W_F @ omega_a + omega_t)])
+        return Gamma, gamma, W_a, W_F, minv
+
+    def _certificate_gain(self, start: FloatArray) -> FloatArray:
+        r"""The fixed gain :math:`\ell_c = \ell_0 + \lambda U_2^\top` minimising the certified steady width.
+
+        Nelder–Mead over :math:`\lambda` from the t-cancelling gain and from :math:`\ell_0`; the
+        objective is :math:`\sum|Z^{-1}|(I - \Gamma)^{-1}\gamma` where :math:`\rho(\Gamma) < 1`,
+        else :math:`10^6 + \rho(\Gamma)`. Any :math:`\lambda` gives a sound prediction, so the
+        optimiser's result needs no verification beyond the certificate itself.
+        """
+        from scipy.optimize import minimize
+
+        r2 = self.U2.shape[1]
+        if r2 == 0 or self._range.global_fg is None:
+            return start
+
+        def gain(lam: FloatArray) -> FloatArray:
+            return np.asarray(self.ell0 + lam.reshape(self.n_a, r2) @ self.U2.T, dtype=float)
+
+        def objective(lam: FloatArray) -> float:
+            parts = self._small_gain(gain(lam))
+            assert parts is not None
+            Gamma, gamma = parts[0], parts[1]
+            radius = float(np.max(np.abs(np.linalg.eigvals(Gamma))))
+            if not radius < 1.0:
+                return 1e6 + radius
+            return float(np.sum(np.abs(self.Zinv) @ np.linalg.solve(np.eye(self.n) - Gamma, gamma)))
+
+        starts = [np.asarray((start - self.ell0) @ self.U2, dtype=float).ravel(), np.zeros(self.n_a * r2)]
+        options = {"maxiter": 400, "xatol": 1e-6}
+        runs = [minimize(objective, x0, method="Nelder-Mead", options=options) for x0 in starts]
+        best = min(runs, key=lambda res: float(res.fun))
+        return gain(best.x) if float(best.fun) < objective(starts[0]) else start
+
     def width_certificate(self) -> WidthCertificate:
         r"""A design-time bound of the widths, from the decomposition's global interval Jacobians.
 
@@ -1253,36 +1306,20 @@ class NullSpaceGSISIO(Observer):
             return WidthCertificate(False, reason, np.full((n, n), np.nan), nan_n, np.nan, empty, empty, empty,
                                     self.ell_c, nan_n, nan_n, nan_q, empty, nan_q, self.Zinv)  # fmt: skip
 
-        phi_a = np.concatenate([self.R, -self.ell_c], axis=1)
-        ja = self._range.global_jacobian(phi_a)
-        if ja is None:
+        parts = self._small_gain(self.ell_c)
+        if parts is None:
             return fail("a Jacobian of f or g is unbounded on the whole space: no global decomposition")
-        W_a = width_matrix(*ja)
-        omega_a = np.abs(self.R) @ dw + np.abs(self.ell_c) @ dv
+        Gamma, gamma, W_a, W_F, minv = parts
         r1 = self.U1.shape[1]
-        phi_1 = np.concatenate([np.zeros((r1, n)), self.U1.T], axis=1)
-        j1 = self._range.global_jacobian(phi_1)
+        j1 = self._range.global_jacobian(np.concatenate([np.zeros((r1, n)), self.U1.T], axis=1))
         assert j1 is not None
         d1_rows = np.abs(V[:, :r1]) / self.sigma[None, :]  # |V1| Sigma^-1
         if h > 0:
-            P = self.preconditioners[0]
-            minv = self._m_inverse[0]
-            phi_f = np.concatenate([np.zeros((h, n)), P @ self.U2.T], axis=1)
-            jfz = self._range.global_jacobian(phi_f)
-            assert jfz is not None
-            W_F = width_matrix(*jfz)[:, :na]
-            omega_t = np.abs(P @ self.U2.T) @ dv + 1e-12
-            Gamma = np.vstack([W_a, 2.0 * minv @ W_F @ W_a])
-            gamma = np.concatenate([omega_a, 2.0 * minv @ (W_F @ omega_a + omega_t)])
-            phi_chi = np.concatenate([self.S, -self.kappa_c], axis=1)
-            jchi = self._range.global_jacobian(phi_chi)
+            jchi = self._range.global_jacobian(np.concatenate([self.S, -self.kappa_c], axis=1))
             assert jchi is not None
-            W_chi = width_matrix(*jchi)
-            d2_z = W_chi
+            d2_z = width_matrix(*jchi)
             d2_const = np.abs(self.S) @ dw + np.abs(self.kappa_c) @ dv
         else:
-            W_F, minv = np.zeros((0, na)), np.zeros((0, 0))
-            Gamma, gamma = W_a, omega_a
             d2_z, d2_const = np.zeros((0, n)), np.zeros(0)
         # delayed inputs: |V1| S^-1 (W_1 dz + |U1'| dv) + |V2| (dt_{k+1} + W_chi dz + const)
         W_1 = width_matrix(*j1)
@@ -1297,7 +1334,7 @@ class NullSpaceGSISIO(Observer):
             )
             return WidthCertificate(False, cert.reason, Gamma, gamma, radius, W_a, W_F, minv, self.ell_c,
                                     nan_n, nan_n, nan_q, d_matrix, offset, self.Zinv)  # fmt: skip
-        z_steady = np.linalg.solve(np.eye(n) - Gamma, gamma) * (1 + 1e-9)
+        z_steady = np.asarray(np.linalg.solve(np.eye(n) - Gamma, gamma), dtype=float) * (1 + 1e-9)
         x_steady = np.abs(self.Zinv) @ z_steady
         d_steady = D_z @ z_steady + D_t @ z_steady[na:] + offset
         return WidthCertificate(True, "rho(Gamma) < 1", Gamma, gamma, radius, W_a, W_F, minv, self.ell_c,
