@@ -872,6 +872,8 @@ class WidthCertificate:
     d_matrix, d_offset : numpy.ndarray
         :math:`\Delta d_k \le D_z\Delta z_k + D_t\Delta t_{k+1} + \delta`, stored as ``d_matrix`` =
         :math:`[D_z, D_t]` and ``d_offset`` = :math:`\delta`.
+    Zinv : numpy.ndarray, shape (n, n)
+        :math:`Z^{-1}`, mapping z widths to x widths (:math:`\Delta x \le |Z^{-1}|\Delta z`).
     """
 
     holds: bool
