@@ -124,15 +124,26 @@ def test_nullspace_variant_encloses_states_and_delayed_inputs_on_the_paper_examp
     assert np.linalg.norm(est.width(), axis=-1)[..., 10:].max() < 4.0
 
 
-def test_nullspace_variant_run_equals_step(paper):
-    obs = NullSpaceGSISIO.design(paper, ex.X0_BOX)
-    sim = simulate_nonlinear(paper, ex.X0_BOX, ex.paper_input(15), seed=11)
-    est = obs.run(np.arange(15.0), sim.y)
+@pytest.mark.parametrize(
+    ("system", "box", "d"),
+    [
+        (ex.paper_system(), ex.X0_BOX, ex.paper_input(15)),
+        (ex.two_hidden_system(), ex.TWO_HIDDEN_X0_BOX, ex.two_hidden_input(8)),
+    ],
+    ids=["paper", "two-hidden"],
+)
+def test_nullspace_variant_run_equals_step(system, box, d):
+    obs = NullSpaceGSISIO.design(system, box)
+    steps = d.shape[0]
+    sim = simulate_nonlinear(system, box, d, seed=11)
+    est = obs.run(np.arange(float(steps)), sim.y)
     state = obs.init()
-    for k in range(15):
+    for k in range(steps):
         state = obs.step(state, sim.y[k])
         np.testing.assert_allclose(state.lower, est.lower[k], rtol=0, atol=1e-12)
         np.testing.assert_allclose(state.upper, est.upper[k], rtol=0, atol=1e-12)
+        if k > 0:
+            np.testing.assert_allclose(state.input_upper, est.input_upper[k], rtol=0, atol=1e-12)
 
 
 def test_nullspace_variant_handles_full_rank_h(fullrank):
@@ -202,17 +213,6 @@ def test_two_hidden_directions_without_jacobians_are_enclosed_below_the_certifie
     assert np.all((est.input_upper - est.input_lower)[:, 1:] <= d_bound[1:] + 1e-9)
     assert np.all(est.width()[:, 30:] <= cert.x_width_steady)
     assert np.all((est.input_upper - est.input_lower)[:, 30:] <= cert.d_width_steady)
-
-
-def test_two_hidden_run_equals_step(two_hidden):
-    obs = NullSpaceGSISIO.design(two_hidden, ex.TWO_HIDDEN_X0_BOX)
-    sim = simulate_nonlinear(two_hidden, ex.TWO_HIDDEN_X0_BOX, ex.two_hidden_input(8), seed=3)
-    est = obs.run(np.arange(8.0), sim.y)
-    state = obs.init()
-    for k in range(8):
-        state = obs.step(state, sim.y[k])
-        np.testing.assert_allclose(state.lower, est.lower[k], rtol=0, atol=1e-12)
-        np.testing.assert_allclose(state.input_upper, est.input_upper[k], rtol=0, atol=1e-12)
 
 
 def _hidden_pair(g, p):
