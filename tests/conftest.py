@@ -3,8 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import HealthCheck, settings
 
 from intervalobs import Bounds, LTISystem
+
+# Property tests assert properties, not speed: on a loaded machine (CI neighbours, xdist workers) drawing
+# inputs or running an example can take seconds, which must not fail a test.
+settings.register_profile("intervalobs", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("intervalobs")
 
 
 def random_system(seed: int, n: int, p: int, continuous: bool, uncertain: bool) -> tuple[LTISystem, Bounds]:
