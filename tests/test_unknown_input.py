@@ -121,20 +121,15 @@ def test_bad_input_is_rejected(observer) -> None:
         _design(derivative="hosm")
 
 
-def test_given_nondiagonal_coordinates_are_refused() -> None:
+def test_given_triangular_metzler_coordinates_are_used() -> None:
     obs = _design()
-    k = obs.coords.K
-    # a Metzler but non-diagonal J: permute-and-mix the eigenbasis by a positive upper-triangular matrix
-    mix = np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1)
-    with pytest.raises((DesignError, AssumptionError)):
-        _design(K=k, T=mix @ obs.coords.T)
-
-
-def test_known_inputs_are_refused() -> None:
-    from intervalobs.systems import LTISystem
-
-    system = LTISystem(ac.A, ac.C, B=np.ones((5, 1)))
-    with pytest.raises(DimensionError, match="known input"):
-        UnknownInputIntervalObserver.design(
-            system, ac.aircraft_bounds(), ac.D, H, noise_rate=np.full(4, 0.01), output_accel=np.full(4, 90.0)
-        )
+    mix = np.eye(5) + 0.1 * np.tril(np.ones((5, 5)), -1)  # T' N T'^-1 lower triangular, Metzler
+    tri = _design(K=obs.coords.K, T=mix @ obs.coords.T)
+    assert np.abs(np.tril(tri.coords.M, -1)).min() > 0.05 and tri.coords.metzler_check > -1e-12
+    t = np.arange(8001) * H
+    rec = ac.simulate_aircraft(t, seed=5, delta_kind="plateau", omega_kind="vertex")
+    est = tri.run(t, rec.y)
+    assert est.enclosure(rec.x, transient=0.0).max_violation == 0.0
+    assert est.input_enclosure(rec.xi, transient=0.0).max_violation == 0.0
+    with pytest.raises(AssumptionError, match="Metzler"):
+        _design(K=obs.coords.K, T=np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1) @ obs.coords.T)

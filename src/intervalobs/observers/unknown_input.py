@@ -8,42 +8,79 @@ Model (seed 000, eq. (1), with the noise matrices of :class:`~intervalobs.system
 (:math:`|\dot v| \le \bar{\dot v}`) and :math:`|\ddot\psi| \le L` (the assumption of Levant's
 differentiator, seed 000, Theorem 3).
 
-Observer (seed 000, eq. (15)) in the coordinates :math:`z = Tx` of Hypothesis 6, with the diagonal
-:math:`J = TNT^{-1} = \Lambda` designed by :func:`~intervalobs.design.uio.design_uio_coordinates`.
-Equation (15) contains :math:`-TE\dot y`; we integrate it *exactly* by writing
-:math:`w = z + TE\psi = T(x + E\psi)`, for which (using :math:`PD = 0`, :math:`K = L + NE`, eq. (14))
+Observer (seed 000, eq. (15)) in the coordinates :math:`z = Tx` of Hypothesis 6, in which
+:math:`TNT^{-1} = M` is Metzler and Hurwitz (diagonal for real poles, 3×3 cyclic blocks for complex
+pairs: :func:`~intervalobs.design.uio.metzler_block_form`). Equation (15) contains :math:`-TE\dot y`; we
+integrate it *exactly* by writing :math:`w = z + TE\psi = T(x + E\psi)`, for which (using :math:`PD = 0`,
+:math:`K = L + NE`, eq. (14))
 
-.. math:: \dot w = \Lambda w + TL\,\psi + TPB\,u + TPE_\omega w_{\text{noise}},
+.. math:: \dot w = M w + TL\,\psi + TPB\,u + TPE_\omega w_{\text{noise}},
           \qquad x = T^{-1}w - E\psi .
 
 No output derivative enters the state bounds, so they hold from :math:`t_0` (no HOSM transient).
-Between samples :math:`\psi` is the linear interpolation of its sample boxes plus a remainder
-:math:`|r| \le L h^2/8`; because :math:`\Lambda` is diagonal with :math:`e^{\lambda_i h} > 0`, each
-component of the bounds obeys an exact scalar recursion
 
-.. math:: \overline w_{i,k+1} = e^{\lambda_i h}\overline w_{i,k} + \overline g_{i,k},
+**Known inputs.** ``u`` is either point-known and held on :math:`[t_k, t_{k+1})` (zero-order hold, a
+digital controller), or interval-known: on :math:`[t_k, t_{k+1})` it is *any* signal in the box
+:math:`[\underline u_k, \overline u_k]` (``u=(lower, upper)``; e.g. a continuous command, or a switch
+inside the step). The assumption on the output is placed on the part of :math:`\dot\psi` the known
+input does not enter directly,
 
-where :math:`\overline g` bounds the exact input integral over the step (every admissible noise
-signal inside the step is covered, not only held ones). The whole record is evaluated with
-``scipy.signal.lfilter``, one call per component, vectorised over Monte Carlo runs.
+.. math:: g = \dot\psi - CBu = C(Ax + D\xi + E_\omega w_{\text{noise}}), \qquad |\dot g| \le L
+          \ (\texttt{output\_accel}),
 
-State bounds (31): :math:`x \in T^{-1}[w] - E[\psi]` (the exact hull, not through the z-box).
-Unknown-input bounds (36)–(37): with :math:`M_0 = (CD)^\dagger`,
-:math:`\xi = M_0\dot\psi - M_0CA\,T^{-1}w + M_0CAE\,\psi - M_0CBu - M_0CE_\omega w_{\text{noise}}`,
-bounded from the derivative enclosure of :mod:`~intervalobs.design.differentiator` (``"difference"``:
-provable, from the first sample on; ``"hosm"``: Levant's differentiator with the paper's bound
-:math:`\beta = \bar{\dot\delta} + \mu_1\bar\delta^{1/2}`, claimed only after ``hosm_transient``).
+which is Lipschitz even when :math:`u` jumps (for :math:`B = 0` it is :math:`|\ddot\psi| \le L`).
 
-Floating point: every rounding-level departure from the exact model (the float ``T`` only nearly
-diagonalises ``N``; ``T⁻¹`` is computed; ``PD`` and ``I - M_0CD`` are ~1e-16 rather than 0, which leaks a
-fraction of :math:`\xi` bounded with ``input_magnitude``; the time grid deviates from the nominal step
-by at most ``step_tolerance``; the recursion itself rounds) is bounded explicitly and added outward,
-through a second ``lfilter`` recursion for the state-dependent parts.
+*Soundness of the state bounds.* On a step, :math:`\psi(t_k + s) = \psi_k + G(s) + CB\,U(s)` with
+:math:`G = \int_0^s g`, :math:`U = \int_0^s u`. Its deviation from the chord through
+:math:`\psi_k, \psi_{k+1}` is :math:`r_G(s) + CB\,r_U(s)`, where :math:`|r_G(s)| \le L s(h-s)/2`
+(:math:`|G''| \le L`) and, writing :math:`u = u_c + \tilde u` with the box centre :math:`u_c` (which the
+chord reproduces exactly) and :math:`|\tilde u| \le u_r`,
+:math:`r_U(s) = \int_0^h \tilde u(\sigma)(\mathbb 1_{\sigma < s} - s/h)\,d\sigma`, so
+:math:`|r_U(s)| \le u_r\,2s(h-s)/h`. Because :math:`e^{M\tau} \ge 0` (M Metzler), the exact step
+
+.. math:: w_{k+1} = e^{Mh}w_k + \int_0^h e^{M(h-s)}\big(TL\,\psi(t_k+s) + TPB\,u(t_k+s)
+          + TPE_\omega w_{\text{noise}}(t_k+s)\big)\,ds
+
+is bounded componentwise by :math:`\overline w_{k+1} = \Phi\overline w_k + \Gamma_0\overline{TL\psi_k}
++ \Gamma_1\overline{TL\psi_{k+1}} + \Gamma(\overline{TPBu}_k + \overline{TPE_\omega w}) + \Gamma_r|TL|
+(L + 4|CB|u_r/h)` with the nonnegative matrices :math:`\Phi = e^{Mh}`,
+:math:`\Gamma = \int_0^h e^{M\sigma}d\sigma`, :math:`\Gamma_1 = \int_0^h e^{M(h-s)}\tfrac sh ds`,
+:math:`\Gamma_0 = \Gamma - \Gamma_1`, :math:`\Gamma_r = \int_0^h e^{M(h-s)}\tfrac{s(h-s)}2 ds`
+(every noise and input signal inside the step is covered, not only held ones); the lower bound
+likewise. For a held point input :math:`u_r = 0` and the widths do not depend on ``u`` at all.
+
+*Soundness of the input bounds.* The known input is removed before differentiating:
+:math:`(\psi_k - \psi_{k-1})/h_k = \tfrac1{h_k}\int g + CB\bar u_{k-1}` with the step mean
+:math:`\bar u_{k-1} \in [\underline u_{k-1}, \overline u_{k-1}]`, and
+:math:`|g(t_k) - \tfrac1{h_k}\int g| \le Lh_k/2`, so
+
+.. math:: g(t_k) \in \frac{y_k - y_{k-1}}{h_k} - CB[\underline u_{k-1}, \overline u_{k-1}]
+          \pm \big(\bar{\dot\delta} + L h_k/2\big),
+
+and, by (36), :math:`\xi(t_k) = M_0\big(g(t_k) - CAx(t_k) - CE_\omega w_{\text{noise}}(t_k)\big)` with
+:math:`M_0 = (CD)^\dagger` — no value of ``u`` at :math:`t_k` is needed, so a jump of ``u`` at a sample
+(or inside a step) never enters the derivative. With ``derivative="hosm"`` Levant's differentiator runs
+on :math:`y - CB\int u`, whose derivative is :math:`g + \dot\delta` (point-known inputs only); its bound
+is the paper's :math:`\beta = \bar{\dot\delta} + \mu_1\bar\delta^{1/2}` (eq. (8)), claimed only after
+``hosm_transient``.
+
+Floating point: every rounding-level departure from the exact model (the float ``T`` only nearly maps
+``N`` onto ``M``; ``T⁻¹``, ``e^{Mh}`` and the Γ's are computed; ``PD`` and ``I - M_0CD`` are ~1e-16 rather
+than 0, which leaks a fraction of :math:`\xi` bounded with ``input_magnitude``; the time grid deviates from
+the nominal step by at most ``step_tolerance``) is bounded and added outward. The recursion
+:math:`\overline w_{k+1} = \Phi\overline w_k + \overline g_k` is evaluated over the whole record by
+:class:`~intervalobs.recursion.LinearRecursion` (modal ``lfilter``, vectorised over Monte Carlo runs);
+its computed value is then checked *a posteriori*: the residual :math:`\rho_k = \hat w_{k+1} - \Phi\hat w_k
+- \overline g_k` (plus the rounding of computing it) drives the exact error recursion
+:math:`\epsilon_{k+1} = \Phi\epsilon_k + |\rho_k|`, which we majorise by :math:`\epsilon_k \le s_k v`
+with :math:`v = -M^{-1}\mathbf 1 > 0`, :math:`\Phi v \le \varrho v` (:math:`\varrho < 1`) and the scalar,
+nonnegative recursion :math:`s_{k+1} = \varrho s_k + \max_i(\cdot)_i/v_i`, whose own rounding is a
+relative :math:`\le 2ku`. The other rounding pads enter the same scalar recursion.
 
 Step semantics (current output): ``init`` returns the prior box; ``step(state, y_k, u_k)`` consumes the
-measurement of the *next* sample and returns the box at that sample given ``y_0 … y_k`` (the first call
-consumes ``y_0`` and returns the prior box at ``t_0``). Row ``k`` of :meth:`run` equals the box after the
-``(k+1)``-th ``step`` call. Known inputs (B) are not supported (see the constructor).
+measurement of the *next* sample and the input held from it on, and returns the box at that sample given
+``y_0 … y_k`` (the first call consumes ``y_0`` and returns the prior box at ``t_0``). Row ``k`` of
+:meth:`run` equals the box after the ``(k+1)``-th ``step`` call.
 """
 
 from __future__ import annotations
@@ -71,16 +108,18 @@ from ..design.uio import (
 from ..errors import BoundsError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
+from ..recursion import LinearRecursion
 from ..systems.lti import Bounds, LTISystem
-from ..validation import as_box, as_matrix, as_vector
+from ..validation import as_box, as_matrix, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState
 
 __all__ = ["UnknownInputIntervalObserver"]
 
 FloatArray = NDArray[np.float64]
+KnownInput = ArrayLike | tuple[ArrayLike, ArrayLike] | None
+"""A point-known input (held between samples) or a pair ``(lower, upper)`` of an interval-known one."""
 
 _U = np.finfo(float).eps / 2
-_RECURSION_ROUNDING = 8 * _U
 _STEP_TOLERANCE = SPACING_TOLERANCE  # the deviation run() accepts; the bounds account for it
 
 
@@ -93,24 +132,30 @@ def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
 class _Precomputed:
     """Design-time constants of the recursion (all arrays are read-only by convention)."""
 
-    a: FloatArray  # e^{λ h}
-    b: FloatArray  # ∫_0^h e^{λ r} dr
-    c_start: FloatArray  # weight of ψ_k
-    c_end: FloatArray  # weight of ψ_{k+1}
+    Phi: FloatArray  # e^{M h} (nonnegative)
+    Gam: FloatArray  # ∫_0^h e^{M σ} dσ
+    G0: FloatArray  # weight of ψ_k
+    G1: FloatArray  # weight of ψ_{k+1}
+    G_mag: FloatArray  # |Γ| + expm error / margin, for the magnitude of the forcing
+    dPhi: FloatArray  # entrywise bound of |Φ_computed - Φ|
+    v: FloatArray  # majorant direction of the rounding recursion
+    rho: float  # Φ v <= rho v
     TL: FloatArray
     TPB: FloatArray
     TE: FloatArray
+    CB: FloatArray
     noise_lo: FloatArray  # bounds of T P E_ω w
     noise_hi: FloatArray
     noise_mag: FloatArray
     const_pad: FloatArray  # per step: remainder + ξ leak
-    offdiag: FloatArray  # |J_exact - Λ| bound
+    input_remainder: FloatArray  # per step and unit input radius: Γ_r |TL| 4|CB|/h
+    offdiag: FloatArray  # |J_exact - M| bound
+    grid: FloatArray  # 2|M| τ: departure of e^{M h_k} from Φ per unit |w|
     dS: float  # entrywise bound of |T⁻¹ - S|
     delta_lo: FloatArray  # bounds of δ = F v
     delta_hi: FloatArray
     Mw: FloatArray
     Mpsi: FloatArray
-    Mu: FloatArray
     xi_noise_lo: FloatArray
     xi_noise_hi: FloatArray
     xi_noise_mag: FloatArray
@@ -120,6 +165,7 @@ class _Precomputed:
     TE_mag: FloatArray
     Mw_mag: FloatArray
     Mpsi_mag: FloatArray
+    TPB_mag: FloatArray
 
 
 class UnknownInputIntervalObserver(Observer):
@@ -140,11 +186,11 @@ class UnknownInputIntervalObserver(Observer):
     decoupling : UIODecoupling
         From :func:`~intervalobs.design.uio.uio_decoupling`.
     coords : UIOCoordinates
-        Gain and diagonalising coordinates (Hypothesis 6).
+        Gain and Metzler coordinates (Hypothesis 6).
     noise_rate : array_like, shape (nv,)
         Bound of ``|dv/dt|``.
     output_accel : array_like, shape (p,)
-        Bound ``L`` of ``|d²ψ/dt²|``.
+        Bound ``L`` of ``|d/dt (dψ/dt - CBu)|`` (``|d²ψ/dt²|`` when ``B = 0``).
     derivative : {"difference", "hosm"}
         Derivative enclosure for the unknown-input bounds.
     hosm : HOSMDifferentiator, optional
@@ -159,7 +205,7 @@ class UnknownInputIntervalObserver(Observer):
     Attributes
     ----------
     system : LTISystem
-        The continuous-time model (``A``, ``B``, ``C``, ``E`` = noise matrix of ``w``, ``F``).
+        The continuous-time model (``A``, ``B`` of the known input, ``C``, ``E`` = noise matrix of ``w``, ``F``).
     D : numpy.ndarray, shape (n, q)
         Unknown-input matrix.
     decoupling : UIODecoupling
@@ -198,12 +244,6 @@ class UnknownInputIntervalObserver(Observer):
             raise DimensionError("system: expected a continuous-time LTISystem (dt=None), got a discrete-time one")
         if system.dA is not None:
             raise DimensionError("system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)")
-        if system.m > 0:
-            raise DimensionError(
-                f"system: expected no known input (B with 0 columns), got m = {system.m}. A held input makes "
-                "dψ/dt jump at every sample, which breaks the |d²ψ/dt²| ≤ L assumption of the bounds; "
-                "the paper's example has none"
-            )
         self.system = system
         self.bounds = bounds.for_system(system)
         n, p = system.n, system.p
@@ -231,9 +271,11 @@ class UnknownInputIntervalObserver(Observer):
         self.mu1 = float(mu1)
         self.input_magnitude = float(input_magnitude)
         self.transient_s = 0.0 if derivative == "difference" else float(hosm_transient)
-        poles = coords.poles
-        if np.any(poles >= 0):
-            raise DesignError(f"coords: expected negative poles, got {poles}")
+        if np.any(coords.poles.real >= 0):
+            raise DesignError(f"coords: expected poles with negative real parts, got {coords.poles}")
+        off = coords.M[~np.eye(n, dtype=bool)]
+        if off.size and off.min() < 0:
+            raise DesignError(f"coords: expected a Metzler M, got an off-diagonal entry {off.min():.3g}")
         self._c = self._precompute()
         self.rate_radius = np.abs(system.F) @ self.noise_rate
         self.beta = hosm_error_bound(
@@ -279,15 +321,16 @@ class UnknownInputIntervalObserver(Observer):
         noise_rate : array_like, shape (nv,)
             Bound of ``|dv/dt|`` (the paper's ``δ̇`` bound); the noise must be smooth.
         output_accel : array_like, shape (p,)
-            Bound ``L`` of ``|d²ψ/dt²|`` (Levant's Lipschitz constant; ``λ_1 = 1.1 L``).
+            Bound ``L`` of ``|d/dt (dψ/dt - CBu)|``, the output acceleration without the known input's
+            direct term (``|d²ψ/dt²|`` when ``B = 0``; Levant's Lipschitz constant, ``λ_1 = 1.1 L``).
         W : array_like, shape (n, p), optional
             Free parameter of (11), default 0.
         poles : array_like, shape (n,), optional
-            Real distinct negative poles of ``PA - KC`` (default: searched, see
-            :func:`~intervalobs.design.uio.design_uio_coordinates`).
+            Poles of ``PA - KC``: real (repeated up to ``p`` times) or complex pairs with a real partner
+            (default: searched, see :func:`~intervalobs.design.uio.design_uio_coordinates`).
         K, T : array_like, optional
-            A given gain (and coordinates), checked against Hypothesis 6; ``T (PA - KC) T⁻¹`` must be
-            diagonal to rounding for this implementation.
+            A given gain (and coordinates), checked against Hypothesis 6: ``T (PA - KC) T⁻¹`` Metzler and
+            Hurwitz (default ``T``: onto :func:`~intervalobs.design.uio.metzler_block_form`).
         derivative : {"difference", "hosm"}
             Derivative enclosure used for the unknown-input bounds.
         hosm : HOSMDifferentiator, optional
@@ -308,7 +351,7 @@ class UnknownInputIntervalObserver(Observer):
         AssumptionError
             Hypothesis 4, 5 or 6 fails.
         DesignError
-            No suitable gain/coordinates, or given ``T`` does not diagonalise ``PA - KC``.
+            No suitable gain/coordinates.
         """
         bounds = bounds.for_system(system)
         d = as_matrix("D", D, (system.n, None))
@@ -318,12 +361,6 @@ class UnknownInputIntervalObserver(Observer):
         delta_radius = np.abs(system.F) @ (0.5 * (bounds.v[1] - bounds.v[0]))
         if K is not None:
             coords = check_cooperative(system.A, system.C, decoupling, K, T)
-            scale = max(1.0, float(np.abs(coords.J).max()))
-            if coords.offdiagonal > 1e-9 * scale:
-                raise DesignError(
-                    "T: this observer needs T (PA - KC) T⁻¹ diagonal (real distinct poles, T = V⁻¹); "
-                    f"got off-diagonal entries up to {coords.offdiagonal:.3g}; give T=None"
-                )
         else:
             coords = design_uio_coordinates(system.A, system.C, decoupling, omega_radius, delta_radius, poles)
         return cls(
@@ -346,25 +383,33 @@ class UnknownInputIntervalObserver(Observer):
         sys, dec, co = self.system, self.decoupling, self.coords
         h, n = self.h, self.n
         assert self.bounds.w is not None and self.bounds.v is not None
-        lam = co.poles
-        a = np.empty(n)
-        b = np.empty(n)
-        c_end = np.empty(n)
-        for i, li in enumerate(lam):
-            # first row of expm([[λh, 1, 0], [0, 0, 1], [0, 0, 0]]) = (e^{λh}, φ1(λh), φ2(λh))
-            blk = np.array([[li * h, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
-            row = expm(blk)[0]
-            a[i], b[i], c_end[i] = row[0], h * row[1], h * row[2]
-        if np.any(a <= 0) or np.any(a >= 1):
-            raise DesignError(f"h: expected 0 < exp(λh) < 1, got {a}")
-        c_start = b - c_end
+        mm = co.M
+        # top block row of expm([[Mh, I, 0, 0], [0, 0, I, 0], [0, 0, 0, I], 0]) = (e^{Mh}, φ1, φ2, φ3)(Mh)
+        big = np.zeros((4 * n, 4 * n))
+        big[:n, :n] = mm * h
+        for i in range(3):
+            big[i * n : (i + 1) * n, (i + 1) * n : (i + 2) * n] = np.eye(n)
+        top = expm(big)[:n]
+        phi, phi1, phi2, phi3 = (top[:, i * n : (i + 1) * n] for i in range(4))
+        # exact values are nonnegative (M Metzler); clipping a rounding-level negative entry only moves it
+        # towards the exact value, whose distance stays bounded by the expm error below
+        Phi = np.maximum(phi, 0.0)
+        Gam = np.maximum(h * phi1, 0.0)
+        G1 = np.maximum(h * phi2, 0.0)
+        G0 = np.maximum(Gam - G1, 0.0)
+        Grem = np.maximum(h**3 * (phi2 - 2 * phi3) / 2, 0.0)
+        # expm (scaling and squaring, Padé) of a small well-scaled matrix: error a few ulps of its norm;
+        # we allow 64 n u of the largest entry of each matrix
+        expm_err = 64 * n * _U
+        dPhi = np.full((n, n), expm_err * float(Phi.max()))
+        G_mag = np.maximum(np.abs(G0), np.abs(G1)) + expm_err * float(Gam.max()) / ROUNDING_MARGIN
         T, S = co.T, co.S
         absT, absS = np.abs(T), np.abs(S)
-        # Rounding budget. The exact model is defined by the float matrices T, E, K, C, A, D, (CD)†;
+        # Rounding budget. The exact model is defined by the float matrices T, E, K, C, A, D, B, (CD)†;
         # every other matrix is computed, and |computed - exact| is bounded entrywise by g·(sum of
         # |products|) (g generously above n·u), propagated below. Terms named d* are such bounds;
         # "*_mag" matrices carry them into the magnitude that the output margin multiplies.
-        g_ = 8 * (n + sys.p + self.q) * _U
+        g_ = 8 * (n + sys.p + self.q + sys.m) * _U
         absE, absC, absA, absK, absN = np.abs(dec.E), np.abs(sys.C), np.abs(sys.A), np.abs(co.K), np.abs(co.N)
         absP = np.abs(dec.P)
         dP = g_ * (1 + absE @ absC)
@@ -380,31 +425,44 @@ class UnknownInputIntervalObserver(Observer):
         dS = r_norm / (1 - r_norm) * float(absS.sum(axis=1).max())  # entrywise bound of |T⁻¹ - S|
         dTL = g_ * (absT @ absK + absT @ absN @ absE) + absT @ dN @ absE
         dTPE = g_ * absT @ absP @ np.abs(sys.E) + absT @ dP @ np.abs(sys.E)
+        dTPB = g_ * absT @ absP @ np.abs(sys.B) + absT @ dP @ np.abs(sys.B)
         w_lo, w_hi = self.bounds.w
         v_lo, v_hi = self.bounds.v
         noise_lo, noise_hi = matvec_bounds(TPE, w_lo, w_hi)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
         noise_mag = (np.abs(TPE) + dTPE / ROUNDING_MARGIN) @ w_mag
         delta_lo, delta_hi = matvec_bounds(sys.F, v_lo, v_hi)
-        # remainder of the linear interpolation of ψ: ∫ e^{λ(h-s)} L s(h-s)/2 ds ≤ L h³/12
-        remainder = (np.abs(TL) + dTL) @ self.output_accel * h**3 / 12
-        # PD is 0 only to rounding: the leak T P D ξ, with |ξ| ≤ input_magnitude
+        # deviation of ψ from its chord: |r| <= (L + 4|CB| u_r / h) s(h - s)/2 (module docstring)
+        TL_abs = np.abs(TL) + dTL
+        remainder = Grem @ TL_abs @ self.output_accel
+        CB = sys.C @ sys.B
+        input_remainder = Grem @ TL_abs @ (np.abs(CB) + g_ * absC @ np.abs(sys.B)) * (4 / h)
+        # PD is 0 only to rounding: the leak T P D ξ, with |ξ| <= input_magnitude
         pd = np.abs(dec.P @ self.D) + g_ * absP @ np.abs(self.D) + dP @ np.abs(self.D)
-        leak = absT @ pd @ np.full(self.q, self.input_magnitude) * b
-        const_pad = (remainder + leak) * (1 + 1e-9)
-        # J = T N T⁻¹ - Λ (off-diagonal and diagonal departures), exact T⁻¹ = S + ΔS, |ΔS| ≤ dS
+        leak = Gam @ absT @ pd @ np.full(self.q, self.input_magnitude)
+        const_pad = (remainder + leak) * (1 + 1e-9) + expm_err * float(Grem.max()) * TL_abs.sum(axis=1) * (
+            self.output_accel.max(initial=0.0)
+        )
+        # J = T N T⁻¹ - M (rounding-level departures), exact T⁻¹ = S + ΔS, |ΔS| <= dS
         offdiag = (
-            np.abs(co.J - np.diag(lam))
+            np.abs(co.J - mm)
             + g_ * absT @ absN @ absS
             + absT @ dN @ absS
             + (absT @ absN).sum(axis=1, keepdims=True) * dS
         )
+        # majorant of the nonnegative rounding recursion e_{k+1} = Φ e_k + pad_k: e_k <= s_k v
+        v = np.linalg.solve(-mm, np.ones(n))
+        if np.any(v <= 0):
+            raise DesignError(f"coords: expected -M⁻¹1 > 0 for a Metzler Hurwitz M, got {v}")
+        v = v / v.max()
+        rho = float(np.max((Phi @ v + dPhi @ v) / v)) * (1 + 4 * (n + 2) * _U)
+        if not rho < 1:
+            raise DesignError(f"h: expected e^(Mh) v <= ρ v with ρ < 1, got ρ = {rho!r}")
         m0 = dec.M0
         m0ca = m0 @ sys.C @ sys.A
         d_m0ca = g_ * np.abs(m0) @ absC @ absA
         Mw = -m0ca @ S
         Mpsi = m0ca @ dec.E
-        Mu = -m0 @ sys.C @ sys.B
         Mv = -m0 @ sys.C @ sys.E
         Mw_mag = np.abs(Mw) + (d_m0ca @ absS + g_ * np.abs(m0ca) @ absS) / ROUNDING_MARGIN
         Mpsi_mag = np.abs(Mpsi) + (d_m0ca @ absE + g_ * np.abs(m0ca) @ absE) / ROUNDING_MARGIN
@@ -413,20 +471,23 @@ class UnknownInputIntervalObserver(Observer):
         leak_xi = np.abs(np.eye(self.q) - m0 @ sys.C @ self.D) + g_ * np.abs(m0) @ absC @ np.abs(self.D)
         xi_pad = leak_xi @ np.full(self.q, self.input_magnitude)
         return _Precomputed(
-            a=a, b=b, c_start=c_start, c_end=c_end, TL=TL, TPB=TPB, TE=T @ dec.E,
+            Phi=Phi, Gam=Gam, G0=G0, G1=G1, G_mag=G_mag, dPhi=dPhi, v=v, rho=rho,
+            TL=TL, TPB=TPB, TE=T @ dec.E, CB=CB,
             noise_lo=noise_lo, noise_hi=noise_hi, noise_mag=noise_mag, const_pad=const_pad,
-            offdiag=offdiag, dS=dS, delta_lo=delta_lo, delta_hi=delta_hi,
-            Mw=Mw, Mpsi=Mpsi, Mu=Mu, xi_noise_lo=xi_noise_lo, xi_noise_hi=xi_noise_hi,
+            input_remainder=input_remainder, offdiag=offdiag, grid=2 * np.abs(mm) * self.step_tolerance,
+            dS=dS, delta_lo=delta_lo, delta_hi=delta_hi,
+            Mw=Mw, Mpsi=Mpsi, xi_noise_lo=xi_noise_lo, xi_noise_hi=xi_noise_hi,
             xi_noise_mag=xi_noise_mag, xi_pad=xi_pad, M0CA_abs=np.abs(m0ca),
             TL_mag=np.abs(TL) + dTL / ROUNDING_MARGIN, TE_mag=absT @ absE, Mw_mag=Mw_mag, Mpsi_mag=Mpsi_mag,
+            TPB_mag=np.abs(TPB) + dTPB / ROUNDING_MARGIN,
         )  # fmt: skip
 
     def _asymptotic_widths(self) -> tuple[FloatArray, FloatArray]:
-        """Limits of the widths (eqs. (30), (34), (48) for this observer), rounding pads excluded."""
+        """Limits of the widths (eqs. (30), (34), (48) for this observer) for held point inputs, pads excluded."""
         c = self._c
         dw = self._c.delta_hi - self._c.delta_lo
-        g_width = (c.c_start + c.c_end) * (np.abs(c.TL) @ dw) + c.b * (c.noise_hi - c.noise_lo) + 2 * c.const_pad
-        rho_w = g_width / (1 - c.a)
+        g_width = (c.G0 + c.G1) @ (np.abs(c.TL) @ dw) + c.Gam @ (c.noise_hi - c.noise_lo) + 2 * c.const_pad
+        rho_w = np.linalg.solve(np.eye(self.n) - c.Phi, g_width)
         rho_x = np.abs(self.coords.S) @ rho_w + np.abs(self.decoupling.E) @ dw
         deriv = 2 * (self.rate_radius + 0.5 * self.output_accel * (self.h + self.step_tolerance))
         if self.derivative == "hosm":
@@ -443,7 +504,7 @@ class UnknownInputIntervalObserver(Observer):
     def paper_rho(self, zeta: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
         r"""The paper's asymptotic bounds (30), (34), (48) with its ``ẏ``-based forcing (sign-corrected).
 
-        :math:`\rho_z = -\Lambda^{-1}(2|TP|\bar\omega + 2|TK|\bar\delta + |TE|\bar\zeta)`,
+        :math:`\rho_z = -M^{-1}(2|TP|\bar\omega + 2|TK|\bar\delta + |TE|\bar\zeta)`,
         :math:`\rho_x = |T^{-1}|\rho_z`,
         :math:`\rho_\xi = |M_1|\rho_z + 2(|M_3|\bar\omega + (|M_0| + |M_4|)\bar{\dot\delta}
         + |M_0|\mu_1\bar\delta^{1/2})`, with :math:`\bar\zeta = 2(\bar{\dot\delta} + \mu_1\bar\delta^{1/2})`.
@@ -462,7 +523,7 @@ class UnknownInputIntervalObserver(Observer):
         delta_r = 0.5 * (c.delta_hi - c.delta_lo)
         z = 2 * self.beta if zeta is None else as_vector("zeta", zeta, self.p)
         forcing = 2 * omega_r + 2 * np.abs(co.T @ co.K) @ delta_r + np.abs(co.T @ dec.E) @ z
-        rho_z = forcing / np.abs(co.poles)
+        rho_z = np.linalg.solve(-co.M, forcing)
         rho_x = np.abs(co.S) @ rho_z
         m0 = dec.M0
         m1 = -m0 @ self.system.C @ self.system.A @ co.S
@@ -489,30 +550,46 @@ class UnknownInputIntervalObserver(Observer):
         self,
         tl0: tuple[FloatArray, FloatArray, FloatArray],
         tl1: tuple[FloatArray, FloatArray, FloatArray],
-        u: FloatArray,
+        u_lo: FloatArray,
+        u_hi: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
-        """Bounds of the exact input integral over one step (any leading axes)."""
+        """Bounds of the exact input integral over one step (any leading axes; module docstring)."""
         c = self._c
-        tpbu = _rmul(u, c.TPB)
-        base_hi = c.c_start * tl0[1] + c.c_end * tl1[1] + c.b * (c.noise_hi + tpbu)
-        base_lo = c.c_start * tl0[0] + c.c_end * tl1[0] + c.b * (c.noise_lo + tpbu)
-        mag = c.c_start * tl0[2] + c.c_end * tl1[2] + c.b * (c.noise_mag + _rmul(np.abs(u), np.abs(c.TPB)))
-        pad = c.const_pad + (ROUNDING_MARGIN + 2 * self.step_tolerance / self.h) * mag
+        bu_lo, bu_hi = matvec_bounds(c.TPB, u_lo, u_hi)
+        u_mag = np.maximum(np.abs(u_lo), np.abs(u_hi))
+        base_hi = _rmul(tl0[1], c.G0) + _rmul(tl1[1], c.G1) + _rmul(c.noise_hi + bu_hi, c.Gam)
+        base_lo = _rmul(tl0[0], c.G0) + _rmul(tl1[0], c.G1) + _rmul(c.noise_lo + bu_lo, c.Gam)
+        mag = _rmul(tl0[2] + tl1[2] + c.noise_mag + _rmul(u_mag, c.TPB_mag), c.G_mag)
+        pad = c.const_pad + _rmul(0.5 * (u_hi - u_lo), c.input_remainder)
+        pad = pad + (ROUNDING_MARGIN + 2 * self.step_tolerance / self.h) * mag
         return base_lo - pad, base_hi + pad
 
+    def _step_residual(self, w_now: FloatArray, w_next: FloatArray, g: FloatArray) -> FloatArray:
+        """Bound of ``|w_next - (Φ w_now + g)|`` in exact arithmetic, for computed ``w_next`` (module docstring)."""
+        c = self._c
+        phi_w = _rmul(w_now, c.Phi)
+        resid = np.abs(w_next - phi_w - g)
+        scale = np.abs(w_next) + _rmul(np.abs(w_now), c.Phi) + np.abs(g)
+        return np.asarray(resid + 2 * (self.n + 3) * _U * scale / (1 - (self.n + 3) * _U))
+
     def _pad_input(
-        self, w_lo: FloatArray, w_hi: FloatArray, g_lo: FloatArray, g_hi: FloatArray, w_run: FloatArray
+        self,
+        w_lo: FloatArray,
+        w_hi: FloatArray,
+        w_next: tuple[FloatArray, FloatArray],
+        g: tuple[FloatArray, FloatArray],
+        w_run: FloatArray,
     ) -> FloatArray:
-        """Per-step input of the rounding recursion (state-dependent departures from the exact model)."""
+        """Input of the rounding recursion: departures of the computed step from the exact model."""
         c = self._c
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
-        g_mag = np.maximum(np.abs(g_lo), np.abs(g_hi))
-        lam = np.abs(self.coords.poles)
-        return (
-            _RECURSION_ROUNDING * (w_mag + g_mag)
-            + 2 * lam * self.step_tolerance * w_mag
-            + c.b * _rmul(2 * w_run, c.offdiag)
-        )
+        residual = np.maximum(self._step_residual(w_lo, w_next[0], g[0]), self._step_residual(w_hi, w_next[1], g[1]))
+        return np.asarray(residual + _rmul(w_mag, c.dPhi + c.grid) + _rmul(_rmul(2 * w_run, c.offdiag), c.Gam))
+
+    def _majorant_step(self, s: FloatArray, pad: FloatArray) -> FloatArray:
+        """``s_{k+1} = ρ s_k + max_i pad_i / v_i``, rounded up."""
+        c = self._c
+        return np.asarray((c.rho * s + np.max(pad / c.v, axis=-1)) * (1 + 4 * _U))
 
     def _initial_w(self, x_lo: FloatArray, x_hi: FloatArray, y0: FloatArray) -> tuple[FloatArray, FloatArray]:
         c = self._c
@@ -542,32 +619,68 @@ class UnknownInputIntervalObserver(Observer):
         w_lo: FloatArray,
         w_hi: FloatArray,
         y: FloatArray,
-        u: FloatArray,
         d_lo: FloatArray,
         d_hi: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
-        """ξ from (36)–(37) in the w-coordinates, rounded outward; NaN where the derivative box is."""
+        """ξ from (36)–(37) in the w-coordinates, from a box of ``g = dψ/dt - CBu``, rounded outward."""
         c = self._c
         plo, phi = self._psi_box(y)
         a_lo, a_hi = matvec_bounds(self.decoupling.M0, d_lo, d_hi)
         b_lo, b_hi = matvec_bounds(c.Mw, w_lo, w_hi)
         e_lo, e_hi = matvec_bounds(c.Mpsi, plo, phi)
-        mu = _rmul(u, c.Mu)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
         mag = (
             _rmul(np.maximum(np.abs(d_lo), np.abs(d_hi)), np.abs(self.decoupling.M0))
             + _rmul(w_mag, c.Mw_mag)
             + _rmul(np.maximum(np.abs(plo), np.abs(phi)), c.Mpsi_mag)
-            + _rmul(np.abs(u), np.abs(c.Mu))
             + c.xi_noise_mag
         )
         pad = c.xi_pad + ROUNDING_MARGIN * mag + c.dS * (w_mag.sum(axis=-1, keepdims=True) * c.M0CA_abs.sum(axis=-1))
-        lo = a_lo + b_lo + e_lo + mu + c.xi_noise_lo - pad
-        hi = a_hi + b_hi + e_hi + mu + c.xi_noise_hi + pad
+        lo = a_lo + b_lo + e_lo + c.xi_noise_lo - pad
+        hi = a_hi + b_hi + e_hi + c.xi_noise_hi + pad
         return lo, hi
 
-    def _derivative_pair(self, y_prev: FloatArray, y_now: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return difference_pair_bounds(y_prev, y_now, self.h, self.rate_radius, self.output_accel, self.step_tolerance)
+    def _derivative_pair(
+        self, y_prev: FloatArray, y_now: FloatArray, u_lo: FloatArray, u_hi: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Box of ``g(t_k) = dψ/dt - CBu`` from ``y_{k-1}, y_k`` and the input box of the step between."""
+        d_lo, d_hi = difference_pair_bounds(
+            y_prev, y_now, self.h, self.rate_radius, self.output_accel, self.step_tolerance
+        )
+        cb_lo, cb_hi = matvec_bounds(self._c.CB, u_lo, u_hi)
+        pad = 4 * (self.m + 1) * _U * _rmul(np.maximum(np.abs(u_lo), np.abs(u_hi)), np.abs(self._c.CB))
+        return d_lo - cb_hi - pad, d_hi - cb_lo + pad
+
+    def _hosm_signal(self, y: FloatArray, u: FloatArray) -> FloatArray:
+        """``y - CB ∫u`` on the sample grid (exact for a held point input): its derivative is ``g + dδ/dt``."""
+        integral = np.zeros_like(u)
+        integral[..., 1:, :] = np.cumsum(u[..., :-1, :], axis=-2) * self.h
+        return np.asarray(y - _rmul(integral, self._c.CB))
+
+    def _input_signal(self, u: KnownInput, shape: tuple[int, ...], steps: int | None) -> tuple[FloatArray, FloatArray]:
+        """The known input as a box ``(lower, upper)`` broadcast to ``shape`` (point input: lower = upper)."""
+        if u is None:
+            if self.m > 0:
+                raise DataError(f"u: expected the known input (m = {self.m}), got None")
+            zero = np.zeros((*shape, self.m))
+            return zero, zero
+        if isinstance(u, tuple):
+            if len(u) != 2:
+                raise DataError(f"u: expected an array or a pair (lower, upper), got a tuple of {len(u)}")
+            lo, hi = self._input_array("u lower", u[0], steps), self._input_array("u upper", u[1], steps)
+            if lo.shape != hi.shape or np.any(lo > hi):
+                raise DataError("u: expected lower <= upper of one shape")
+        else:
+            lo = hi = self._input_array("u", u, steps)
+        return np.broadcast_to(lo, (*shape, self.m)), np.broadcast_to(hi, (*shape, self.m))
+
+    def _input_array(self, name: str, value: ArrayLike, steps: int | None) -> FloatArray:
+        if steps is not None:
+            return as_signal(name, value, steps, self.m)
+        arr = np.asarray(value, dtype=float)
+        if arr.shape[-1:] != (self.m,) or not np.all(np.isfinite(arr)):
+            raise DataError(f"{name}: expected finite values of shape (..., {self.m}), got {arr.shape}")
+        return arr
 
     # ------------------------------------------------------------------ protocol
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -598,7 +711,7 @@ class UnknownInputIntervalObserver(Observer):
             raise BoundsError(f"x0: expected finite boxes of shape (..., {self.n}) with lower <= upper")
         return lo, hi
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+    def step(self, state: ObserverState, y: ArrayLike, u: KnownInput = None) -> ObserverState:
         """Consume the next measurement ``y_k`` (and ``u_k``) and return the box at ``t_k``.
 
         Parameters
@@ -607,8 +720,9 @@ class UnknownInputIntervalObserver(Observer):
             From :meth:`init` or a previous :meth:`step`.
         y : array_like, shape (p,) or (M, p)
             Measurement at the next sample.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input at that sample (held until the following one).
+        u : array_like or (array_like, array_like), shape (m,) or (M, m), optional
+            Known input from that sample to the following one: a held value, or a pair ``(lower, upper)``
+            bounding it over the step. Required when ``m > 0``.
 
         Returns
         -------
@@ -617,12 +731,14 @@ class UnknownInputIntervalObserver(Observer):
         yk = np.asarray(y, dtype=float)
         if yk.shape[-1:] != (self.p,) or not np.all(np.isfinite(yk)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {yk.shape}")
-        uk = self._input(u, yk.shape[:-1])
+        u_lo, u_hi = self._input_signal(u, yk.shape[:-1], None)
+        if self.derivative == "hosm" and np.any(u_lo != u_hi):
+            raise DataError("u: derivative='hosm' needs a point-known input (lower == upper)")
         it = state.internal
         c = self._c
         if not it.get("started", False):
             w_lo, w_hi = self._initial_w(state.lower, state.upper, yk)
-            e = np.zeros_like(w_lo)
+            s = np.zeros(w_lo.shape[:-1])
             w_run = np.maximum(np.abs(w_lo), np.abs(w_hi))
             x_lo, x_hi = (
                 np.broadcast_to(state.lower, w_lo.shape).copy(),
@@ -633,41 +749,47 @@ class UnknownInputIntervalObserver(Observer):
             d_hi = np.full(yk.shape, np.nan)
             if self.derivative == "hosm" and hosm_q is not None:
                 d_lo, d_hi = hosm_q[..., 1] - self.beta, hosm_q[..., 1] + self.beta
-            xi_lo, xi_hi = self._input_box(w_lo - e, w_hi + e, yk, uk, d_lo, d_hi)
+            xi_lo, xi_hi = self._input_box(w_lo, w_hi, yk, d_lo, d_hi)
             internal = {
                 "started": True,
                 "w_lo": w_lo,
                 "w_hi": w_hi,
-                "e": e,
+                "s": s,
                 "w_run": w_run,
                 "y": yk.copy(),
-                "u": np.array(uk),
+                "u_lo": np.array(u_lo),
+                "u_hi": np.array(u_hi),
+                "cb_integral": np.zeros_like(yk),
                 "hosm": hosm_q,
             }
             return ObserverState(x_lo, x_hi, xi_lo, xi_hi, internal)
-        y_prev, u_prev = it["y"], it["u"]
-        g_lo, g_hi = self._forcing(self._tl_bounds(y_prev), self._tl_bounds(yk), u_prev)
-        w_lo = c.a * it["w_lo"] + g_lo
-        w_hi = c.a * it["w_hi"] + g_hi
+        y_prev = it["y"]
+        g_lo, g_hi = self._forcing(self._tl_bounds(y_prev), self._tl_bounds(yk), it["u_lo"], it["u_hi"])
+        w_lo = _rmul(it["w_lo"], c.Phi) + g_lo
+        w_hi = _rmul(it["w_hi"], c.Phi) + g_hi
         w_run = np.maximum(it["w_run"], np.maximum(np.abs(w_lo), np.abs(w_hi)))
-        e = c.a * it["e"] + self._pad_input(it["w_lo"], it["w_hi"], g_lo, g_hi, w_run)
+        s = self._majorant_step(it["s"], self._pad_input(it["w_lo"], it["w_hi"], (w_lo, w_hi), (g_lo, g_hi), w_run))
+        e = s[..., None] * c.v
         x_lo, x_hi = self._state_box(w_lo - e, w_hi + e, yk)
+        cb_integral = it["cb_integral"] + _rmul(it["u_lo"], c.CB) * self.h
         hosm_q = None
         if self.hosm is not None:
-            hosm_q = self.hosm.step(it["hosm"], y_prev, self.h)
+            hosm_q = self.hosm.step(it["hosm"], y_prev - it["cb_integral"], self.h)
         if self.derivative == "hosm" and hosm_q is not None:
             d_lo, d_hi = hosm_q[..., 1] - self.beta, hosm_q[..., 1] + self.beta
         else:
-            d_lo, d_hi = self._derivative_pair(y_prev, yk)
-        xi_lo, xi_hi = self._input_box(w_lo - e, w_hi + e, yk, uk, d_lo, d_hi)
+            d_lo, d_hi = self._derivative_pair(y_prev, yk, it["u_lo"], it["u_hi"])
+        xi_lo, xi_hi = self._input_box(w_lo - e, w_hi + e, yk, d_lo, d_hi)
         internal = {
             "started": True,
             "w_lo": w_lo,
             "w_hi": w_hi,
-            "e": e,
+            "s": s,
             "w_run": w_run,
             "y": yk.copy(),
-            "u": np.array(uk),
+            "u_lo": np.array(u_lo),
+            "u_hi": np.array(u_hi),
+            "cb_integral": cb_integral,
             "hosm": hosm_q,
         }
         return ObserverState(x_lo, x_hi, xi_lo, xi_hi, internal)
@@ -676,7 +798,7 @@ class UnknownInputIntervalObserver(Observer):
         self,
         t: ArrayLike,
         y: ArrayLike,
-        u: ArrayLike | None = None,
+        u: KnownInput = None,
         x0_lower: ArrayLike | None = None,
         x0_upper: ArrayLike | None = None,
         hosm_q1: ArrayLike | None = None,
@@ -689,13 +811,14 @@ class UnknownInputIntervalObserver(Observer):
             Sample times, uniformly spaced by ``h`` (to ``1e-9 h``).
         y : array_like, shape (T, p) or (M, T, p)
             Measurements.
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known input; must be None or empty (m = 0).
+        u : array_like or (array_like, array_like), shape (T, m) or (M, T, m), optional
+            Known input, required when ``m > 0``: row ``k`` is held on ``[t_k, t_{k+1})``, or a pair
+            ``(lower, upper)`` whose row ``k`` bounds the input over that step (any signal inside).
         x0_lower, x0_upper : array_like, optional
             Prior box (default: the design bounds).
         hosm_q1 : array_like, shape like ``y``, optional
-            With ``derivative="hosm"``: the estimate ``q₁`` already computed by ``self.hosm.run(y, h)``
-            (saves the time-stepping loop when several observers share one differentiator run).
+            With ``derivative="hosm"``: the estimate ``q₁`` already computed by ``self.hosm.run`` on
+            ``y - CB ∫u`` (``y`` itself when ``m = 0``; saves the loop when observers share one run).
 
         Returns
         -------
@@ -703,9 +826,15 @@ class UnknownInputIntervalObserver(Observer):
             State bounds, unknown-input bounds (NaN where none is available: the first sample with the
             difference enclosure) and ``meta`` with ``transient_s``.
         """
-        times, ys, us = self._signals(t, y, u)
+        times, ys, _ = self._signals(t, y, u[0] if isinstance(u, tuple) else u)
+        u_lo, u_hi = self._input_signal(u, ys.shape[:-1], times.size)
+        if self.derivative == "hosm" and np.any(u_lo != u_hi):
+            raise DataError("u: derivative='hosm' needs a point-known input (lower == upper)")
         x0_lo, x0_hi = self._prior(x0_lower, x0_upper)
-        lead = ys.shape[:-2]
+        lead = np.broadcast_shapes(ys.shape[:-2], u_lo.shape[:-2])
+        ys = np.broadcast_to(ys, (*lead, *ys.shape[-2:]))
+        u_lo = np.broadcast_to(u_lo, (*lead, *u_lo.shape[-2:]))
+        u_hi = np.broadcast_to(u_hi, (*lead, *u_hi.shape[-2:]))
         w0_lo, w0_hi = self._initial_w(x0_lo, x0_hi, ys[..., 0, :])
         w0_lo = np.broadcast_to(w0_lo, (*lead, self.n))
         w0_hi = np.broadcast_to(w0_hi, (*lead, self.n))
@@ -713,14 +842,22 @@ class UnknownInputIntervalObserver(Observer):
         g_lo, g_hi = self._forcing(
             tuple(v[..., :-1, :] for v in tl),  # type: ignore[arg-type]
             tuple(v[..., 1:, :] for v in tl),  # type: ignore[arg-type]
-            us[..., :-1, :],
+            u_lo[..., :-1, :],
+            u_hi[..., :-1, :],
         )
-        w_lo = self._scalar_recursion(w0_lo, g_lo)
-        w_hi = self._scalar_recursion(w0_hi, g_hi)
+        recursion = LinearRecursion(self._c.Phi)
+        w_lo = recursion(w0_lo, g_lo)
+        w_hi = recursion(w0_hi, g_hi)
         w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
         w_run = np.maximum.accumulate(w_mag, axis=-2)
-        pad_in = self._pad_input(w_lo[..., :-1, :], w_hi[..., :-1, :], g_lo, g_hi, w_run[..., 1:, :])
-        e = self._scalar_recursion(np.zeros_like(w0_lo), pad_in)
+        pad_in = self._pad_input(
+            w_lo[..., :-1, :],
+            w_hi[..., :-1, :],
+            (w_lo[..., 1:, :], w_hi[..., 1:, :]),
+            (g_lo, g_hi),
+            w_run[..., 1:, :],
+        )
+        e = self._majorant(pad_in)
         w_lo_p, w_hi_p = w_lo - e, w_hi + e
         x_lo, x_hi = self._state_box(w_lo_p, w_hi_p, ys)
         x_lo[..., 0, :] = x0_lo
@@ -728,7 +865,7 @@ class UnknownInputIntervalObserver(Observer):
         if self.derivative == "hosm":
             assert self.hosm is not None
             if hosm_q1 is None:
-                q1 = self.hosm.run(ys, self.h)[..., 1]
+                q1 = self.hosm.run(self._hosm_signal(ys, u_lo), self.h)[..., 1]
             else:
                 q1 = np.asarray(hosm_q1, dtype=float)
                 if q1.shape != ys.shape:
@@ -737,24 +874,27 @@ class UnknownInputIntervalObserver(Observer):
         else:
             d_lo = np.full(ys.shape, np.nan)
             d_hi = np.full(ys.shape, np.nan)
-            d_lo[..., 1:, :], d_hi[..., 1:, :] = self._derivative_pair(ys[..., :-1, :], ys[..., 1:, :])
-        xi_lo, xi_hi = self._input_box(w_lo_p, w_hi_p, ys, us, d_lo, d_hi)
+            d_lo[..., 1:, :], d_hi[..., 1:, :] = self._derivative_pair(
+                ys[..., :-1, :], ys[..., 1:, :], u_lo[..., :-1, :], u_hi[..., :-1, :]
+            )
+        xi_lo, xi_hi = self._input_box(w_lo_p, w_hi_p, ys, d_lo, d_hi)
         meta = {
             "method": "unknown-input interval observer (seed 000)",
             "derivative": self.derivative,
             "transient_s": float(times[0]) + self.transient_s,
-            "poles": self.coords.poles.tolist(),
+            "poles": [complex(v) if v.imag else float(v.real) for v in self.coords.poles],
             "rho_x": self.rho_x.tolist(),
             "rho_xi": self.rho_xi.tolist(),
+            "known_input": "none" if self.m == 0 else ("interval" if np.any(u_lo != u_hi) else "held point"),
         }
         return Estimate(times, x_lo, x_hi, xi_lo, xi_hi, meta)
 
-    def _scalar_recursion(self, w0: FloatArray, g: FloatArray) -> FloatArray:
-        """``w_{k+1} = a ⊙ w_k + g_k`` for every component, with the initial value as row 0."""
-        a = self._c.a
-        out = np.empty((*g.shape[:-2], g.shape[-2] + 1, self.n))
-        out[..., 0, :] = w0
-        for i in range(self.n):
-            zi = (a[i] * w0[..., i])[..., None]
-            out[..., 1:, i] = lfilter([1.0], [1.0, -a[i]], g[..., i], axis=-1, zi=zi)[0]
-        return out
+    def _majorant(self, pad: FloatArray) -> FloatArray:
+        """``e_k = s_k v`` from the scalar recursion of :meth:`_majorant_step` over a record, row 0 zero."""
+        c = self._c
+        steps = pad.shape[-2]
+        drive = np.max(pad / c.v, axis=-1) * (1 + 4 * _U)
+        s = np.zeros((*pad.shape[:-2], steps + 1))
+        # nonnegative recursion: lfilter's relative rounding is at most (1 + u)^(2k) - 1 <= 3ku
+        s[..., 1:] = lfilter([1.0], [1.0, -c.rho], drive, axis=-1) * (1 + 3 * (steps + 1) * _U)
+        return np.asarray(s[..., None] * c.v)
