@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from intervalobs.design.differentiator import HOSMDifferentiator, levant_gains
-from intervalobs.errors import AssumptionError, DataError, DesignError, DimensionError
+from intervalobs.errors import AssumptionError, DataError, DimensionError
 from intervalobs.examples import aircraft as ac
 from intervalobs.interval import ROUNDING_MARGIN
 from intervalobs.observers.unknown_input import UnknownInputIntervalObserver
@@ -132,4 +132,4 @@ def test_given_triangular_metzler_coordinates_are_used() -> None:
     assert est.enclosure(rec.x, transient=0.0).max_violation == 0.0
     assert est.input_enclosure(rec.xi, transient=0.0).max_violation == 0.0
     with pytest.raises(AssumptionError, match="Metzler"):
-        _design(K=obs.coords.K, T=np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1) @ obs.coords.T)
+        _design(K=obs.coords.K, T=(np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1)) @ obs.coords.T)

@@ -17,6 +17,14 @@ differentiable output). Worst-case admissible kinds (documented choices, bounds 
   rate limit the assumption imposes);
 * process noise ω (enters the dynamics): ``"sine"`` — full amplitude 1e-2, 1 rad/s, random phases;
   ``"vertex"`` — a constant vertex of the box (random signs).
+
+Known control inputs (not in the paper, whose inputs are all unknown): the paper's ``D`` is the
+control matrix of Edwards & Spurgeon's model, column 1 the rudder, column 2 the aileron (our reading of
+its rows: yaw rate and roll rate). With ``control=...`` the surfaces get known commands
+:func:`control_input` through ``B_CONTROL = D`` on top of the unknown inputs ξ (actuator faults or
+disturbances in the same channels): ``ẋ = Ax + Bu + Dξ + ω``. ``"held"``: the command sampled and held
+between samples (exact zero-order-hold response); ``"continuous"``: the command itself, with its steps
+*inside* sampling steps (exact closed form), for which the observer is given per-step boxes.
 """
 
 from __future__ import annotations
@@ -25,11 +33,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.signal import lfilter
 
 from ..errors import DimensionError
 from ..systems.lti import Bounds, LTISystem
 
 __all__ = [
+    "B_CONTROL",
     "DELTA_BAR",
     "DELTA_DOT_BAR",
     "HOSM_LAMBDA",
@@ -45,6 +55,8 @@ __all__ = [
     "D",
     "aircraft_bounds",
     "aircraft_system",
+    "control_box",
+    "control_input",
     "simulate_aircraft",
     "unknown_input",
 ]
@@ -111,14 +123,68 @@ PAPER = {
 """The paper's printed design numbers (§5.1)."""
 
 
-def aircraft_system() -> LTISystem:
-    """The model of seed 000, §5.1: ``ẋ = Ax + Dξ + ω``, ``y = Cx + δ`` (B = 0; D is separate).
+B_CONTROL = D.copy()
+"""Known control inputs (rudder, aileron): the control matrix of Edwards & Spurgeon's model (= the paper's D)."""
+RUDDER_STEPS = ((2.00005, 0.1), (6.00003, -0.15))
+"""(time [s], size [rad]) of the rudder steps: both fall inside a sampling step of 1e-4 s."""
+AILERON_AMPLITUDE, AILERON_FREQUENCY = 0.2, 0.8
+
+
+def aircraft_system(known_inputs: bool = False) -> LTISystem:
+    """The model of seed 000, §5.1: ``ẋ = Ax + Bu + Dξ + ω``, ``y = Cx + δ`` (D is separate).
+
+    Parameters
+    ----------
+    known_inputs : bool
+        ``B = B_CONTROL`` (rudder, aileron) when True; the paper's ``B = 0`` otherwise.
 
     Returns
     -------
     LTISystem
     """
-    return LTISystem(A, C)
+    return LTISystem(A, C, B=B_CONTROL) if known_inputs else LTISystem(A, C)
+
+
+def control_input(t: ArrayLike) -> FloatArray:
+    """The commands: rudder steps :data:`RUDDER_STEPS`, aileron ``0.2 sin(0.8 t)`` [rad], shape (T, 2).
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    tt = np.asarray(t, dtype=float)
+    rudder = sum((size * (tt >= when) for when, size in RUDDER_STEPS), np.zeros_like(tt))
+    return np.stack([rudder, AILERON_AMPLITUDE * np.sin(AILERON_FREQUENCY * tt)], axis=-1)
+
+
+def control_box(t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Boxes of the continuous commands over each step ``[t_k, t_{k+1}]`` (last row: the last sample).
+
+    The rudder is exact (the step's values at both ends and any step inside); the aileron sine is
+    bounded by its values at the ends widened by ``|u̇| h / 2`` (``|u̇| <= 0.2·0.8``), a sound bound of
+    a function with that Lipschitz constant between two samples.
+
+    Parameters
+    ----------
+    t : array_like, shape (T,)
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (T, 2)
+    """
+    tt = np.asarray(t, dtype=float)
+    u = control_input(tt)
+    nxt = np.vstack([u[1:], u[-1:]])
+    lo, hi = np.minimum(u, nxt), np.maximum(u, nxt)
+    step = np.append(np.diff(tt), 0.0)
+    slack = AILERON_AMPLITUDE * AILERON_FREQUENCY * step / 2
+    lo[:, 1] -= slack
+    hi[:, 1] += slack
+    return lo, hi
 
 
 def aircraft_bounds() -> Bounds:
@@ -160,8 +226,10 @@ class AircraftRecord:
     x : (..., T, 5) true state
     y : (..., T, 4) measurements
     xi : (T, 2) unknown input
-    psi, psi_dot, psi_ddot : (..., T, 4) noise-free output and its first two derivatives
+    psi, psi_dot : (..., T, 4) noise-free output and its derivative (right limit)
+    psi_ddot : (..., T, 4) ``d/dt (dψ/dt - CBu)`` (``d²ψ/dt²`` without inputs), larger of both limits
     delta : (..., T, 4) measurement noise
+    u : (T, 2) known input at the samples (zeros without ``control``)
     """
 
     t: FloatArray
@@ -172,6 +240,7 @@ class AircraftRecord:
     psi_dot: FloatArray
     psi_ddot: FloatArray
     delta: FloatArray
+    u: FloatArray
 
 
 def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
@@ -205,6 +274,7 @@ def simulate_aircraft(
     delta_kind: str = "sine",
     omega_kind: str = "sine",
     x0: ArrayLike | None = None,
+    control: str | None = None,
 ) -> AircraftRecord:
     """Exact truth of the aircraft model with smooth worst-case admissible noise (module docstring).
 
@@ -222,6 +292,8 @@ def simulate_aircraft(
         Process-noise kind.
     x0 : array_like, shape (5,), optional
         Initial state (default: the paper's).
+    control : {None, "held", "continuous"}
+        Known commands :func:`control_input` through ``B_CONTROL`` (module docstring); None: no input.
 
     Returns
     -------
@@ -232,6 +304,8 @@ def simulate_aircraft(
         raise DimensionError(f"delta_kind: expected 'sine' or 'plateau', got {delta_kind!r}")
     if omega_kind not in ("sine", "vertex"):
         raise DimensionError(f"omega_kind: expected 'sine' or 'vertex', got {omega_kind!r}")
+    if control not in (None, "held", "continuous"):
+        raise DimensionError(f"control: expected None, 'held' or 'continuous', got {control!r}")
     rng = np.random.default_rng(seed)
     m = 1 if runs is None else int(runs)
     n, p = 5, 4
@@ -243,13 +317,17 @@ def simulate_aircraft(
     xs, ys, psis, dpsis, ddpsis, deltas = [], [], [], [], [], []
     vals, vecs = np.linalg.eig(A)
     vinv = np.linalg.inv(vecs)
+    x_u, u_right, u_left, u_terms = _control_response(tt, control, vals, vecs, vinv)
+    u_direct = u_right.copy()  # the part of u whose response x_u is not in the closed form below
+    if control == "continuous":
+        u_direct[:, 1] = 0.0
     for _ in range(m):
         omega_terms: list[tuple[float, NDArray[np.complex128]]] = []
         if omega_kind == "sine":
             omega_terms.append((nu_omega, OMEGA_BAR * np.exp(1j * rng.uniform(0, 2 * np.pi, n))))
         else:
             omega_terms.append((0.0, (OMEGA_BAR * rng.choice([-1.0, 1.0], n)).astype(np.complex128)))
-        terms = [(1.0, xi_amp.astype(complex)), *omega_terms]
+        terms = [(1.0, xi_amp.astype(complex)), *omega_terms, *u_terms]
         xp = np.zeros((tt.size, n))
         xp_dot = np.zeros((tt.size, n))
         xp0 = np.zeros(n)
@@ -264,11 +342,16 @@ def simulate_aircraft(
             omega_dot += np.real(1j * nu * b * np.exp(1j * nu * tt)[:, None])
         coef = vinv @ (start - xp0)
         modes = np.exp(np.outer(tt - tt[0], vals))
-        x = np.real(np.einsum("tj,ij->ti", modes * coef, vecs)) + xp
+        x = np.real(np.einsum("tj,ij->ti", modes * coef, vecs)) + xp + x_u
         x[0] = start  # exact at t_0 (the closed form reproduces it only to rounding)
         x_dot = np.real(np.einsum("tj,ij->ti", modes * (vals * coef), vecs)) + xp_dot
+        x_dot = x_dot + _rmul(x_u, A) + _rmul(u_direct, B_CONTROL)
         _, xi_dot = unknown_input(tt)
-        x_ddot = _rmul(x_dot, A) + _rmul(xi_dot, D) + omega_dot
+        # d/dt (dψ/dt - CBu) = C(A ẋ + D ξ̇ + ω̇), at both one-sided limits of ẋ
+        accel = _rmul(x_dot, A) + _rmul(xi_dot, D) + omega_dot
+        accel_left = accel + _rmul(_rmul(u_left - u_right, B_CONTROL), A)
+        g_dot, g_dot_left = _rmul(accel, C), _rmul(accel_left, C)
+        g_dot = np.where(np.abs(g_dot_left) > np.abs(g_dot), g_dot_left, g_dot)
         psi = _rmul(x, C)
         if delta_kind == "sine":
             delta = DELTA_BAR * np.sin(nu_delta * tt[:, None] + rng.uniform(0, 2 * np.pi, p))
@@ -277,9 +360,49 @@ def simulate_aircraft(
         xs.append(x)
         psis.append(psi)
         dpsis.append(_rmul(x_dot, C))
-        ddpsis.append(_rmul(x_ddot, C))
+        ddpsis.append(g_dot)
         deltas.append(delta)
         ys.append(psi + delta)
     stack = (lambda v: np.stack(v)) if runs is not None else (lambda v: v[0])
     xi, _ = unknown_input(tt)
-    return AircraftRecord(tt, stack(xs), stack(ys), xi, stack(psis), stack(dpsis), stack(ddpsis), stack(deltas))
+    return AircraftRecord(
+        tt, stack(xs), stack(ys), xi, stack(psis), stack(dpsis), stack(ddpsis), stack(deltas), u_right
+    )
+
+
+def _control_response(
+    t: FloatArray, control: str | None, vals: NDArray[np.complex128], vecs: NDArray[np.complex128], vinv: NDArray
+) -> tuple[FloatArray, FloatArray, FloatArray, list[tuple[float, NDArray[np.complex128]]]]:
+    """Zero-state response to the commands, the input at the samples (right and left limits), sine terms.
+
+    ``"held"``: exact zero-order-hold recursion of the modes, ``z_{k+1} = e^{λh} z_k + (e^{λh} - 1)/λ ·
+    V⁻¹B u_k``. ``"continuous"``: the steps in closed form, ``A⁻¹(e^{A(t-τ)} - I) b`` for ``t >= τ``; the
+    aileron sine is returned as a term for the caller's closed form.
+    """
+    n = A.shape[0]
+    zero = np.zeros((t.size, n))
+    if control is None:
+        u0 = np.zeros((t.size, 2))
+        return zero, u0, u0, []
+    if control == "held":
+        h = float(t[1] - t[0])
+        if np.max(np.abs(np.diff(t) - h)) > 1e-9 * h:
+            raise DimensionError("t: control='held' expects a uniform time grid")
+        u = control_input(t)
+        drive = _rmul(u, B_CONTROL) @ vinv.T
+        decay = np.exp(vals * h)
+        gain = (decay - 1) / vals
+        modes = np.zeros((t.size, n), dtype=complex)
+        for i in range(n):
+            modes[1:, i] = lfilter([gain[i]], [1.0, -decay[i]], drive[:-1, i])
+        u_left = np.vstack([u[:1], u[:-1]])
+        return np.real(modes @ vecs.T), u, u_left, []
+    x_u = zero.copy()
+    for when, size in RUDDER_STEPS:
+        after = t >= when
+        modes = np.exp(np.outer(t[after] - when, vals))
+        b = vinv @ (B_CONTROL[:, 0] * size)
+        x_u[after] += np.real(((modes - 1) / vals * b) @ vecs.T)
+    sine = (AILERON_FREQUENCY, -1j * AILERON_AMPLITUDE * B_CONTROL[:, 1].astype(complex))
+    u = control_input(t)
+    return x_u, u, u, [sine]

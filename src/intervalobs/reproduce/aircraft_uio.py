@@ -3,12 +3,16 @@
 What it does:
 
 1. computes E, P from A, C, D (W = 0) and compares them with the printed ones; checks the printed K, T;
-2. designs K, T (real distinct poles, T = V⁻¹, diagonal T N T⁻¹) and the observer;
+2. designs K, T (pole search, Metzler block form of T N T⁻¹; here the real distinct winner) and the observer;
 3. simulates the exact truth for 20 s at Te = 1e-4 (200 001 samples) under four smooth worst-case noise
    realisations (sine / plateau measurement noise × sine / vertex process noise);
 4. runs the observer with the provable difference enclosure of ẏ (recommended), and, for comparison,
    with the paper's HOSM (λ = 100, µ1 = 1.1) and with Levant-tuned gains, measuring the HOSM error;
-5. writes summary.json, trajectories.npz (run 0) and the figures.
+5. adds two known control inputs (rudder steps, aileron sine, through the model's control matrix
+   ``B = D``) on top of the unknown inputs: held commands (point-known) and continuous commands whose
+   steps fall inside sampling steps (interval-known per step), and compares the widths with the
+   no-input case;
+6. writes summary.json, trajectories.npz (run 0) and the figures.
 """
 
 from __future__ import annotations
@@ -33,9 +37,11 @@ NOISE_CASES = (("sine", "sine"), ("plateau", "vertex"), ("sine", "vertex"), ("pl
 HOSM_TRANSIENT = 1.0
 
 
-def _observer(derivative: str = "difference", hosm: HOSMDifferentiator | None = None) -> UnknownInputIntervalObserver:
+def _observer(
+    derivative: str = "difference", hosm: HOSMDifferentiator | None = None, known_inputs: bool = False
+) -> UnknownInputIntervalObserver:
     return UnknownInputIntervalObserver.design(
-        ac.aircraft_system(),
+        ac.aircraft_system(known_inputs),
         ac.aircraft_bounds(),
         ac.D,
         ac.TE,
@@ -160,6 +166,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "settling_time_to_beta": settling_time(t, err, hosm_obs.beta),
             "input_enclosure_with_beta_run0": inp.as_dict(),
         }
+    known, known_est, known_rec = _known_inputs(t, seed, est)
     # the paper's step is not the problem for the state bounds: they do not use ẏ here
     rec0 = records[0]
     est0 = _single(est, 0)
@@ -192,10 +199,11 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "K": co.K,
         "T": co.T,
         "L": co.L,
-        "poles": co.poles,
+        "poles": co.poles.real,
         "eig_N": np.sort(np.linalg.eigvals(co.N).real),
         "metzler_check": co.metzler_check,
-        "max_offdiagonal_TNTinv": co.offdiagonal,
+        "metzler_form_M": co.M,
+        "max_abs_TNTinv_minus_M": co.form_residual,
         "cond_T": co.cond_T,
         "pole_candidates_score": co.tried,
         "rho_x": observer.rho_x,
@@ -215,6 +223,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "max_abs_psi_ddot_in_simulation": float(max(np.abs(r.psi_ddot).max() for r in records)),
         },
         "hosm": hosm_report,
+        "known_inputs": known,
         "monte_carlo": {
             "runs": len(records),
             "state": mc_state.as_dict(),
@@ -250,10 +259,115 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "hosm_paper_d_lower": hosm_estimates["paper_lambda100"].input_lower,
         "hosm_paper_d_upper": hosm_estimates["paper_lambda100"].input_upper,
     }
+    trajectories.update(
+        {
+            # own truth (a different record): names outside the checker's "<observer>_x_lower" pattern
+            "known_input_truth_state": known_rec.x,
+            "known_input_truth_xi": known_rec.xi,
+            "known_input_state_lower": known_est.lower,
+            "known_input_state_upper": known_est.upper,
+            "known_input_xi_lower": known_est.input_lower,
+            "known_input_xi_upper": known_est.input_upper,
+            "known_input_u": known_rec.u,
+        }
+    )
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         _figures(out_dir, est0, rec0, observer, hosm_estimates)
+        _known_input_figure(out_dir, known_est, known_rec, est0)
     return summary
+
+
+KNOWN_INPUT_CASES = (
+    ("held", "sine", "sine"),
+    ("held", "plateau", "vertex"),
+    ("continuous", "plateau", "vertex"),
+    ("continuous", "sine", "sine"),
+)
+"""(command kind, measurement-noise kind, process-noise kind) of the known-input runs."""
+
+
+def _known_inputs(t: np.ndarray, seed: int, free: Estimate) -> tuple[dict[str, Any], Estimate, ac.AircraftRecord]:
+    """Runs with the rudder/aileron commands known; widths against the no-input runs ``free``."""
+    observer = _observer(known_inputs=True)
+    after = t >= 1.0
+    assert free.input_lower is not None and free.input_upper is not None
+    free_w = free.width()[:, after].mean(axis=(0, 1))
+    free_wi = (free.input_upper - free.input_lower)[:, after].mean(axis=(0, 1))
+    cases = []
+    shown: tuple[Estimate, ac.AircraftRecord] | None = None
+    for i, (kind, dk, ok) in enumerate(KNOWN_INPUT_CASES):
+        rec = ac.simulate_aircraft(t, seed=seed * 100 + 50 + i, delta_kind=dk, omega_kind=ok, control=kind)
+        u = rec.u if kind == "held" else ac.control_box(t)
+        est = observer.run(t, rec.y, u)
+        assert est.input_lower is not None and est.input_upper is not None
+        width = est.width()[after].mean(axis=0)
+        input_width = (est.input_upper - est.input_lower)[after].mean(axis=0)
+        cases.append(
+            {
+                "command": kind,
+                "delta": dk,
+                "omega": ok,
+                "state": est.enclosure(rec.x).as_dict(),
+                "input": est.input_enclosure(rec.xi).as_dict(),
+                "mean_state_width_after_1s": width,
+                "mean_input_width_after_1s": input_width,
+                "state_width_ratio_to_no_input": width / free_w,
+                "input_width_ratio_to_no_input": input_width / free_wi,
+                "max_abs_g_dot": float(np.abs(rec.psi_ddot).max()),
+            }
+        )
+        if kind == "continuous" and shown is None:
+            shown = (est, rec)
+    assert shown is not None
+    summary = {
+        "B": ac.B_CONTROL,
+        "inputs": "u1 rudder: steps +0.1 rad at 2.00005 s, -0.15 rad at 6.00003 s (inside sampling steps); "
+        "u2 aileron: 0.2 sin(0.8 t) rad",
+        "held": "command sampled at t_k and held (zero-order hold, point-known)",
+        "continuous": "the command itself; the observer gets per-step boxes (control_box)",
+        "no_input_mean_state_width_after_1s": free_w,
+        "no_input_mean_input_width_after_1s": free_wi,
+        "PB_max": float(np.abs(observer.decoupling.P @ ac.B_CONTROL).max()),
+        "cases": cases,
+        "max_state_width_ratio": float(max(np.max(c["state_width_ratio_to_no_input"]) for c in cases)),
+        "max_input_width_ratio": float(max(np.max(c["input_width_ratio_to_no_input"]) for c in cases)),
+        "all_enclosed": all(c["state"]["max_violation"] == 0.0 and c["input"]["max_violation"] == 0.0 for c in cases),
+    }
+    return summary, shown[0], shown[1]
+
+
+def _known_input_figure(out_dir: Path, est: Estimate, rec: ac.AircraftRecord, free: Estimate) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..plotting import save_figure
+
+    t = est.t
+    sl = slice(None, None, 20)
+    assert est.input_lower is not None and est.input_upper is not None
+    fig, axes = plt.subplots(4, 2, figsize=(11, 9), sharex=True)
+    flat = axes.ravel()
+    flat[0].plot(t[sl], rec.u[sl, 0], label="rudder $u_1$")
+    flat[0].plot(t[sl], rec.u[sl, 1], label="aileron $u_2$")
+    flat[0].set_title("known commands [rad]")
+    flat[0].legend(fontsize="small")
+    panels = [(est.lower[:, i], est.upper[:, i], rec.x[:, i], f"$x_{i + 1}$") for i in range(5)]
+    panels += [(est.input_lower[:, j], est.input_upper[:, j], rec.xi[:, j], rf"$\xi_{j + 1}$") for j in range(2)]
+    for a, (lo, hi, truth, label) in zip(flat[1:], panels):
+        a.fill_between(t[sl], lo[sl], hi[sl], color="tab:blue", alpha=0.35, lw=0, label="bounds")
+        a.plot(t[sl], truth[sl], color="black", lw=0.8, label="truth")
+        late = t >= 1.0
+        a.set_ylim(min(truth.min(), lo[late].min()) - 0.2, max(truth.max(), hi[late].max()) + 0.2)
+        a.set_title(label)
+    flat[1].legend(fontsize="small", loc="upper right")
+    for a in axes[-1]:
+        a.set_xlabel("t [s]")
+    fig.suptitle("Fig. 10: aircraft with known rudder/aileron commands (continuous, per-step boxes) and unknown ξ")
+    fig.tight_layout()
+    save_figure(fig, out_dir / "fig10_known_inputs.png")
 
 
 def _figures(
