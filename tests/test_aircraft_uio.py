@@ -49,5 +49,10 @@ def test_reproduction_contract(tmp_path) -> None:
     assert max(design["final_width_over_rho_x"]) < 1 + 1e-5
     assert design["hosm"]["paper_lambda100"]["max_error_after_transient"] > 0.2
     assert len(on_disk["paper"]["checks"]["misprints"]) == 4
+    known = design["known_inputs"]
+    assert known["all_enclosed"] and len(known["cases"]) == 4
+    assert {c["command"] for c in known["cases"]} == {"held", "continuous"}
+    assert known["max_state_width_ratio"] < 1.2 and known["max_input_width_ratio"] < 1.2
+    assert max(c["max_abs_g_dot"] for c in known["cases"]) <= ac.OUTPUT_ACCEL
     with np.load(tmp_path / "trajectories.npz") as data:
         assert {"t", "x", "x_lower", "x_upper", "d", "d_lower", "d_upper"} <= set(data.files)

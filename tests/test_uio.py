@@ -8,6 +8,7 @@ import pytest
 from intervalobs.design.uio import (
     check_cooperative,
     design_uio_coordinates,
+    metzler_block_form,
     uio_constraint_matrices,
     uio_decoupling,
 )
@@ -46,23 +47,62 @@ def test_parametrisation_solves_the_constraints(decoupling) -> None:
     np.testing.assert_allclose(coords.K, coords.L + coords.N @ decoupling.E, atol=1e-12)  # eq. (14)
 
 
-def test_designed_coordinates_are_diagonal_metzler_hurwitz(decoupling) -> None:
+def test_designed_coordinates_are_metzler_hurwitz(decoupling) -> None:
     coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01))
-    assert coords.offdiagonal < 1e-12
+    assert coords.form_residual < 1e-12
     assert coords.metzler_check > -1e-12
-    assert np.all(coords.poles < 0)
-    assert np.unique(np.round(coords.poles, 6)).size == 5
+    assert np.all(coords.poles.real < 0)
     assert coords.cond_T < 10
-    np.testing.assert_allclose(np.sort(np.linalg.eigvals(coords.N).real), np.sort(coords.poles), atol=1e-7)
+    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(coords.N)), np.sort_complex(coords.poles), atol=1e-7)
+    assert any(name.startswith("complex pair") and np.isfinite(v) for name, v in coords.tried.items())
 
 
 def test_given_poles_are_placed(decoupling) -> None:
     poles = -np.arange(1.0, 6.0)
     coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=poles)
-    np.testing.assert_allclose(np.sort(coords.poles), np.sort(poles), atol=1e-7)
+    np.testing.assert_allclose(np.sort(coords.poles.real), np.sort(poles), atol=1e-7)
     assert coords.cond_T == pytest.approx(4.08, abs=0.05)
-    with pytest.raises(DesignError, match="distinct negative"):
-        design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=[-1, -1, -2, -3, -4])
+    with pytest.raises(DesignError, match="negative real parts"):
+        design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=[1, -1, -2, -3, -4])
+
+
+@pytest.mark.parametrize(
+    "poles",
+    [[-1, -1, -2, -3, -4], [-1, -2 + 0.5j, -2 - 0.5j, -3, -4], [-0.5, -1.5 + 0.4j, -1.5 - 0.4j, -3 + 1j, -3 - 1j]],
+    ids=["repeated", "complex", "two-pairs"],
+)
+def test_repeated_and_complex_poles_get_metzler_coordinates(decoupling, poles) -> None:
+    if np.iscomplexobj(poles) and len([p for p in poles if np.imag(p) > 0]) == 2:
+        # two pairs but one free real pole: no 3×3 Metzler block for the second pair
+        with pytest.raises(DesignError, match="needs a real pole"):
+            design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=poles)
+        return
+    coords = design_uio_coordinates(ac.A, ac.C, decoupling, np.full(5, 0.01), np.full(4, 0.01), poles=poles)
+    np.testing.assert_allclose(
+        np.sort_complex(coords.poles), np.sort_complex(np.array(poles, dtype=complex)), atol=1e-7
+    )
+    off = coords.M[~np.eye(5, dtype=bool)]
+    assert off.min() >= 0.0 and coords.metzler_check > -1e-9 and coords.form_residual < 1e-8
+    # T N T⁻¹ recomputed here equals the Metzler form
+    np.testing.assert_allclose(coords.T @ coords.N @ np.linalg.inv(coords.T), coords.M, atol=1e-8)
+
+
+@pytest.mark.parametrize(("r", "sigma", "omega"), [(-1.0, -2.0, 0.5), (-1.0, -3.0, 2 / np.sqrt(3)), (-0.2, -5.0, 0.1)])
+def test_metzler_block_form_spectrum_and_sector(r, sigma, omega) -> None:
+    m = metzler_block_form([sigma + 1j * omega, r, sigma - 1j * omega])
+    assert m[~np.eye(3, dtype=bool)].min() >= 0
+    np.testing.assert_allclose(
+        np.sort_complex(np.linalg.eigvals(m)),
+        np.sort_complex(np.array([r, sigma + 1j * omega, sigma - 1j * omega])),
+        atol=1e-12,
+    )
+    # outside the 60° sector no 3×3 Metzler matrix has this spectrum
+    with pytest.raises(DesignError, match="needs a real pole"):
+        metzler_block_form(
+            [sigma + 1j * (omega + (r - sigma) / np.sqrt(3)), r, sigma - 1j * (omega + (r - sigma) / np.sqrt(3))]
+        )
+    with pytest.raises(DesignError, match="conjugation"):
+        metzler_block_form([sigma + 1j * omega, r, sigma])
 
 
 def test_printed_K_and_T_are_not_metzler(decoupling) -> None:

@@ -125,7 +125,7 @@ def test_given_triangular_metzler_coordinates_are_used() -> None:
     obs = _design()
     mix = np.eye(5) + 0.1 * np.tril(np.ones((5, 5)), -1)  # T' N T'^-1 lower triangular, Metzler
     tri = _design(K=obs.coords.K, T=mix @ obs.coords.T)
-    assert np.abs(np.tril(tri.coords.M, -1)).min() > 0.05 and tri.coords.metzler_check > -1e-12
+    assert tri.coords.M[np.tril_indices(5, -1)].min() > 0.05 and tri.coords.metzler_check > -1e-12
     t = np.arange(8001) * H
     rec = ac.simulate_aircraft(t, seed=5, delta_kind="plateau", omega_kind="vertex")
     est = tri.run(t, rec.y)
@@ -133,3 +133,30 @@ def test_given_triangular_metzler_coordinates_are_used() -> None:
     assert est.input_enclosure(rec.xi, transient=0.0).max_violation == 0.0
     with pytest.raises(AssumptionError, match="Metzler"):
         _design(K=obs.coords.K, T=(np.eye(5) + 0.1 * np.triu(np.ones((5, 5)), 1)) @ obs.coords.T)
+
+
+def test_complex_poles_on_the_aircraft_enclose() -> None:
+    obs = _design(poles=[-1, -2 + 0.5j, -2 - 0.5j, -3, -4])
+    assert np.count_nonzero(obs.coords.M[~np.eye(5, dtype=bool)] > 0.01) == 6  # the 3×3 cyclic block
+    t = np.arange(10001) * H
+    rec = ac.simulate_aircraft(t, seed=6, delta_kind="plateau", omega_kind="sine")
+    est = obs.run(t, rec.y)
+    assert est.enclosure(rec.x, transient=0.0).max_violation == 0.0
+    assert est.input_enclosure(rec.xi, transient=0.0).max_violation == 0.0
+
+
+@pytest.mark.parametrize("control", ["held", "continuous"])
+def test_aircraft_known_commands_enclose_with_no_input_widths(control) -> None:
+    system = ac.aircraft_system(known_inputs=True)
+    options = {"noise_rate": np.full(4, ac.DELTA_DOT_BAR), "output_accel": np.full(4, ac.OUTPUT_ACCEL)}
+    obs = UnknownInputIntervalObserver.design(system, ac.aircraft_bounds(), ac.D, H, **options)
+    t = np.arange(25001) * H  # spans the rudder step at 2.00005 s (inside a sampling step)
+    rec = ac.simulate_aircraft(t, seed=8, delta_kind="plateau", omega_kind="vertex", control=control)
+    assert np.abs(rec.psi_ddot).max() <= ac.OUTPUT_ACCEL
+    est = obs.run(t, rec.y, rec.u if control == "held" else ac.control_box(t))
+    assert est.enclosure(rec.x, transient=0.0).max_violation == 0.0
+    assert est.input_enclosure(rec.xi, transient=0.0).max_violation == 0.0
+    free = _design().run(t, ac.simulate_aircraft(t, seed=8, delta_kind="plateau", omega_kind="vertex").y)
+    np.testing.assert_allclose(est.width()[-1], free.width()[-1], rtol=1e-5)
+    ratio = (est.input_upper - est.input_lower)[-1] / (free.input_upper - free.input_lower)[-1]
+    assert np.all(ratio < 1.001)

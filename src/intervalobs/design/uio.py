@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import place_poles
 
 from ..errors import AssumptionError, DesignError, DimensionError
+from .regions import canonical_eigenvectors
 from ..validation import as_matrix, as_vector
 
 __all__ = [
@@ -340,20 +341,12 @@ def metzler_block_form(poles: ArrayLike) -> FloatArray:
     return out
 
 
-def _canonical_eigenvectors(vecs: NDArray[np.complex128]) -> NDArray[np.complex128]:
-    """Eigenvectors scaled to unit norm with their largest entry real positive (LAPACK-independent phase)."""
-    big = np.argmax(np.abs(vecs) * (1 + 1e-9 * np.arange(vecs.shape[0]))[::-1, None], axis=0)
-    phase = vecs[big, np.arange(vecs.shape[1])]
-    out = vecs / (phase / np.abs(phase))
-    return np.asarray(out / np.linalg.norm(out, axis=0))
-
-
 def _similarity_to(nmat: FloatArray, target: FloatArray) -> FloatArray:
     """A real ``T`` with ``T N T⁻¹ = M`` for diagonalisable ``N``, ``M`` with one spectrum: ``T = U V⁻¹``."""
     n = nmat.shape[0]
     vals, vecs = np.linalg.eig(nmat)
     tvals, tvecs = np.linalg.eig(target)
-    vecs, tvecs = _canonical_eigenvectors(vecs), _canonical_eigenvectors(tvecs)
+    vecs, tvecs = canonical_eigenvectors(vecs), canonical_eigenvectors(tvecs)
     order = np.empty(n, dtype=int)
     unused = list(range(n))
     for j, lam in enumerate(tvals):  # match each target eigenvalue to the nearest unused one of N
