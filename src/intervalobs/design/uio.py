@@ -27,8 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import place_poles
 
 from ..errors import AssumptionError, DesignError, DimensionError
-from .regions import canonical_eigenvectors
 from ..validation import as_matrix, as_vector
+from .regions import canonical_eigenvectors
 
 __all__ = [
     "UIOCoordinates",
@@ -412,11 +412,11 @@ def uio_pole_candidates(n: int) -> dict[str, NDArray[np.complex128]]:
     """
     found: dict[str, NDArray[np.complex128]] = {}
     for scale in (0.5, 1.0, 2.0, 3.0):
-        found[f"linear x{scale:g}"] = -scale * np.arange(1, n + 1, dtype=complex)
-        found[f"geometric x{scale:g}"] = -scale * 1.6 ** np.arange(n, dtype=complex)
+        found[f"linear x{scale:g}"] = np.asarray(-scale * np.arange(1, n + 1), dtype=complex)
+        found[f"geometric x{scale:g}"] = np.asarray(-scale * 1.6 ** np.arange(n), dtype=complex)
         if n >= 3:
-            rest = np.arange(3, n, dtype=complex)
-            found[f"complex pair x{scale:g}"] = -scale * np.concatenate([[1.0, 2 + 0.5j, 2 - 0.5j], rest])
+            pair = np.concatenate([[1.0, 2 + 0.5j, 2 - 0.5j], np.arange(3, n)])
+            found[f"complex pair x{scale:g}"] = np.asarray(-scale * pair, dtype=complex)
     return found
 
 
