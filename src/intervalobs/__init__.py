@@ -27,6 +27,7 @@ from .observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
+from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
@@ -60,6 +61,7 @@ __all__ = [
     "Observer",
     "ObserverState",
     "RegionPlacement",
+    "RobustHullEstimator",
     "SampledSystem",
     "Simulation",
     "ThetaDesign",
@@ -74,6 +76,7 @@ __all__ = [
     "neg",
     "place_in_disks",
     "pos",
+    "robust_hull_lower_bound",
     "simulate",
     "simulate_sampled",
     "theta_design",

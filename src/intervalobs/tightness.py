@@ -2,8 +2,12 @@ r"""Tightness report: how far each observer's box is from the tightest box any s
 
 The reference is the exact interval hull of the consistent set (:class:`~intervalobs.observers.hull.
 HullEstimator`) for a model without :math:`\Delta A`, and otherwise the **lower bound** of
-:func:`~intervalobs.observers.hull.hull_lower_bound` (inner hulls for fixed :math:`\Delta A` samples),
-which no sound estimator can beat. For each observer the report gives the mean over the steps
+:func:`~intervalobs.observers.robust_hull.robust_hull_lower_bound` (consistent states of fixed
+:math:`\Delta A` candidates over the full history, improved by sequential LP), which no sound
+estimator can beat. For a model with :math:`\Delta A`, :func:`add_tightness` also runs the
+data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` and reports it next to
+the observers, with the cost per step of each estimator that was timed. For each observer the report
+gives the mean over the steps
 :math:`k \ge` ``start`` of the summed widths :math:`\sum_i (\overline{x}_{k,i} - \underline{x}_{k,i})`
 and its ratio to the reference's (≥ 1 for every sound observer: a ratio below 1 is a bug in one of the
 two, and the report says so in ``reference_inside``).
@@ -20,7 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .estimate import Estimate
-from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+from .observers.hull import HullEstimator, HullLowerBound, _delta_samples
+from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .systems.lti import Bounds, LTISystem
 
 __all__ = ["add_tightness", "format_tightness", "tightness_reference", "tightness_report"]
@@ -41,6 +46,8 @@ def tightness_reference(
     samples: int = 3,
     seed: int = 0,
     truth: tuple[ArrayLike, ArrayLike] | None = None,
+    candidates: ArrayLike | None = None,
+    steps: ArrayLike | None = None,
 ) -> Estimate | HullLowerBound:
     """The reference box sequence: the hull (no ``ΔA``) or the lower bound (interval ``ΔA``).
 
@@ -59,13 +66,17 @@ def tightness_reference(
     h : float, optional
         Sampling period (continuous time).
     horizon : int or None
-        Window of the LPs (None: full history).
+        Window of the hull LPs (None: full history); the lower bound always uses the full history.
     samples : int
-        Number of ``ΔA`` samples of the lower bound.
+        Number of ``ΔA`` candidates of the lower bound drawn at the centre and random vertices.
     seed : int
         Seed of the ``ΔA`` vertex draw.
     truth : tuple (ΔA, x), optional
-        The simulation's true ``ΔA`` and states (see :func:`~intervalobs.observers.hull.hull_lower_bound`).
+        The simulation's true ``ΔA`` (a candidate of the lower bound) and states.
+    candidates : array_like, shape (T, S, n, n), optional
+        More ``ΔA`` candidates per step, e.g. :meth:`RobustHullEstimator.extremal_deltas`.
+    steps : array_like of int, optional
+        Steps at which the lower bound is computed (default all).
 
     Returns
     -------
@@ -73,7 +84,14 @@ def tightness_reference(
     """
     if system.dA is None:
         return HullEstimator(system, bounds, horizon=horizon, h=h).run(t, y, u)
-    return hull_lower_bound(system, bounds, t, y, u, h=h, samples=samples, horizon=horizon, seed=seed, truth=truth)
+    size = np.asarray(t).size
+    shared = [_delta_samples(system, samples, seed)]
+    if truth is not None:
+        shared.insert(0, np.asarray(truth[0], dtype=float).reshape(1, system.n, system.n))
+    pool = np.broadcast_to(np.concatenate(shared)[None], (size, sum(c.shape[0] for c in shared), system.n, system.n))
+    if candidates is not None:
+        pool = np.concatenate([pool, np.asarray(candidates, dtype=float)], axis=1)
+    return robust_hull_lower_bound(system, bounds, t, y, u, h=h, candidates=pool, steps=steps)
 
 
 def tightness_report(
@@ -81,6 +99,7 @@ def tightness_report(
     estimates: Mapping[str, Estimate],
     reference: Estimate | HullLowerBound,
     start: int = 0,
+    costs: Mapping[str, float] | None = None,
 ) -> dict[str, Any]:
     """Mean summed widths of each observer and of the reference, and their ratios.
 
@@ -94,12 +113,15 @@ def tightness_report(
         From :func:`tightness_reference`.
     start : int
         First step of the average (skip the initial transient).
+    costs : mapping of str to float, optional
+        Run time per step (ms) of some of the estimators, reported next to their widths.
 
     Returns
     -------
     dict
         ``reference`` (kind, label, mean width), ``observers`` (mean width, ratio, whether the reference
-        lies inside the observer's box at every step), ``best`` (smallest ratio), ``steps``.
+        lies inside the observer's box at every step, ``ms_per_step`` when timed), ``best`` (smallest
+        ratio), ``steps``. The means are over the steps ``≥ start`` where the reference is defined.
     """
     times = np.asarray(t, dtype=float)
     is_bound = isinstance(reference, HullLowerBound)
@@ -122,6 +144,8 @@ def tightness_report(
             "ratio": mean / ref_mean if ref_mean > 0 else float("nan"),
             "reference_inside": inside,
         }
+        if costs is not None and name in costs:
+            observers[name]["ms_per_step"] = float(costs[name])
     best = min(observers, key=lambda k: observers[k]["ratio"]) if observers else None
     meta = reference.meta if isinstance(reference, (Estimate, HullLowerBound)) else {}
     return {
@@ -134,6 +158,7 @@ def tightness_report(
             ),
             "mean_width": ref_mean,
             "horizon": meta.get("horizon"),
+            "steps_used": int(np.count_nonzero(defined)),
         },
         "observers": observers,
         "best": best,
@@ -161,11 +186,14 @@ def format_tightness(report: Mapping[str, Any], title: str = "") -> str:
     kind = "hull" if ref["kind"] == "hull" else "LOWER BOUND"
     lines.append(f"reference: {ref['label']} (horizon {ref.get('horizon')})")
     lines.append(f"mean summed width over steps {report['steps'][0]}-{report['steps'][1]}")
-    lines.append(f"{'estimator':40s} {'mean width':>11s} {'ratio':>7s}  reference inside")
+    if ref.get("steps_used") is not None:
+        lines.append(f"(the {ref['steps_used']} steps where the reference is computed)")
+    lines.append(f"{'estimator':40s} {'mean width':>11s} {'ratio':>7s} {'ms/step':>8s}  reference inside")
     lines.append(f"{kind:40s} {ref['mean_width']:11.4g} {1.0:7.3f}")
     for name, row in report["observers"].items():
         inside = "yes" if row["reference_inside"] else "NO (bug in one of the two)"
-        lines.append(f"{name:40s} {row['mean_width']:11.4g} {row['ratio']:7.3f}  {inside}")
+        cost = f"{row['ms_per_step']:8.3g}" if "ms_per_step" in row else f"{'-':>8s}"
+        lines.append(f"{name:40s} {row['mean_width']:11.4g} {row['ratio']:7.3f} {cost}  {inside}")
     oracle = report.get("oracle_hull")
     if oracle:
         lines.append(f"hull if ΔA were known: mean width {oracle['mean_width']:.4g}; ratios to it:")
@@ -190,6 +218,8 @@ def add_tightness(
     samples: int = 3,
     truth: tuple[ArrayLike, ArrayLike] | None = None,
     steps: int | None = None,
+    robust_horizon: int | None = None,
+    stride: int = 1,
 ) -> Estimate | HullLowerBound:
     """The hook a reproduction calls before writing its files: ``summary["tightness"]`` and a figure.
 
@@ -226,6 +256,12 @@ def add_tightness(
         :func:`~intervalobs.observers.hull.hull_lower_bound`).
     steps : int, optional
         Use only the first ``steps`` samples (to keep a long record's LPs within the time budget).
+    robust_horizon : int, optional
+        With interval ``ΔA``: also run :class:`RobustHullEstimator` with this window (reported as
+        ``"RobustHullEstimator"``, timed; its extremal ``ΔA`` values seed the lower bound).
+    stride : int
+        With interval ``ΔA``: the lower bound is computed every ``stride`` steps from ``start`` (its LPs
+        span the whole history); the means are over those steps.
 
     Returns
     -------
@@ -242,8 +278,24 @@ def add_tightness(
     estimates = {
         k: Estimate(e.t[cut], e.lower[..., cut, :], e.upper[..., cut, :], meta=e.meta) for k, e in estimates.items()
     }
-    reference = tightness_reference(system, bounds, t, y, u, h=h, horizon=horizon, samples=samples, truth=truth)
-    report = tightness_report(t, estimates, reference, start=start)
+    costs: dict[str, float] = {}
+    candidates = None
+    chosen = None
+    if system.dA is not None:
+        chosen = np.arange(start, t.size, max(int(stride), 1))
+        if robust_horizon is not None:
+            robust = RobustHullEstimator(system, bounds, horizon=robust_horizon, h=h)
+            clock_run = time.perf_counter()
+            estimates["RobustHullEstimator"] = robust.run(t, y, u)
+            costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
+            candidates = robust.extremal_deltas(t.size)
+    clock_bound = time.perf_counter()
+    reference = tightness_reference(
+        system, bounds, t, y, u, h=h, horizon=horizon, samples=samples, truth=truth, candidates=candidates, steps=chosen
+    )
+    reference_s = time.perf_counter() - clock_bound
+    report = tightness_report(t, estimates, reference, start=start, costs=costs)
+    report["reference"]["runtime_s"] = reference_s
     oracle = None
     if system.dA is not None and truth is not None:
         known = LTISystem(

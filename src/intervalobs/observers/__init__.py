@@ -7,6 +7,7 @@ from .hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .lpv import LPVIntervalObserver, LPVIntervalUIO
+from .robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
@@ -22,8 +23,10 @@ __all__ = [
     "LPVIntervalUIO",
     "Observer",
     "ObserverState",
+    "RobustHullEstimator",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",
     "hull_lower_bound",
     "output_contraction",
+    "robust_hull_lower_bound",
 ]

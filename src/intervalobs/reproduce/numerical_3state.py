@@ -47,6 +47,10 @@ from ._seed002 import (
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "numerical-3state"
+ROBUST_HORIZON = 40
+"""Window of the RobustHullEstimator in the tightness report (steps)."""
+BOUND_STRIDE = 20
+"""The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 SEED_FILE = "002_a6311576c67046f0.txt"
 MONTE_CARLO_RUNS = 20
 LABELS = ["$x_1$", "$x_2$", "$x_3$"]
@@ -245,6 +249,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         horizon=40,
         samples=0,
         truth=(sim68.dA, sim68.x),
+        robust_horizon=ROBUST_HORIZON,
+        stride=BOUND_STRIDE,
     )
     write_reproduction(out_dir, summary, trajectories)
     if plots:

@@ -19,6 +19,10 @@ from ..tightness import add_tightness
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "spring-mass-lti"
+ROBUST_HORIZON = 80
+"""Window of the RobustHullEstimator in the tightness report (steps)."""
+BOUND_STRIDE = 30
+"""The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 TIGHTNESS_STEPS = 250
 """The tightness report (LP windows at every step) covers the first 2.5 s of the record."""
 
@@ -99,6 +103,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         horizon=30,
         samples=0,
         truth=(sim.dA, sim.x),
+        robust_horizon=ROBUST_HORIZON,
+        stride=BOUND_STRIDE,
         steps=TIGHTNESS_STEPS,
     )
     trajectories = {

@@ -44,6 +44,10 @@ from .numerical_3state import SEED_FILE, _naive_facts, _observer_facts, _ratio
 TIGHTNESS_STEPS = 400
 """The tightness report (LP windows at every step) covers the first 400 s."""
 NAME = "two-tank"
+ROBUST_HORIZON = 120
+"""Window of the RobustHullEstimator in the tightness report (steps)."""
+BOUND_STRIDE = 40
+"""The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 MONTE_CARLO_RUNS = 20
 LABELS = ["$h_1$ (cm)", "$h_2$ (cm)"]
 
@@ -176,6 +180,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         horizon=40,
         samples=0,
         truth=(sim.dA, sim.x),
+        robust_horizon=ROBUST_HORIZON,
+        stride=BOUND_STRIDE,
         steps=TIGHTNESS_STEPS,
     )
     write_reproduction(out_dir, summary, trajectories)

@@ -1,0 +1,137 @@
+"""Tightness under interval ΔA (issue 19): RobustHullEstimator against the certified lower bound.
+
+The three reproductions with a tightness report, their own extreme (bang-bang) noise, seeds 0, 1, 2,
+and the true ΔA at a vertex of its box (as the simulator draws it) and, separately, at a random point
+of the box. For each run: the mean summed width of the RobustHullEstimator (window H), of the
+IntervalObserver (designed) and of the default IntersectionObserver, the lower bound of
+``robust_hull_lower_bound`` (candidates: the true ΔA and the estimator's extremal ΔA values; computed
+every ``stride`` steps, all means over those steps), the ratios, the enclosure of the truth and the
+costs per step. Settings (steps, first step of the means, windows) are those of the reproductions.
+
+Run with ``make bench`` or ``python benchmarks/robust_tightness.py``; writes
+benchmarks/robust_tightness.json.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from intervalobs import IntervalObserver, LTISystem, simulate
+from intervalobs.examples import numerical3, spring_mass, two_tank
+from intervalobs.observers.intersection import IntersectionObserver
+from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+
+SEEDS = (0, 1, 2)
+
+
+def examples() -> dict[str, dict[str, Any]]:
+    t3 = numerical3.time_grid()
+    tt = two_tank.time_grid()[:400]
+    ts = np.arange(250) * spring_mass.SAMPLING_PERIOD
+    return {
+        "numerical-3state (68)": {
+            "system": numerical3.system("68"),
+            "bounds": numerical3.bounds(),
+            "t": t3,
+            "u": numerical3.input_signal(t3),
+            "h": None,
+            "start": 20,
+            "horizon": 40,
+            "stride": 10,
+        },
+        "two-tank": {
+            "system": two_tank.system(),
+            "bounds": two_tank.bounds(),
+            "t": tt,
+            "u": two_tank.input_signal(tt),
+            "h": None,
+            "start": 20,
+            "horizon": 120,
+            "stride": 20,
+        },
+        "spring-mass-lti": {
+            "system": spring_mass.system(),
+            "bounds": spring_mass.bounds(),
+            "t": ts,
+            "u": spring_mass.input_signal(ts),
+            "h": spring_mass.SAMPLING_PERIOD,
+            "start": 100,
+            "horizon": 80,
+            "stride": 15,
+        },
+    }
+
+
+def one_run(case: dict[str, Any], seed: int, vertex: bool) -> dict[str, Any]:
+    system, bounds, t, u, h = case["system"], case["bounds"], case["t"], case["u"], case["h"]
+    lo, hi = system.dA
+    rng = np.random.default_rng(1000 + seed)
+    delta = np.where(rng.integers(0, 2, size=lo.shape) == 1, hi, lo) if vertex else rng.uniform(lo, hi)
+    truth = LTISystem(system.A + delta, system.C, B=system.B, E=system.E, F=system.F, dt=system.dt)
+    sim = simulate(truth, bounds, t, u=u, noise="extreme", seed=seed, substeps=10)
+    robust = RobustHullEstimator(system, bounds, horizon=case["horizon"], h=h)
+    clock = time.perf_counter()
+    est = robust.run(t, sim.y, u)
+    robust_ms = 1e3 * (time.perf_counter() - clock) / t.size
+    others = {
+        "IntervalObserver": IntervalObserver.design(system, bounds, h=h),
+        "IntersectionObserver": IntersectionObserver.design(system, bounds, h=h),
+    }
+    steps = np.arange(case["start"], t.size, case["stride"])
+    candidates = np.concatenate([np.broadcast_to(delta, (t.size, 1, *delta.shape)), robust.extremal_deltas(t.size)], 1)
+    clock = time.perf_counter()
+    bound = robust_hull_lower_bound(system, bounds, t, sim.y, u, h=h, candidates=candidates, steps=steps)
+    bound_s = time.perf_counter() - clock
+    ref = np.sum(bound.width(), axis=-1)[steps]
+    defined = np.isfinite(ref)
+    row: dict[str, Any] = {"lower bound": float(np.mean(ref[defined])), "bound steps": int(defined.sum())}
+
+    def width(e: Any) -> float:
+        return float(np.mean(np.sum(e.upper - e.lower, axis=-1)[steps][defined]))
+
+    row["RobustHullEstimator"] = width(est)
+    row["ratio"] = row["RobustHullEstimator"] / row["lower bound"]
+    row["enclosure"] = est.enclosure(sim.x).fraction
+    row["max violation"] = est.enclosure(sim.x).max_violation
+    inside = bool(
+        np.all(est.lower[steps][defined] <= bound.lower[steps][defined])
+        and np.all(est.upper[steps][defined] >= bound.upper[steps][defined])
+    )
+    row["lower bound inside"] = inside
+    row["RobustHullEstimator ms/step"] = robust_ms
+    for name, obs in others.items():
+        clock = time.perf_counter()
+        other = obs.run(t, sim.y, u)
+        row[f"{name} ms/step"] = 1e3 * (time.perf_counter() - clock) / t.size
+        row[name] = width(other)
+        row[f"{name} ratio"] = row[name] / row["lower bound"]
+    row["lower bound s"] = bound_s
+    return row
+
+
+def main() -> None:
+    chosen = sys.argv[1:]
+    out = Path(__file__).with_name("robust_tightness.json")
+    results: dict[str, Any] = json.loads(out.read_text()) if out.exists() else {}
+    for name, case in examples().items():
+        if chosen and not any(c in name for c in chosen):
+            continue
+        per: dict[str, Any] = {"horizon": case["horizon"], "stride": case["stride"], "start": case["start"]}
+        for vertex in (True, False):
+            key = "ΔA at a vertex" if vertex else "ΔA at a random point"
+            per[key] = {f"seed {seed}": one_run(case, seed, vertex) for seed in SEEDS}
+            for seed, row in per[key].items():
+                print(name, key, seed, {k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()})
+        results[name] = per
+        out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"written {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,717 @@
+r"""Data-dependent boxes under an interval :math:`\Delta A`: the window LP with :math:`\Delta A` a shared unknown.
+
+With an unknown constant :math:`\Delta A \in [\underline{\Delta A}, \overline{\Delta A}]` the set of states
+consistent with the data is not convex (the dynamics contain the products :math:`\Delta A\,x_j`), so
+its hull is not an LP (:class:`~intervalobs.observers.hull.HullEstimator` refuses it). The fixed-gain
+observers bound :math:`\Delta A\,x_j` by the interval product :math:`|\Delta A|\,|x_j|`, a fresh
+disturbance at every step of the size of the *state*; that term dominates their width on the two-tank
+and spring-mass examples. Here :math:`\Delta A` is one unknown shared by every step of a window, and the
+product is split around a known reference :math:`\hat x_j` (the midpoint of the estimator's own box of
+:math:`x_j`):
+
+.. math::
+
+    \Delta A\,x_j = \Delta A\,\hat x_j + \Delta A\,(x_j - \hat x_j),
+
+whose first term is **linear in the unknown** :math:`\delta = \Delta A - \Delta A_c` (an LP variable,
+the same at every step, which the data identify) and whose second term is bounded by
+:math:`|\delta|_{\max}\,|x_j - \hat x_j|`, of the size of the *box width*, not of the state. The window
+LP over steps :math:`s = k - H, \dots, k` (states eliminated, as the hull's condensed LP):
+
+.. math::
+
+    x_{j+1} = \Phi_c x_j + \Gamma_c u_j + W_j\,\delta + e_j,\qquad
+    e_j \in [c - r - \rho_j,\; c + r + \rho_j],\qquad y_j - C x_j \in \mathcal V,\qquad
+    x_s \in [\underline x_s, \overline x_s],\quad \delta \in [\underline\delta, \overline\delta],
+
+with :math:`W_j = [M_{ab}\hat x_j + N_{ab}u_j]_{ab}` (one column per uncertain entry :math:`(a, b)`),
+:math:`[c \pm r]` the noise box of the sound sampled model (valid for every :math:`\Delta A` of the box)
+and the remainder radius :math:`\rho_j = K\,|x_j - \hat x_j|_{\max} + R_x|x_j|_{\max} + R_u|u_j|`.
+
+* **Discrete time**: :math:`\Phi_c = A + \Delta A_c`, :math:`M_{ab} = e_a e_b^\top`, :math:`N = 0`,
+  :math:`R = 0`, :math:`K = |\delta|_{\max}`.
+* **Continuous time** (sampling period ``h``, input held): with the augmented matrix
+  :math:`\mathcal A = [[A_c, B], [0, 0]]` and the direction :math:`\mathcal D = [[\delta, 0], [0, 0]]`,
+  :math:`e^{(\mathcal A + \mathcal D)h} = e^{\mathcal A h} + L(\mathcal A h, \mathcal D h) + R`, with
+  :math:`L` the Fréchet derivative of the exponential (linear in :math:`\delta`: it gives
+  :math:`M_{ab}, N_{ab}`) and :math:`|R| \le e^{(|\mathcal A| + D)h} - e^{|\mathcal A|h} -
+  L(|\mathcal A|h, Dh)` (the terms of the exponential series with at least two factors of
+  :math:`\mathcal D`, bounded termwise; all terms nonnegative). :math:`K = \sum_{ab} D_{ab}|M_{ab}|`.
+
+Every state of the true system, with the true :math:`\Delta A`, noise and remainder, is feasible (the
+boxes of :math:`x_j` are the estimator's own, sound by induction), so every bound of the LP is a sound
+bound. Bounds are **certified by weak duality** with the rounding of their evaluation subtracted
+(:func:`~intervalobs.observers.hull._dual_bounds`, as the hull); the condensed matrix and the drive are
+padded for their own rounding like the hull's condensed LP.
+
+**Identification.** The same LP bounds each entry of :math:`\delta`; since :math:`\Delta A` is constant,
+every certified bound holds at every later step, so the estimator keeps the running intersection (the
+box of :math:`\Delta A` consistent with all data seen so far). It shrinks the remainder radii and the
+interval prediction too.
+
+The box of :math:`x_k` is finally intersected with the interval prediction of the previous box and
+with an optional fallback observer's box (so it is never wider than that observer).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import expm, expm_frechet
+
+from ..design.discretization import sampled_model
+from ..errors import AssumptionError, BoundsError, DataError, DimensionError
+from ..estimate import Estimate
+from ..interval import inflate, interval_matvec_bounds, matvec_bounds
+from ..systems.lti import Bounds, LTISystem
+from ..validation import as_signal, as_time, as_vector
+from .base import Observer, ObserverState
+from .hull import _INNER_SHRINK, HullLowerBound, _dual_bounds, _inner_model, _new_highs, _solve
+
+__all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
+
+FloatArray = NDArray[np.float64]
+
+_EPS = float(np.finfo(float).eps)
+_MODEL_PAD = 1e-13
+"""Relative pad on the computed exponentials (their own rounding, ``expm`` is accurate to ~1e-15)."""
+
+
+@dataclass(frozen=True)
+class _DeltaModel:
+    r"""``x+ = Φ_c x + Γ_c u + Σ δ_ab (M_ab x + N_ab u) + R-terms + noise``: the linearisation in ``δ``.
+
+    ``entries`` lists the uncertain entries ``(a, b)`` (radius > 0); ``M[l]``, ``N[l]`` are the derivative
+    matrices of entry ``l``; ``R_x``, ``R_u`` bound the second-order remainder for ``|δ| ≤ radius``.
+    """
+
+    Phi: FloatArray
+    Gamma: FloatArray
+    M: FloatArray
+    N: FloatArray
+    R_x: FloatArray
+    R_u: FloatArray
+    entries: tuple[tuple[int, int], ...]
+    center: FloatArray
+    radius: FloatArray
+    noise_lo: FloatArray
+    noise_hi: FloatArray
+    C: FloatArray
+    v_lo: FloatArray
+    v_hi: FloatArray
+
+
+def _delta_model(system: LTISystem, bounds: Bounds, h: float | None) -> _DeltaModel:
+    """The linearisation of the (sampled) model in ``δ = ΔA - ΔA_c`` (module docstring)."""
+    assert system.dA is not None
+    full = bounds.for_system(system)
+    assert full.v is not None
+    sampled = sampled_model(system, full, h)
+    n, m = system.n, system.m
+    center = 0.5 * (system.dA[0] + system.dA[1])
+    radius = 0.5 * (system.dA[1] - system.dA[0])
+    entries = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(radius > 0), strict=True))
+    nd = len(entries)
+    M = np.zeros((nd, n, n))
+    N = np.zeros((nd, n, m))
+    if system.continuous:
+        assert h is not None
+        size = n + m
+        aug = np.zeros((size, size))
+        aug[:n, :n], aug[:n, n:] = system.A + center, system.B
+        rad = np.zeros((size, size))
+        rad[:n, :n] = radius
+        base = expm(aug * h)
+        phi, gamma = base[:n, :n], base[:n, n:]
+        for index, (a, b) in enumerate(entries):
+            direction = np.zeros((size, size))
+            direction[a, b] = h
+            _, derivative = expm_frechet(aug * h, direction)
+            M[index], N[index] = derivative[:n, :n], derivative[:n, n:]
+        abs_aug = np.abs(aug) * h
+        top = expm(abs_aug + rad * h)
+        _, first = expm_frechet(abs_aug, rad * h)
+        remainder = np.maximum(top - expm(abs_aug) - first, 0.0) + _MODEL_PAD * top
+        R_x, R_u = remainder[:n, :n], remainder[:n, n:]
+    else:
+        phi, gamma = system.A + center, system.B.copy()
+        for index, (a, b) in enumerate(entries):
+            M[index, a, b] = 1.0
+        R_x = _MODEL_PAD * np.abs(phi)
+        R_u = np.zeros((n, m))
+    lo = sampled.noise_center - sampled.noise_radius
+    hi = sampled.noise_center + sampled.noise_radius
+    v_lo, v_hi = matvec_bounds(system.F, full.v[0], full.v[1])
+    return _DeltaModel(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
+
+
+class _Certified:
+    """A dense LP ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi`` solved by HiGHS; bounds by weak duality."""
+
+    def __init__(self, tolerance: float = 1e-9) -> None:
+        self.solver = _new_highs()
+        self.solver.setOptionValue("primal_feasibility_tolerance", tolerance)
+        self.solver.setOptionValue("dual_feasibility_tolerance", tolerance)
+        self.inf = float(self.solver.getInfinity())
+        self.solves = 0
+        self.iterations = 0
+
+    def load(
+        self, matrix: FloatArray, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray
+    ) -> None:
+        """Pass a new model (the basis of the previous solve is kept when the sizes agree)."""
+        from highspy import _core
+
+        self.matrix_t = np.ascontiguousarray(matrix.T)
+        self.abs_matrix_t = np.abs(self.matrix_t)
+        self.col_nnz = matrix.shape[0]
+        self.ncol, self.nrow = matrix.shape[1], matrix.shape[0]
+        self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
+        lp = _core.HighsLp()
+        lp.num_col_, lp.num_row_ = self.ncol, self.nrow
+        lp.col_cost_ = np.zeros(self.ncol)
+        lp.col_lower_, lp.col_upper_ = col_lo, col_hi
+        lp.row_lower_ = np.where(np.isfinite(row_lo), row_lo, -self.inf)
+        lp.row_upper_ = np.where(np.isfinite(row_hi), row_hi, self.inf)
+        lp.a_matrix_.format_ = _core.MatrixFormat.kRowwise
+        lp.a_matrix_.start_ = (np.arange(self.nrow + 1) * self.ncol).astype(np.int32)
+        lp.a_matrix_.index_ = np.tile(np.arange(self.ncol, dtype=np.int32), self.nrow)
+        lp.a_matrix_.value_ = matrix.ravel().astype(float)
+        self.solver.passModel(lp)
+        self._cols = np.arange(self.ncol, dtype=np.int32)
+
+    def minima(self, costs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Certified lower bounds of ``costs[r] · z`` and the solver's optimal points (rows of ``costs``)."""
+        from highspy import _core
+
+        duals = np.zeros((costs.shape[0], self.nrow))
+        points = np.full((costs.shape[0], self.ncol), np.nan)
+        usable = np.ones(costs.shape[0], dtype=bool)
+        for r, cost in enumerate(costs):
+            self.solver.changeColsCost(self.ncol, self._cols, cost)
+            _solve(self.solver)
+            self.solves += 1
+            self.iterations += int(self.solver.getInfoValue("simplex_iteration_count")[1])
+            solution = self.solver.getSolution()
+            dual = np.asarray(solution.row_dual)
+            if dual.shape != (self.nrow,) or not np.all(np.isfinite(dual)):
+                usable[r] = False
+                continue
+            duals[r] = dual
+            if self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal:
+                points[r] = np.asarray(solution.col_value)
+        return np.where(usable, _dual_bounds(self, costs, duals), -np.inf), points
+
+
+class RobustHullEstimator(Observer):
+    r"""Sound, data-dependent boxes for an LTI system with interval ``ΔA``: window LP with ``ΔA`` shared.
+
+    Parameters
+    ----------
+    system : LTISystem
+        Discrete- or continuous-time model with an interval ``dA``.
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``.
+    horizon : int
+        Window length ``H`` in steps (the prior is the estimator's own box ``H`` steps back).
+    h : float, optional
+        Sampling period of a continuous-time system (required there).
+    identify : bool
+        Also bound every uncertain entry of ``ΔA`` by the window LP at each step and keep the running
+        intersection (``2 n_δ`` more LPs per step; tighter remainders and predictions).
+    fallback : Observer, optional
+        A sound observer run on the same data; the box is intersected with its box (never wider).
+
+    Notes
+    -----
+    See the module docstring for the LP. Each step solves ``2n`` LPs (``2(n + n_δ)`` with ``identify``)
+    with HiGHS; row ``k`` of :meth:`run` is the box of ``x_k`` given ``y_0 … y_{k-1}`` (prediction form).
+    ``meta()["delta_box"]`` holds the identified box of ``ΔA`` at the end of the last run.
+    """
+
+    def __init__(
+        self,
+        system: LTISystem,
+        bounds: Bounds,
+        horizon: int = 40,
+        h: float | None = None,
+        identify: bool = True,
+        fallback: Observer | None = None,
+    ) -> None:
+        if not isinstance(system, LTISystem):
+            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+        if not isinstance(bounds, Bounds):
+            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+        if system.dA is None:
+            raise AssumptionError("system.dA: expected an interval ΔA (without it, use HullEstimator: exact)")
+        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
+            raise DataError(f"horizon: expected a positive integer, got {horizon!r}")
+        if system.continuous and (h is None or not (np.isfinite(h) and h > 0)):
+            raise DataError(f"h: expected a positive sampling period for a continuous-time system, got {h!r}")
+        self.system, self.bounds = system, bounds.for_system(system)
+        self.n, self.p, self.m = system.n, system.p, system.m
+        self.horizon = int(horizon)
+        self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
+        self.identify = bool(identify)
+        self.fallback = fallback
+        self.model = _delta_model(system, self.bounds, h if system.continuous else None)
+        self.sampled = sampled_model(system, self.bounds, h if system.continuous else None)
+        self.nd = len(self.model.entries)
+        self._rows = np.array([a for a, _ in self.model.entries], dtype=int)
+        self._cols = np.array([b for _, b in self.model.entries], dtype=int)
+        self._extremal: dict[int, FloatArray] = {}
+        self._lp = _Certified()
+        self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
+
+    # -- the window LP ---------------------------------------------------------------------------
+    def _window(
+        self, k: int, ys: FloatArray, us: FloatArray, box_lo: FloatArray, box_hi: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Load the LP of the window ``s = max(k - H, 0) … k`` (rows: ``y_s … y_{k-1}``).
+
+        ``box_*[τ]`` bound ``x_τ`` for ``s ≤ τ < k``. Returns the affine maps of the window's states
+        (L + 1, n, ncol), their drives (L + 1, n) and rounding pads (L + 1, n).
+        """
+        mod, n, nd = self.model, self.n, self.nd
+        L = min(k, self.horizon)
+        s = k - L
+        d_lo, d_hi = self.delta_box
+        d_max = np.maximum(np.abs(d_lo), np.abs(d_hi))[self._rows, self._cols]
+        K = np.einsum("l,lij->ij", d_max, np.abs(mod.M))
+        lo, hi = box_lo[s:k], box_hi[s:k]
+        mid, half, big = 0.5 * (lo + hi), 0.5 * (hi - lo), np.maximum(np.abs(lo), np.abs(hi))
+        u_win = us[s:k]
+        rho = half @ K.T + big @ mod.R_x.T + np.abs(u_win) @ mod.R_u.T
+        e_lo, e_hi = mod.noise_lo - rho, mod.noise_hi + rho
+        sens = np.einsum("lab,jb->jal", mod.M, mid) + np.einsum("lab,jb->jal", mod.N, u_win)
+        states, drives = _condensed(mod.Phi, mod.Gamma, np.eye(n), sens, u_win)
+        # Magnitude bound of every term of x_j (rounding of the maps, the drive and the products W_j).
+        growth = (
+            np.maximum(np.abs(e_lo), np.abs(e_hi))
+            + np.einsum("lab,jb,l->ja", np.abs(mod.M), np.abs(mid), d_max)
+            + np.einsum("lab,jb,l->ja", np.abs(mod.N), np.abs(u_win), d_max)
+            + np.abs(u_win) @ np.abs(mod.Gamma).T
+            + np.abs(drives[1:])
+        )
+        mag = np.zeros((L + 1, n))
+        mag[0] = np.maximum(np.abs(box_lo[s]), np.abs(box_hi[s]))
+        abs_phi = np.abs(mod.Phi)
+        for j in range(L):
+            mag[j + 1] = abs_phi @ mag[j] + growth[j]
+        rounding = (n + nd + self.m + 2) * _EPS * mag
+        pads = 4.0 * (L + 1) * rounding + rounding
+        row_pad = pads[:L] @ np.abs(mod.C).T
+        matrix = np.einsum("pn,jnc->jpc", mod.C, states[:L]).reshape(L * self.p, -1)
+        centre = drives[:L] @ mod.C.T
+        row_lo = (ys[s:k] - mod.v_hi - centre - row_pad).ravel()
+        row_hi = (ys[s:k] - mod.v_lo - centre + row_pad).ravel()
+        col_lo = np.concatenate([box_lo[s], e_lo.ravel(), d_lo[self._rows, self._cols]])
+        col_hi = np.concatenate([box_hi[s], e_hi.ravel(), d_hi[self._rows, self._cols]])
+        self._lp.load(matrix, col_lo, col_hi, row_lo, row_hi)
+        return states, drives, pads
+
+    def _box(
+        self, k: int, ys: FloatArray, us: FloatArray, box_lo: FloatArray, box_hi: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Certified box of ``x_k`` from ``y_0 … y_{k-1}``; with ``identify`` the ``δ`` box is updated too."""
+        n, nd = self.n, self.nd
+        states, drives, pads = self._window(k, ys, us, box_lo, box_hi)
+        objective, drive, pad = states[-1], drives[-1], pads[-1]
+        costs = np.concatenate([objective, -objective])
+        identify = self.identify and nd > 0 and k > 0
+        if identify:
+            pick = np.zeros((nd, self._lp.ncol))
+            pick[:, self._lp.ncol - nd :] = np.eye(nd)
+            costs = np.concatenate([costs, pick, -pick])
+        values, points = self._lp.minima(costs)
+        self._extremal[k] = points[: 2 * n, self._lp.ncol - nd :]
+        lower = values[:n] + drive - pad
+        upper = -values[n : 2 * n] + drive + pad
+        if identify:
+            d_lo, d_hi = self.delta_box[0].copy(), self.delta_box[1].copy()
+            rows, cols = self._rows, self._cols
+            d_lo[rows, cols] = np.maximum(d_lo[rows, cols], values[2 * n : 2 * n + nd])
+            d_hi[rows, cols] = np.minimum(d_hi[rows, cols], -values[2 * n + nd :])
+            if np.any(d_lo > d_hi):
+                raise DataError(f"y: the measurements are inconsistent with the model and its ΔA box at step {k}")
+            self.delta_box = (d_lo, d_hi)
+        return lower, upper
+
+    def _predict(self, lo: FloatArray, hi: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Interval image of the box through one step of the sampled model (discrete time: identified ``ΔA`` box)."""
+        s = self.sampled
+        if self.system.continuous:
+            a_lo, a_hi = s.Phi - s.dPhi, s.Phi + s.dPhi
+            g_lo, g_hi = s.Gamma - s.dGamma, s.Gamma + s.dGamma
+        else:
+            a_lo = self.system.A + self.model.center + self.delta_box[0]
+            a_hi = self.system.A + self.model.center + self.delta_box[1]
+            g_lo = g_hi = self.system.B
+        xl, xh = interval_matvec_bounds(a_lo, a_hi, lo, hi)
+        ul, uh = interval_matvec_bounds(g_lo, g_hi, u, u)
+        return inflate(xl + ul + s.noise_center - s.noise_radius, xh + uh + s.noise_center + s.noise_radius)
+
+    # -- protocol ------------------------------------------------------------------------------
+    def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
+        """State at the first sample: the prior box, an empty record and the full ``ΔA`` box.
+
+        Parameters
+        ----------
+        x0_lower, x0_upper : array_like, optional
+            Prior box of ``x(t_0)`` (default ``bounds.x0``).
+
+        Returns
+        -------
+        ObserverState
+        """
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
+        self.delta_box = (-self.model.radius.copy(), self.model.radius.copy())
+        self._extremal = {}
+        inner = None if self.fallback is None else self.fallback.init(lo, hi)
+        internal: dict[str, Any] = {"k": 0, "y": [], "u": [], "box_lo": [lo.copy()], "box_hi": [hi.copy()]}
+        internal["fallback"] = inner
+        internal["delta_box"] = self.delta_box
+        return ObserverState(lo.copy(), hi.copy(), internal=internal)
+
+    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+        """Consume ``y_k``, ``u_k`` and return the box of ``x_{k+1}`` given ``y_0 … y_k``.
+
+        Parameters
+        ----------
+        state : ObserverState
+            State at ``t_k`` (from :meth:`init` or a previous step).
+        y : array_like, shape (p,)
+            Measurement at ``t_k``.
+        u : array_like, shape (m,), optional
+            Known input over ``[t_k, t_{k+1})``.
+
+        Returns
+        -------
+        ObserverState
+            ``internal["delta_box"]`` is the identified box of ``ΔA - ΔA_c`` (``ΔA_c`` the box centre).
+        """
+        yk = as_vector("y", y, self.p)
+        uk = np.zeros(self.m) if u is None else as_vector("u", u, self.m)
+        old = state.internal
+        k = int(old["k"])
+        self.delta_box = old["delta_box"]
+        ys = np.array([*old["y"], yk])
+        us = np.array([*old["u"], uk]).reshape(k + 1, self.m)
+        lo, hi = self._predict(old["box_lo"][-1], old["box_hi"][-1], uk)
+        low, high = self._box(k + 1, ys, us, np.array(old["box_lo"]), np.array(old["box_hi"]))
+        lo, hi = inflate(np.maximum(lo, low), np.minimum(hi, high))
+        inner = None
+        if self.fallback is not None:  # the fallback's box is sound as it is: intersect after the inflation
+            inner = self.fallback.step(old["fallback"], yk, uk)
+            lo, hi = np.maximum(lo, inner.lower), np.minimum(hi, inner.upper)
+        if np.any(lo > hi):
+            raise DataError(f"y: the measurements are inconsistent with the model and its bounds at step {k + 1}")
+        internal = {
+            "k": k + 1,
+            "y": [*old["y"], yk],
+            "u": [*old["u"], uk],
+            "box_lo": [*old["box_lo"], lo],
+            "box_hi": [*old["box_hi"], hi],
+            "fallback": inner,
+            "delta_box": self.delta_box,
+        }
+        return ObserverState(lo, hi, internal=internal)
+
+    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
+        """Boxes over a whole record (row ``k``: given ``y_0 … y_{k-1}``).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Sample times (uniform with spacing ``h`` in continuous time).
+        y : array_like, shape (T, p) or (M, T, p)
+            Measurements (a leading axis of runs is processed run by run).
+        u : array_like, shape (T, m) or (M, T, m), optional
+            Known inputs.
+
+        Returns
+        -------
+        Estimate
+        """
+        times, ys, us = self._signals(t, y, u)
+        if self.system.continuous:
+            self._check_spacing(times, self.h)
+        if ys.ndim == 3:
+            parts = [self._run_one(times, ys[i], us[i]) for i in range(ys.shape[0])]
+            lower, upper = np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
+        else:
+            lower, upper = self._run_one(times, ys, us)
+        return Estimate(times, lower, upper, meta=self.meta())
+
+    def _run_one(self, times: FloatArray, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
+        steps = ys.shape[0]
+        lower = np.empty((steps, self.n))
+        upper = np.empty((steps, self.n))
+        state = self.init()
+        lower[0], upper[0] = state.lower, state.upper
+        for k in range(steps - 1):
+            state = self.step(state, ys[k], us[k])
+            lower[k + 1], upper[k + 1] = state.lower, state.upper
+        return lower, upper
+
+    def extremal_deltas(self, steps: int) -> FloatArray:
+        """The ``ΔA`` of the LP optimum of each bound of the last run: candidates for a lower bound.
+
+        Parameters
+        ----------
+        steps : int
+            Length of the record.
+
+        Returns
+        -------
+        numpy.ndarray, shape (steps, 2n, n, n)
+            Row ``k``, ``r``: the ``ΔA`` at which the window LP attained the bound ``r`` of ``x_k``
+            (``r < n``: lower bound of component ``r``, else upper bound of ``r - n``); NaN where none.
+        """
+        out = np.full((steps, 2 * self.n, self.n, self.n), np.nan)
+        for k, found in self._extremal.items():
+            if k < steps:
+                ok = np.all(np.isfinite(found), axis=1)
+                full = np.broadcast_to(self.model.center, (2 * self.n, self.n, self.n)).copy()
+                full[:, self._rows, self._cols] += found
+                out[k, ok] = full[ok]
+        assert self.system.dA is not None
+        return np.clip(out, self.system.dA[0], self.system.dA[1])  # the solver's point is accurate to 1e-9
+
+    def meta(self) -> dict[str, Any]:
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate`.
+
+        Returns
+        -------
+        dict
+        """
+        return {
+            "method": "RobustHullEstimator",
+            "horizon": self.horizon,
+            "identify": self.identify,
+            "h": self.h,
+            "uncertain_entries": len(self.model.entries),
+            "delta_box": [(self.model.center + b).tolist() for b in self.delta_box],
+            "fallback": None if self.fallback is None else type(self.fallback).__name__,
+            "transient_s": 0.0,
+            "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
+        }
+
+
+def _condensed(
+    phi: FloatArray, gamma: FloatArray, noise: FloatArray, sens: FloatArray, us: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    r"""States of a window as affine maps of ``z = (x_s, q_0 … q_{L-1}, δ)``: ``x_j = S_j z + d_j``.
+
+    ``x_{j+1} = Φ x_j + Γ u_j + G q_j + W_j δ`` with ``noise`` = G (n, n_q) and ``sens[j]`` = W_j (n, n_δ);
+    ``us`` has ``L`` rows. Returns ``S`` (L + 1, n, ncol) and ``d`` (L + 1, n).
+    """
+    n, nq = noise.shape
+    L, nd = us.shape[0], sens.shape[-1]
+    ncol = n + L * nq + nd
+    state = np.zeros((L + 1, n, ncol))
+    drive = np.zeros((L + 1, n))
+    state[0, :, :n] = np.eye(n)
+    for j in range(L):
+        state[j + 1] = phi @ state[j]
+        state[j + 1, :, n + j * nq : n + (j + 1) * nq] += noise
+        state[j + 1, :, n + L * nq :] += sens[j]
+        drive[j + 1] = phi @ drive[j] + gamma @ us[j]
+    return state, drive
+
+
+def _inner_points(
+    model: Any,
+    x0: tuple[FloatArray, FloatArray],
+    k: int,
+    ys: FloatArray,
+    us: FloatArray,
+    lp: _Certified,
+    sens: FloatArray | None = None,
+    delta_box: tuple[FloatArray, FloatArray] | None = None,
+    objective: int | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Optimal points of ``± x_k`` over the full-history consistent set of a fixed-``ΔA`` model.
+
+    Objective ``r < n`` minimises ``(x_k)_r``, ``r ≥ n`` maximises ``(x_k)_{r-n}``; ``objective`` solves
+    that one only (the other rows of the results stay NaN).
+    With ``sens`` (k, n, n_δ) and ``delta_box`` the model is the linearisation in a step ``δ`` of ``ΔA``
+    (a search direction only). Returns the values (2n, n) of ``x_k`` at the points and the trajectories
+    (2n, k + 1, n); NaN where the solver gave no point or (without ``sens``) the point fails the check
+    against the measurement bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy).
+    """
+    n = model.C.shape[1]
+    G = np.eye(n) if model.G is None else model.G
+    nd = 0 if sens is None else sens.shape[-1]
+    state, drive = _condensed(model.Phi, model.Gamma, G, np.zeros((k, n, nd)) if sens is None else sens, us[:k])
+    ncol = state.shape[-1]
+    matrix = np.einsum("pn,jnc->jpc", model.C, state[:k]).reshape(k * model.C.shape[0], ncol)
+    centre = (drive[:k] @ model.C.T).ravel()
+    y = ys[:k].ravel()
+    v_lo, v_hi = np.tile(model.v_lo, k), np.tile(model.v_hi, k)
+    extra_lo = np.zeros(0) if delta_box is None else delta_box[0]
+    extra_hi = np.zeros(0) if delta_box is None else delta_box[1]
+    col_lo = np.concatenate([x0[0], np.tile(model.w_lo, k), extra_lo])
+    col_hi = np.concatenate([x0[1], np.tile(model.w_hi, k), extra_hi])
+    if k == 0:
+        matrix, centre, y, v_lo, v_hi = np.zeros((1, ncol)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
+    lp.load(matrix, col_lo, col_hi, y - v_hi - centre, y - v_lo - centre)
+    chosen = list(range(2 * n)) if objective is None else [objective]
+    _, points = lp.minima(np.concatenate([state[k], -state[k]])[chosen])
+    values = np.full((2 * n, n), np.nan)
+    paths = np.full((2 * n, k + 1, n), np.nan)
+    steps = np.full((2 * n, nd), np.nan)
+    for r, z in zip(chosen, points, strict=True):
+        if not np.all(np.isfinite(z)):
+            continue
+        z = np.clip(z, col_lo, col_hi)
+        slack = 1e-8 * (1.0 + np.abs(y))
+        residual = y - (matrix @ z + centre)
+        if sens is None and not (np.all(residual >= v_lo - slack) and np.all(residual <= v_hi + slack)):
+            continue
+        values[r] = state[k] @ z + drive[k]
+        paths[r] = state @ z + drive
+        steps[r] = z[ncol - nd :]
+    return values, paths, steps
+
+
+def robust_hull_lower_bound(
+    system: LTISystem,
+    bounds: Bounds,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    h: float | None = None,
+    candidates: ArrayLike | None = None,
+    steps: ArrayLike | None = None,
+    search: int = 2,
+    substeps: int = 2,
+) -> HullLowerBound:
+    r"""Lower bound on the box of any sound estimator under interval ``ΔA``: consistent states, full history.
+
+    For any fixed admissible :math:`\Delta A` the states consistent with it and with the data (over the
+    whole record, from the box of :math:`x_0`) are consistent states of the true problem, so the hull of
+    any such states lies inside every sound box. For each step ``k`` and each bound of :math:`x_k`, the
+    LP over the fixed-:math:`\Delta A` consistent set (full history, condensed from :math:`x_0`; in
+    continuous time the process noise is held over ``substeps`` parts of each sampling interval, an
+    admissible signal) is solved for each candidate :math:`\Delta A`, and improved by ``search``
+    steps of sequential linear programming on the bilinear problem: the dynamics linearised in
+    :math:`\Delta A` around the optimal trajectory give a new :math:`\Delta A` (clipped to the box),
+    kept when its exact LP value is better. Every point used is re-checked against the measurement
+    bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy) and the result is shrunk inward
+    by a relative 1e-6, as in :func:`~intervalobs.observers.hull.hull_lower_bound`.
+
+    Parameters
+    ----------
+    system : LTISystem
+        Model with an interval ``dA``.
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``.
+    t : array_like, shape (T,)
+        Sample times.
+    y : array_like, shape (T, p)
+        Measurements of one run.
+    u : array_like, shape (T, m), optional
+        Known inputs.
+    h : float, optional
+        Sampling period of a continuous-time system.
+    candidates : array_like, shape (S, n, n) or (T, S, n, n), optional
+        Starting ``ΔA`` values (shared by all steps, or per step; NaN entries are skipped), e.g. the
+        simulation's true ``ΔA`` and :meth:`RobustHullEstimator.extremal_deltas`. Default: the centre.
+    steps : array_like of int, optional
+        Steps at which the bound is computed (default all; NaN elsewhere).
+    search : int
+        Sequential-LP improvement steps per candidate and bound.
+    substeps : int
+        Continuous time: noise values per sampling interval of the inner model (more: a larger inner
+        set, slower LPs).
+
+    Returns
+    -------
+    HullLowerBound
+        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
+    """
+    if system.dA is None:
+        raise AssumptionError("system.dA: expected an interval ΔA (without it the hull is exact: HullEstimator)")
+    times = as_time("t", t)
+    ys = as_signal("y", y, times.size, system.p)
+    if ys.ndim != 2:
+        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
+    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
+    full = bounds.for_system(system)
+    n = system.n
+    if np.any(np.count_nonzero(system.F, axis=0) > 1):
+        raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")
+    linear = _delta_model(system, full, h)
+    rows_a = np.array([a for a, _ in linear.entries], dtype=int)
+    cols_b = np.array([b for _, b in linear.entries], dtype=int)
+    da_lo, da_hi = system.dA[0][rows_a, cols_b], system.dA[1][rows_a, cols_b]
+    centre = 0.5 * (system.dA[0] + system.dA[1])
+    cands = centre[None, None] if candidates is None else np.asarray(candidates, dtype=float)
+    if cands.ndim == 3:
+        cands = np.broadcast_to(cands, (times.size, *cands.shape))
+    if cands.ndim != 4 or cands.shape[0] != times.size or cands.shape[2:] != (n, n):
+        raise DimensionError(
+            f"candidates: expected shape (S, {n}, {n}) or ({times.size}, S, {n}, {n}), got {cands.shape}"
+        )
+    finite = np.all(np.isfinite(cands), axis=(2, 3))
+    tol = 1e-12 * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
+    outside = (cands < system.dA[0] - tol) | (cands > system.dA[1] + tol)
+    if np.any(np.any(outside, axis=(2, 3)) & finite):
+        raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")
+    lower = np.full((times.size, n), np.nan)
+    upper = np.full((times.size, n), np.nan)
+    lp = _Certified()
+    chosen = range(times.size) if steps is None else [int(k) for k in np.atleast_1d(steps)]
+    gain = np.concatenate([-np.ones(n), np.ones(n)])  # row r < n minimises x_r, the others maximise x_{r-n}
+
+    def exact(delta: FloatArray, k: int, objective: int | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
+        return _inner_points(
+            _inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective
+        )
+
+    for k in chosen:
+        best = np.full(2 * n, -np.inf)
+        start: list[tuple[FloatArray, FloatArray] | None] = [None] * (2 * n)
+        for delta in cands[k][finite[k]]:
+            delta = np.clip(delta, system.dA[0], system.dA[1])
+            values, paths, _ = exact(delta, k)
+            for r in range(2 * n):
+                if np.all(np.isfinite(values[r])) and gain[r] * values[r, r % n] > best[r]:
+                    best[r], start[r] = gain[r] * values[r, r % n], (delta, paths[r])
+        for r in range(2 * n):  # sequential LP from the best candidate of each bound
+            if start[r] is None or k == 0 or rows_a.size == 0:
+                continue
+            current, path = start[r]  # type: ignore[misc]
+            for _ in range(search):
+                sens = np.einsum("lab,jb->jal", linear.M, path[:k])
+                here = current[rows_a, cols_b]
+                model = _inner_model(system, full, h, current, substeps)
+                box = (da_lo - here, da_hi - here)
+                _, _, step = _inner_points(model, full.x0, k, ys, us, lp, sens, box, objective=r)
+                if not np.all(np.isfinite(step[r])):
+                    break
+                trial = current.copy()
+                trial[rows_a, cols_b] = np.clip(here + step[r], da_lo, da_hi)
+                t_values, t_paths, _ = exact(trial, k, objective=r)
+                if not np.all(np.isfinite(t_values[r])) or gain[r] * t_values[r, r % n] <= best[r]:
+                    break
+                current, path, best[r] = trial, t_paths[r], gain[r] * t_values[r, r % n]
+        lo, hi = -best[:n], best[n:]
+        if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+            lower[k], upper[k] = lo, hi
+    shrink = _INNER_SHRINK * (1.0 + np.maximum(np.abs(lower), np.abs(upper)))
+    lower, upper = lower + shrink, upper - shrink
+    middle = 0.5 * (lower + upper)
+    crossed = lower > upper
+    lower, upper = np.where(crossed, middle, lower), np.where(crossed, middle, upper)
+    used = cands.reshape(-1, n, n)
+    alive = np.ones(used.shape[0], dtype=bool)
+    meta = {"horizon": "full", "filtered": False, "search": int(search), "steps": [int(k) for k in chosen]}
+    label = (
+        "lower bound on the width of any sound estimator (consistent states of fixed ΔA, full history; not an estimate)"
+    )
+    return HullLowerBound(times, lower, upper, used, alive, label=label, meta=meta)

@@ -1,0 +1,158 @@
+"""RobustHullEstimator and robust_hull_lower_bound: soundness under interval ΔA, never wider than the
+IntervalObserver it is intersected with, the lower bound inside every sound box, the linearisation bound."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import AssumptionError, BoundsError, DataError
+from intervalobs.observers.robust_hull import RobustHullEstimator, _delta_model, robust_hull_lower_bound
+
+STEPS = 40
+H_CONTINUOUS = 0.05
+
+
+def random_system(seed: int, continuous: bool) -> tuple[LTISystem, Bounds]:
+    """A random observable-ish 3-5 state system with ΔA on a random third of the entries."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 6))
+    p = int(rng.integers(1, 3))
+    A = rng.normal(size=(n, n))
+    if continuous:
+        A = A / np.max(np.abs(np.linalg.eigvals(A))) - 0.6 * np.eye(n)
+    else:
+        A = 0.85 * A / np.max(np.abs(np.linalg.eigvals(A)))
+    radius = np.where(rng.uniform(size=(n, n)) < 0.35, 0.02 * (1.0 + np.abs(A)), 0.0)
+    radius[0, 0] = 0.02  # at least one uncertain entry
+    C = rng.normal(size=(p, n))
+    B = rng.normal(size=(n, 1))
+    system = LTISystem(A, C, B=B, E=np.eye(n), dt=None if continuous else 1.0, dA=(-radius, radius))
+    bounds = Bounds(
+        (-np.ones(n), np.ones(n)), w=(-0.05 * np.ones(n), 0.05 * np.ones(n)), v=(-0.1 * np.ones(p), 0.1 * np.ones(p))
+    )
+    return system, bounds
+
+
+def record(
+    system: LTISystem, bounds: Bounds, seed: int, vertex: bool
+) -> tuple[np.ndarray, np.ndarray, Any, np.ndarray]:
+    """Extreme (bang-bang) noise; ΔA at a box vertex, or at a random point of the box."""
+    h = H_CONTINUOUS if system.continuous else 1.0
+    t = np.arange(STEPS) * h
+    u = np.sin(0.3 * np.arange(STEPS))[:, None]
+    assert system.dA is not None
+    lo, hi = system.dA
+    rng = np.random.default_rng(seed + 100)
+    delta = (
+        np.where(rng.integers(0, 2, size=lo.shape) == 1, hi, lo)
+        if vertex
+        else lo + (hi - lo) * rng.uniform(size=lo.shape)
+    )
+    truth = LTISystem(system.A + delta, system.C, B=system.B, E=system.E, dt=system.dt)
+    sim = simulate(truth, bounds, t, u=u, noise="extreme", seed=seed)
+    return t, u, sim, delta
+
+
+CASES = [(seed, continuous, vertex) for seed in range(3) for continuous in (False, True) for vertex in (True, False)]
+
+
+@pytest.mark.parametrize(
+    ("seed", "continuous", "vertex"),
+    CASES,
+    ids=[f"seed{s}-{'ct' if c else 'dt'}-{'vertex' if v else 'random'}" for s, c, v in CASES],
+)
+def test_sound_and_never_wider_than_the_interval_observer(seed: int, continuous: bool, vertex: bool) -> None:
+    system, bounds = random_system(seed, continuous)
+    t, u, sim, _ = record(system, bounds, seed, vertex)
+    h = H_CONTINUOUS if continuous else None
+    interval = IntervalObserver.design(system, bounds, h=h)
+    base = interval.run(t, sim.y, u)
+    alone = RobustHullEstimator(system, bounds, horizon=10, h=h).run(t, sim.y, u)
+    robust = RobustHullEstimator(system, bounds, horizon=10, h=h, fallback=interval).run(t, sim.y, u)
+    assert alone.enclosure(sim.x).max_violation == 0.0
+    assert robust.enclosure(sim.x).max_violation == 0.0
+    assert np.all(robust.lower >= base.lower) and np.all(robust.upper <= base.upper)
+    # The LP is what makes it narrow: alone it is narrower than the interval observer after the transient.
+    assert np.mean(alone.width()[10:]) < np.mean(base.width()[10:])
+
+
+def test_identification_keeps_the_true_delta_a_and_stays_sound() -> None:
+    system, bounds = random_system(1, continuous=False)
+    t, u, sim, delta = record(system, bounds, 1, vertex=True)
+    estimator = RobustHullEstimator(system, bounds, horizon=10, identify=True)
+    estimate = estimator.run(t, sim.y, u)
+    assert estimate.enclosure(sim.x).max_violation == 0.0
+    lo, hi = (np.asarray(b) for b in estimate.meta["delta_box"])
+    assert np.all(lo <= delta) and np.all(delta <= hi)
+
+
+def test_step_and_run_agree() -> None:
+    system, bounds = random_system(2, continuous=False)
+    t, u, sim, _ = record(system, bounds, 2, vertex=False)
+    estimator = RobustHullEstimator(system, bounds, horizon=8)
+    estimate = estimator.run(t, sim.y, u)
+    state = estimator.init()
+    for k in range(STEPS - 1):
+        state = estimator.step(state, sim.y[k], u[k])
+        np.testing.assert_allclose(state.lower, estimate.lower[k + 1], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(state.upper, estimate.upper[k + 1], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_linearisation_remainder_bounds_the_sampled_matrix(seed: int) -> None:
+    """``e^{(A_c + δ)h} = Φ_c + Σ δ_l M_l + R`` with ``|R| ≤ R_x`` for every δ of the box (vertices and inside)."""
+    system, bounds = random_system(seed, continuous=True)
+    model = _delta_model(system, bounds, H_CONTINUOUS)
+    rng = np.random.default_rng(seed)
+    rows = np.array([a for a, _ in model.entries])
+    cols = np.array([b for _, b in model.entries])
+    for trial in range(20):
+        step = model.radius[rows, cols] * (
+            rng.choice([-1.0, 1.0], size=rows.size) if trial % 2 else rng.uniform(-1, 1, size=rows.size)
+        )
+        delta = np.zeros_like(system.A)
+        delta[rows, cols] = step
+        exact = expm((system.A + model.center + delta) * H_CONTINUOUS)
+        linear = model.Phi + np.einsum("l,lij->ij", step, model.M)
+        assert np.all(np.abs(exact - linear) <= model.R_x)
+    # The remainder is second order: much smaller than the first-order term.
+    assert np.max(model.R_x) < 0.1 * np.max(np.einsum("l,lij->ij", model.radius[rows, cols], np.abs(model.M)))
+
+
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_lower_bound_lies_inside_every_sound_box(continuous: bool) -> None:
+    system, bounds = random_system(3, continuous)
+    t, u, sim, _ = record(system, bounds, 3, vertex=True)
+    h = H_CONTINUOUS if continuous else None
+    estimator = RobustHullEstimator(system, bounds, horizon=10, h=h)
+    estimate = estimator.run(t, sim.y, u)
+    interval = IntervalObserver.design(system, bounds, h=h).run(t, sim.y, u)
+    steps = np.array([10, 25, 39])
+    bound = robust_hull_lower_bound(
+        system, bounds, t, sim.y, u, h=h, candidates=estimator.extremal_deltas(STEPS), steps=steps, search=1, substeps=2
+    )
+    width = bound.width()[steps]
+    assert np.all(np.isfinite(width)) and np.all(width >= 0)
+    for box in (estimate, interval):
+        assert np.all(box.lower[steps] <= bound.lower[steps]) and np.all(box.upper[steps] >= bound.upper[steps])
+    assert np.all(np.isnan(bound.width()[np.setdiff1d(np.arange(STEPS), steps)]))
+
+
+def test_errors_name_the_argument() -> None:
+    system, bounds = random_system(0, continuous=True)
+    with pytest.raises(DataError, match="h:"):
+        RobustHullEstimator(system, bounds)
+    with pytest.raises(DataError, match="horizon"):
+        RobustHullEstimator(system, bounds, horizon=0, h=0.1)
+    point = LTISystem(system.A, system.C, dt=1.0)
+    with pytest.raises(AssumptionError, match="dA"):
+        RobustHullEstimator(point, bounds)
+    t = np.arange(5) * 0.1
+    assert system.dA is not None
+    with pytest.raises(BoundsError, match="candidates"):
+        robust_hull_lower_bound(system, bounds, t, np.zeros((5, system.p)), h=0.1, candidates=[2 * system.dA[1] + 1])
