@@ -121,6 +121,45 @@ def tightness_section() -> list[str]:
     return lines
 
 
+def robust_section() -> list[str]:
+    """Tightness under interval ΔA (benchmarks/robust_tightness.py)."""
+    results = HERE / "robust_tightness.json"
+    lines = ["## Tightness under interval ΔA", "", *_docstring(HERE / "robust_tightness.py").splitlines(), ""]
+    if not results.exists():
+        return [*lines, "No results yet: run `make bench`.", ""]
+    data = json.loads(results.read_text())
+    lines += [
+        "Ranges over seeds 0, 1, 2 (widths: mean summed width over the steps where the lower bound is computed).",
+        "",
+        "| example | true ΔA | lower bound | RobustHullEstimator | / lower bound | IntervalObserver / lower bound "
+        "| IntersectionObserver / lower bound | enclosure | RobustHull ms/step | IntervalObserver ms/step "
+        "| lower bound s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, per in data.items():
+        for key in ("ΔA at a vertex", "ΔA at a random point"):
+            if key not in per:
+                continue
+            runs = list(per[key].values())
+
+            def span(field: str, runs: list[dict[str, Any]] = runs) -> str:
+                return _span([float(r[field]) for r in runs])
+
+            cells = [
+                span("lower bound"),
+                span("RobustHullEstimator"),
+                span("ratio"),
+                span("IntervalObserver ratio"),
+                span("IntersectionObserver ratio"),
+                f"{min(r['enclosure'] for r in runs):.3f}",
+                span("RobustHullEstimator ms/step"),
+                span("IntervalObserver ms/step"),
+                span("lower bound s"),
+            ]
+            lines.append(f"| {name} (H = {per['horizon']}) | {key[5:]} | " + " | ".join(cells) + " |")
+    return [*lines, ""]
+
+
 def render() -> str:
     """The whole page.
 
@@ -129,7 +168,7 @@ def render() -> str:
     str
     """
     lines = ["# Benchmarks", "", "`make bench` runs both benchmarks below and rewrites this page.", ""]
-    return "\n".join([*lines, *recursion_section(), *tightness_section()]).rstrip("\n") + "\n"
+    return "\n".join([*lines, *recursion_section(), *tightness_section(), *robust_section()]).rstrip("\n") + "\n"
 
 
 def main() -> None:

@@ -43,7 +43,7 @@ def examples() -> dict[str, dict[str, Any]]:
             "h": None,
             "start": 20,
             "horizon": 40,
-            "stride": 10,
+            "stride": 20,
         },
         "two-tank": {
             "system": two_tank.system(),
@@ -53,7 +53,7 @@ def examples() -> dict[str, dict[str, Any]]:
             "h": None,
             "start": 20,
             "horizon": 120,
-            "stride": 20,
+            "stride": 40,
         },
         "spring-mass-lti": {
             "system": spring_mass.system(),
@@ -63,7 +63,7 @@ def examples() -> dict[str, dict[str, Any]]:
             "h": spring_mass.SAMPLING_PERIOD,
             "start": 100,
             "horizon": 80,
-            "stride": 15,
+            "stride": 30,
         },
     }
 

@@ -76,6 +76,8 @@ __all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
 FloatArray = NDArray[np.float64]
 
 _EPS = float(np.finfo(float).eps)
+_BACKTRACK = (1.0, 0.5, 0.25)
+"""Fractions of a sequential-LP step of the lower bound's ΔA search tried in turn."""
 _MODEL_PAD = 1e-13
 """Relative pad on the computed exponentials (their own rounding, ``expm`` is accurate to ~1e-15)."""
 
@@ -673,10 +675,12 @@ def robust_hull_lower_bound(
             _inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective
         )
 
+    found = np.full((2 * n, n, n), np.nan)  # the best ΔA of each bound at the previous step: a candidate
     for k in chosen:
         best = np.full(2 * n, -np.inf)
         start: list[tuple[FloatArray, FloatArray] | None] = [None] * (2 * n)
-        for delta in cands[k][finite[k]]:
+        previous = found[np.all(np.isfinite(found), axis=(1, 2))]
+        for delta in np.concatenate([cands[k][finite[k]], previous]):
             delta = np.clip(delta, system.dA[0], system.dA[1])
             values, paths, _ = exact(delta, k)
             for r in range(2 * n):
@@ -694,12 +698,16 @@ def robust_hull_lower_bound(
                 _, _, step = _inner_points(model, full.x0, k, ys, us, lp, sens, box, objective=r)
                 if not np.all(np.isfinite(step[r])):
                     break
-                trial = current.copy()
-                trial[rows_a, cols_b] = np.clip(here + step[r], da_lo, da_hi)
-                t_values, t_paths, _ = exact(trial, k, objective=r)
-                if not np.all(np.isfinite(t_values[r])) or gain[r] * t_values[r, r % n] <= best[r]:
+                for fraction in _BACKTRACK:
+                    trial = current.copy()
+                    trial[rows_a, cols_b] = np.clip(here + fraction * step[r], da_lo, da_hi)
+                    t_values, t_paths, _ = exact(trial, k, objective=r)
+                    if np.all(np.isfinite(t_values[r])) and gain[r] * t_values[r, r % n] > best[r]:
+                        break
+                else:
                     break
                 current, path, best[r] = trial, t_paths[r], gain[r] * t_values[r, r % n]
+            found[r] = current
         lo, hi = -best[:n], best[n:]
         if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
             lower[k], upper[k] = lo, hi

@@ -49,7 +49,7 @@ from .contract import Example, base_summary, write_reproduction
 NAME = "numerical-3state"
 ROBUST_HORIZON = 40
 """Window of the RobustHullEstimator in the tightness report (steps)."""
-BOUND_STRIDE = 20
+BOUND_STRIDE = 45
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 SEED_FILE = "002_a6311576c67046f0.txt"
 MONTE_CARLO_RUNS = 20

@@ -19,9 +19,9 @@ from ..tightness import add_tightness
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "spring-mass-lti"
-ROBUST_HORIZON = 80
+ROBUST_HORIZON = 40
 """Window of the RobustHullEstimator in the tightness report (steps)."""
-BOUND_STRIDE = 30
+BOUND_STRIDE = 50
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 TIGHTNESS_STEPS = 250
 """The tightness report (LP windows at every step) covers the first 2.5 s of the record."""

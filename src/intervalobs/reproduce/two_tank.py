@@ -44,9 +44,9 @@ from .numerical_3state import SEED_FILE, _naive_facts, _observer_facts, _ratio
 TIGHTNESS_STEPS = 400
 """The tightness report (LP windows at every step) covers the first 400 s."""
 NAME = "two-tank"
-ROBUST_HORIZON = 120
+ROBUST_HORIZON = 60
 """Window of the RobustHullEstimator in the tightness report (steps)."""
-BOUND_STRIDE = 40
+BOUND_STRIDE = 95
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 MONTE_CARLO_RUNS = 20
 LABELS = ["$h_1$ (cm)", "$h_2$ (cm)"]
