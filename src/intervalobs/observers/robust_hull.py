@@ -396,7 +396,7 @@ class RobustHullEstimator(Observer):
             ``internal["delta_box"]`` is the identified box of ``ΔA - ΔA_c`` (``ΔA_c`` the box centre).
         """
         yk = as_vector("y", y, self.p)
-        uk = np.zeros(self.m) if u is None else as_vector("u", u, self.m)
+        uk = as_vector("u", self._input(u, ()), self.m)
         old = state.internal
         k = int(old["k"])
         self.delta_box = old["delta_box"]
@@ -438,9 +438,7 @@ class RobustHullEstimator(Observer):
         -------
         Estimate
         """
-        times, ys, us = self._signals(t, y, u)
-        if self.system.continuous:
-            self._check_spacing(times, self.h)
+        times, ys, us = self._signals(t, y, u)  # checks the spacing h (dt in discrete time)
         if ys.ndim == 3:
             parts = [self._run_one(times, ys[i], us[i]) for i in range(ys.shape[0])]
             lower, upper = np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
