@@ -29,7 +29,7 @@ from scipy.optimize import linprog
 from scipy.signal import place_poles
 
 from ..errors import DesignError
-from .discretization import SampledModel
+from ..systems.sampling import SampledModel
 
 __all__ = ["FramerDesign", "coordinate_candidates", "design_framer", "framer_matrices", "is_detectable"]
 

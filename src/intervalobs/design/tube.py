@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_discrete_are
 
-from .discretization import SampledModel
+from ..systems.sampling import SampledModel
 
 __all__ = ["TubeDesign", "design_tube_gain", "tube_horizon", "tube_stability"]
 
@@ -168,15 +168,16 @@ def design_tube_gain(
     """
     n = model.Phi.shape[0]
     spread = model.dPhi.sum(axis=1)
-    q = np.diag(model.noise_radius**2 + spread**2) + 1e-12 * np.eye(n) * max(
-        1.0, float(np.max(model.noise_radius)) ** 2
-    )
+    if not (np.all(np.isfinite(model.noise_radius)) and np.all(np.isfinite(spread))):
+        return None
+    scale = max(1.0, float(np.max(model.noise_radius)))
+    q = np.diag(np.square(model.noise_radius / scale) + np.square(spread / scale)) + 1e-12 * np.eye(n)
     r0 = np.diag((np.abs(F) @ v_radius) ** 2) + 1e-12 * np.eye(C.shape[0])
     candidates: dict[str, FloatArray] = {}
-    for scale in (0.1, 1.0, 10.0):
-        gain = _kalman_gain(model, C, q, r0 * scale)
+    for factor in (0.1, 1.0, 10.0):
+        gain = _kalman_gain(model, C, q, r0 * factor / scale / scale)
         if gain is not None:
-            candidates[f"kalman-{scale:g}"] = gain
+            candidates[f"kalman-{factor:g}"] = gain
     candidates.update(extra or {})
     best: TubeDesign | None = None
     for name, gain in candidates.items():

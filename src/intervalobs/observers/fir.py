@@ -3,7 +3,7 @@ r"""Finite-memory (FIR) estimators: linear filters chosen by LP at design time, 
 For a point model :math:`x_{k+1} = \Phi x_k + \Gamma u_k + G\,\eta_k`, :math:`\eta_k` in a box of
 centre :math:`c` and radius :math:`r` (discrete time: :math:`G = E` and the box of :math:`w`, so noise
 channels that drive several states keep their structure; continuous time: :math:`G = I` and the box
-of the sound sampled model of :mod:`intervalobs.design.discretization`), and
+of the sound sampled model of :mod:`intervalobs.systems.sampling`), and
 :math:`y_k = C x_k + F v_k`, write :math:`s = k - N`. Then :math:`x_k` and the window's
 measurements :math:`y_{s+j}`, :math:`j = 0 \dots N-1`, are affine in :math:`x_s`, the noises and the
 known inputs. The estimate of every component is a fixed linear combination of the :math:`N` last
@@ -56,12 +56,12 @@ from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
-from ..design.discretization import sampled_model
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..simulate import simulate
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import sampled_model
 from ..validation import as_box
 from .base import Observer, ObserverState
 from .hull import HullEstimator

@@ -32,7 +32,7 @@ for every feasible :math:`x` (all variables have finite bounds here). The solver
 bounded and subtracted. The box is finally intersected with the interval propagation of the previous
 box (sound without any LP) and inflated by ``ROUNDING_MARGIN`` like every observer's output.
 
-**Continuous time** uses the sound sampled model of :mod:`intervalobs.design.discretization`: the hull
+**Continuous time** uses the sound sampled model of :mod:`intervalobs.systems.sampling`: the hull
 is exact for that model (whose per-step noise set is a box around the true, non-box set), so it is
 sound for the continuous system and slightly wider than its true hull. :func:`hull_lower_bound` gives
 the matching inner value.
@@ -54,11 +54,11 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.linalg import expm
 
-from ..design.discretization import sampled_model
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import sampled_model
 from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
 

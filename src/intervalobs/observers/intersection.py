@@ -27,11 +27,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import coordinate_candidates
-from ..design.discretization import sampled_model
 from ..errors import DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import sampled_model
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
 

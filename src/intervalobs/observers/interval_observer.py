@@ -13,13 +13,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable
-from ..design.discretization import SampledModel, sampled_model
 from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
 from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN
 from ..recursion import LinearRecursion
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
 
@@ -58,7 +58,7 @@ class IntervalObserver(Observer):
     Notes
     -----
     Both methods run on the sound sampled model :math:`x_{k+1} \in (\Phi \pm \delta\Phi)x_k +
-    (\Gamma \pm \delta\Gamma)u_k + [c \pm r]` (:mod:`intervalobs.design.discretization`; a discrete-time
+    (\Gamma \pm \delta\Gamma)u_k + [c \pm r]` (:mod:`intervalobs.systems.sampling`; a discrete-time
     system is its own sampled model) and propagate a box :math:`[\hat x \pm \rho]` whose centre is a
     Luenberger estimate, in coordinates :math:`z = Tx` with :math:`M = T(\Phi - LC)T^{-1}`:
 

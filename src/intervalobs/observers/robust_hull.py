@@ -62,11 +62,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm, expm_frechet
 
-from ..design.discretization import sampled_model
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import sampled_model
 from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
 from .hull import _INNER_SHRINK, HullLowerBound, _dual_bounds, _inner_model, _new_highs, _solve

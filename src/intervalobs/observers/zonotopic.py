@@ -35,12 +35,12 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design.discretization import sampled_model
 from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError, DesignError
 from ..estimate import Estimate
 from ..interval import inflate
 from ..systems.lti import Bounds, LTISystem
+from ..systems.sampling import sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
 from .base import Observer, ObserverState

@@ -4,6 +4,7 @@ from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from .lti import Bounds, LTISystem
 from .nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
 from .sampled import SampledSimulation, SampledSystem, simulate_sampled
+from .sampling import SampledModel, sampled_model
 
 __all__ = [
     "Bounds",
@@ -12,9 +13,11 @@ __all__ = [
     "NonlinearSimulation",
     "NonlinearSystem",
     "SampledLPVModel",
+    "SampledModel",
     "SampledSimulation",
     "SampledSystem",
     "StepEnclosure",
+    "sampled_model",
     "simulate_nonlinear",
     "simulate_sampled",
 ]

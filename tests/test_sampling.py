@@ -1,0 +1,190 @@
+"""The sound sampled model (systems/sampling.py): tight for stiff A, sound against an exact-exponential truth."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from intervalobs import AssumptionError, Bounds, BoundsError, IntervalObserver, LTISystem, sampled_model
+from intervalobs.systems.sampling import _nodes
+
+STEPS = [0.001, 0.01, 0.1, 0.5, 1.0, 10.0]
+STIFF_A = np.array([[-1000.0, 0.0], [1.0, -0.01]])
+# Entries of dPhi below this fraction of max|Phi| are rounding-level (the Schur residual allowance).
+FLOOR = 1e-12
+
+
+def stiff_system(uncertain: bool) -> LTISystem:
+    da = 1e-3 * np.abs(STIFF_A)
+    return LTISystem(STIFF_A, [[0.0, 1.0]], E=np.eye(2), dA=(-da, da) if uncertain else None)
+
+
+def unit_bounds(n: int, nw: int, p: int) -> Bounds:
+    return Bounds(
+        x0=(-np.ones(n), np.ones(n)), w=(-np.ones(nw), np.ones(nw)), v=(-0.01 * np.ones(p), 0.01 * np.ones(p))
+    )
+
+
+def random_stiff(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stable A with real eigenvalues spread over 5 decades (-1e-2 … -1e3), a well-conditioned basis."""
+    rng = np.random.default_rng(seed)
+    lam = -(10.0 ** np.linspace(-2.0, 3.0, n))
+    basis = np.eye(n) + 0.3 * rng.standard_normal((n, n))
+    a = basis @ np.diag(rng.permutation(lam)) @ np.linalg.inv(basis)
+    e = rng.standard_normal((n, 2))
+    c = rng.standard_normal((1, n))
+    return a, e, c
+
+
+def exact_noise_radius(a: np.ndarray, e: np.ndarray, h: float) -> np.ndarray:
+    """∫_0^h |e^{Aτ}E| 1 dτ by a fine trapezoid rule on eigen-evaluated exponentials (real spectrum)."""
+    lam, vec = np.linalg.eig(a)
+    lam, vec = lam.real, vec.real
+    coef = np.linalg.solve(vec, e)
+    tau = np.unique(np.concatenate([[0.0], np.geomspace(1e-9, h, 40000), np.linspace(0, h, 20000)]))
+    values = np.abs(np.einsum("ip,tp,pk->tik", vec, np.exp(np.outer(tau, lam)), coef)).sum(axis=2)
+    return np.asarray(np.trapezoid(values, tau, axis=0))
+
+
+def vertex_lower_bound(a: np.ndarray, d: np.ndarray, h: float) -> np.ndarray:
+    """max over chosen vertices ΔA of |e^{(A+ΔA)h} - e^{Ah}|: per entry, the vertex of the first-order signs."""
+    n = a.shape[0]
+    phi = expm(a * h)
+    pairs = list(zip(*np.nonzero(d), strict=True))
+    sens = np.zeros((len(pairs), n, n))
+    for q, (j, l) in enumerate(pairs):  # ∂Φ/∂A_jl = ∫ e^{A(h-s)} e_j e_l^T e^{As} ds (Van Loan block)
+        block = np.zeros((2 * n, 2 * n))
+        block[:n, :n], block[n:, n:], block[j, n + l] = a, a, 1.0
+        sens[q] = expm(block * h)[:n, n:]
+    best = np.zeros((n, n))
+    for i, k in itertools.product(range(n), range(n)):
+        for sign in (1.0, -1.0):
+            delta = np.zeros((n, n))
+            for q, (j, l) in enumerate(pairs):
+                delta[j, l] = sign * d[j, l] * (1.0 if sens[q, i, k] >= 0 else -1.0)
+            best = np.maximum(best, np.abs(expm((a + delta) * h) - phi))
+    return best
+
+
+def test_nodes_are_symmetric_and_geometric() -> None:
+    for h in (1e-3, 0.1, 7.3):
+        nodes = _nodes(h, 1000.0)
+        np.testing.assert_array_equal(h - nodes[::-1], nodes)
+        assert nodes[1] * 1000.0 <= 1.0 / 16.0 + 1e-15
+
+
+@pytest.mark.parametrize("h", STEPS, ids=[f"h={h:g}" for h in STEPS])
+def test_stiff_noise_radius_within_1_5_of_exact(h: float) -> None:
+    model = sampled_model(stiff_system(False), unit_bounds(2, 2, 1), h)
+    # Closed form: e^{Aτ} = [[e^{-1000τ}, 0], [(e^{-0.01τ} - e^{-1000τ})/999.99, e^{-0.01τ}]] >= 0.
+    fast, slow = (1 - np.exp(-1000 * h)) / 1000, (1 - np.exp(-0.01 * h)) / 0.01
+    exact = np.array([fast, (slow - fast) / 999.99 + slow])
+    np.testing.assert_allclose(exact_noise_radius(STIFF_A, np.eye(2), h), exact, rtol=1e-4)
+    assert np.all(model.noise_radius >= exact * (1 - 1e-9))
+    assert np.all(model.noise_radius <= 1.5 * exact)
+
+
+@pytest.mark.parametrize("h", STEPS, ids=[f"h={h:g}" for h in STEPS])
+def test_stiff_dphi_within_3_of_vertex_bound_and_design_bounded(h: float) -> None:
+    system = stiff_system(True)
+    model = sampled_model(system, unit_bounds(2, 2, 1), h)
+    lower = vertex_lower_bound(STIFF_A, 1e-3 * np.abs(STIFF_A), h)
+    floor = FLOOR * np.abs(model.Phi).max()
+    assert np.all(model.dPhi >= lower * (1 - 1e-9))
+    assert np.all(model.dPhi <= 3 * lower + floor)
+    observer = IntervalObserver.design(system, unit_bounds(2, 2, 1), h=h)
+    assert np.all(np.isfinite(observer.design_result.steady_radius))
+
+
+RANDOM_CASES = [(3, 0), (6, 1), (10, 2)]
+# Known weakness (module docstring): on dense random bases the second-order remainder of the Schur
+# majorant couples the fast and slow modes; dPhi is within 3x of the vertex bound only while the
+# first-order term dominates (h <= 0.001 here, i.e. h·max|λ| <= 1).
+DPHI_TIGHT_UP_TO = 0.001
+
+
+@pytest.mark.parametrize(("n", "seed"), RANDOM_CASES, ids=[f"n={n}-seed={s}" for n, s in RANDOM_CASES])
+def test_random_stiff_systems_tight(n: int, seed: int) -> None:
+    a, e, c = random_stiff(n, seed)
+    d = 1e-3 * np.abs(a)
+    system = LTISystem(a, c, E=e, dA=(-d, d))
+    point = LTISystem(a, c, E=e)
+    for h in STEPS:
+        exact = exact_noise_radius(a, e, h)
+        radius = sampled_model(point, unit_bounds(n, 2, 1), h).noise_radius
+        assert np.all(radius >= exact * (1 - 1e-6)), h
+        assert np.all(radius <= 1.5 * exact), (h, np.max(radius / exact))
+        model = sampled_model(system, unit_bounds(n, 2, 1), h)
+        lower = vertex_lower_bound(a, d, h)
+        assert np.all(model.dPhi >= lower * (1 - 1e-6)), h
+        if h <= DPHI_TIGHT_UP_TO:
+            floor = FLOOR * np.abs(model.Phi).max()
+            assert np.all(model.dPhi <= 3 * lower + floor), (h, np.max((model.dPhi - floor) / lower))
+
+
+def simulate_truth(
+    a: np.ndarray, e: np.ndarray, c: np.ndarray, delta: np.ndarray, x0: np.ndarray, h: float, steps: int, rng
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact exponentials of 4 sub-steps per sample; the noise switches sign (bang-bang) at every sub-step."""
+    n, nw, sub = a.shape[0], e.shape[1], 4
+    block = np.zeros((n + nw, n + nw))
+    block[:n, :n], block[:n, n:] = a + delta, e
+    flow = expm(block * (h / sub))
+    x = np.empty((steps, n))
+    x[0] = x0
+    for k in range(steps - 1):
+        state = x[k]
+        for _ in range(sub):
+            w = rng.choice([-1.0, 1.0], nw)
+            state = flow[:n, :n] @ state + flow[:n, n:] @ w
+        x[k + 1] = state
+    y = x @ c.T + 0.01 * rng.choice([-1.0, 1.0], (steps, c.shape[0]))
+    return x, y
+
+
+SOUND_CASES = [("stiff", 0.01), ("stiff", 0.5), ("stiff", 10.0), ("n=6", 0.1), ("n=6", 1.0)]
+
+
+@pytest.mark.parametrize(("name", "h"), SOUND_CASES, ids=[f"{n}-h={h:g}" for n, h in SOUND_CASES])
+def test_enclosure_against_exact_exponential_truth(name: str, h: float) -> None:
+    if name == "stiff":
+        a, e, c = STIFF_A, np.eye(2), np.array([[0.0, 1.0]])
+    else:
+        a, e, c = random_stiff(int(name[2:]), 5)
+    n = a.shape[0]
+    d = (1e-3 if name == "stiff" else 1e-5) * np.abs(a)
+    system = LTISystem(a, c, E=e, dA=(-d, d))
+    bounds = unit_bounds(n, e.shape[1], 1)
+    observer = IntervalObserver.design(system, bounds, h=h)
+    rng = np.random.default_rng(7)
+    steps = 120
+    t = h * np.arange(steps)
+    for run in range(4):
+        delta = d * rng.choice([-1.0, 1.0], d.shape)
+        x0 = rng.choice([-1.0, 1.0], n)
+        x, y = simulate_truth(a, e, c, delta, x0, h, steps, rng)
+        est = observer.run(t, y)
+        assert np.all(est.lower <= x) and np.all(x <= est.upper), run
+        assert np.all(np.isfinite(est.upper[-1] - est.lower[-1]))
+
+
+def test_unstable_long_step_is_a_named_error() -> None:
+    system = LTISystem([[800.0]], [[1.0]])
+    with pytest.raises(AssumptionError, match="Phi, Gamma"):
+        sampled_model(system, unit_bounds(1, 1, 1), 1.0)
+    with pytest.raises(BoundsError, match="h: expected a positive step"):
+        sampled_model(system, unit_bounds(1, 1, 1), None)
+
+
+def test_old_examples_never_looser_than_cheap_bound() -> None:
+    """A slow, small-norm model: the minimum keeps the cheap bound where it is tighter (never wider)."""
+    a = np.array([[0.0, 1.0], [-2.0, -0.3]])
+    d = 0.02 * np.abs(a)
+    system = LTISystem(a, [[1.0, 0.0]], E=np.eye(2), dA=(-d, d))
+    h = 0.05
+    model = sampled_model(system, unit_bounds(2, 2, 1), h)
+    cheap = np.maximum(expm((np.abs(a) + d) * h) - expm(np.abs(a) * h), 0.0)
+    assert np.all(model.dPhi <= cheap * (1 + 1e-9))
