@@ -115,8 +115,8 @@ def test_parameter_box_with_vanishing_determinant_is_rejected():
 
 def _lpv(**over):
     args = dict(
-        A=lambda th: np.broadcast_to(-np.eye(2), (*th.shape[:-1], 2, 2)),
-        B=lambda th: np.broadcast_to(np.eye(2)[:, :1], (*th.shape[:-1], 2, 1)),
+        A=lambda th: [[-1.0, 0.0], [0.0, -1.0]],
+        B=lambda th: [[1.0], [0.0]],
         C=np.eye(2),
         theta_box=([-1.0], [1.0]),
     )
@@ -128,17 +128,17 @@ def test_lpv_system_validates_shapes_bounds_and_ranks():
     sys_ = _lpv()
     assert (sys_.n, sys_.m, sys_.p, sys_.n_theta) == (2, 1, 2, 1)
     with pytest.raises(DimensionError, match="square"):
-        _lpv(A=lambda th: np.zeros((*th.shape[:-1], 2, 3)))
+        _lpv(A=lambda th: [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
     with pytest.raises(AssumptionError, match="full row rank"):
         _lpv(C=[[1.0, 0.0], [2.0, 0.0]])
     with pytest.raises(BoundsError, match="lower <= upper"):
-        _lpv(dA=lambda th: (np.ones((th.shape[0], 2, 2)), np.zeros((th.shape[0], 2, 2))))
+        _lpv(dA=(np.ones((2, 2)), np.zeros((2, 2))))
     with pytest.raises(DimensionError, match="shape"):
-        _lpv(dA=lambda th: (np.zeros((th.shape[0], 3, 2)), np.zeros((th.shape[0], 3, 2))))
+        _lpv(dA=(np.zeros((3, 2)), np.zeros((3, 2))))
     with pytest.raises(AssumptionError, match="rank"):
-        _lpv(B_un=lambda th: np.zeros((*th.shape[:-1], 2, 1)))
+        _lpv(B_un=lambda th: [[0.0], [0.0]])
     with pytest.raises(BoundsError, match="finite"):
-        _lpv(A=lambda th: np.full((*th.shape[:-1], 2, 2), np.nan))
+        _lpv(A=lambda th: [[np.nan, 0.0], [0.0, -1.0]])
 
 
 def test_manipulator_lpv_system_is_consistent(model):

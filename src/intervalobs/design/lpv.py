@@ -619,8 +619,8 @@ def eta_and_generator(
 
     Parameters
     ----------
-    f_lower, f_upper : numpy.ndarray, shape (n, n)
-        Metzler matrices of the lower and upper observer.
+    f_lower, f_upper : numpy.ndarray, shape (n, n) or (..., n, n)
+        Metzler matrices of the lower and upper observer (constant or per grid point).
     da_lower, da_upper : numpy.ndarray, shape (..., n, n)
         Bounds of :math:`\Delta A_R` at grid points.
     s1, s2 : numpy.ndarray, shape (..., n)
@@ -645,8 +645,8 @@ def eta_and_generator(
         + norm(neg(u1))
         + norm(neg(l1))
     )
-    n = f_lower.shape[0]
-    lead = np.broadcast_shapes(l1.shape[:-2], l2.shape[:-2])
+    n = f_lower.shape[-1]
+    lead = np.broadcast_shapes(l1.shape[:-2], l2.shape[:-2], f_lower.shape[:-2], f_upper.shape[:-2])
     g = np.zeros((*lead, 2 * n, 2 * n))
     g[..., :n, :n] = f_lower + pos(l1)
     g[..., n:, n:] = f_upper + pos(u2)
@@ -866,8 +866,8 @@ def verify_boundedness(
     ----------
     cert : BoundednessCertificate
         From :func:`boundedness_lmi`.
-    f_lower, f_upper : array_like, shape (n, n)
-        Observer matrices.
+    f_lower, f_upper : array_like, shape (n, n) or (N, n, n)
+        Observer matrices (constant or at each grid point).
     da_lower, da_upper : array_like, shape (N, n, n)
         Bounds of :math:`\Delta A_R` at the fine grid points (e.g. the paper's 10 000).
     switchable : sequence of int
@@ -882,17 +882,18 @@ def verify_boundedness(
         ``cert`` with ``fine_margin`` (largest eigenvalue of the (1,1) block over all points and
         subset pairs) and ``fine_points`` filled in.
     """
-    fl = as_matrix("f_lower", f_lower)
-    n = fl.shape[0]
-    fu = as_matrix("f_upper", f_upper, (n, n))
+    fl = np.asarray(f_lower, dtype=float)
+    n = fl.shape[-1]
     dl = np.asarray(da_lower, dtype=float).reshape(-1, n, n)
     du = np.asarray(da_upper, dtype=float).reshape(-1, n, n)
+    fl = np.broadcast_to(fl, dl.shape)
+    fu = np.broadcast_to(np.asarray(f_upper, dtype=float), dl.shape)
     masks = _subset_masks(n, _active_switchable(switchable, dl, du))
     worst = -np.inf
     for start in range(0, dl.shape[0], chunk):
         sl = slice(start, start + chunk)
         g, eta = eta_and_generator(
-            fl, fu, dl[sl][None, None], du[sl][None, None], masks[:, None, None, :], masks[None, :, None, :]
+            fl[sl], fu[sl], dl[sl][None, None], du[sl][None, None], masks[:, None, None, :], masks[None, :, None, :]
         )
         worst = max(worst, float(np.max(_block_max_eig(cert.P, cert.Q, cert.gamma, cert.eps1 + cert.eps2, g, eta))))
     return BoundednessCertificate(

@@ -387,15 +387,19 @@ class ManipulatorModel(SampledLPVModel):
         )
         self._fast = _fast_factory(self.nominal)
         self.bounds.check_fast(self._fast, range(8))
+
+        def stacked(f: Any) -> Any:
+            return lambda th: f(np.stack(np.broadcast_arrays(*th), axis=-1))
+
         self.system = LPVSystem(
-            A=self.a_matrix,
-            B=self.b_matrix,
+            A=stacked(self.a_matrix),
+            B=stacked(self.b_matrix),
             C=np.eye(4),
             theta_box=THETA_BOX,
-            B_un=self.b_matrix,
-            dA=self.da_bounds,
-            dB=self.db_bounds,
-            dB_un=self.db_bounds,
+            B_un=stacked(self.b_matrix),
+            dA=stacked(self.da_bounds),
+            dB=stacked(self.db_bounds),
+            dB_un=stacked(self.db_bounds),
         )
 
     # --- nominal matrices -----------------------------------------------------------------------

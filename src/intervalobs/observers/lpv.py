@@ -33,6 +33,24 @@ exactly the paper's switching rule of (69)/(71) — when :math:`\underline\varep
 :math:`\underline x^{(i)}` is replaced by :math:`\tilde x^{(i)} = (C^\dagger y)^{(i)}` (73) — extended
 from the sample instant to the whole step. All outputs are widened by ``ROUNDING_MARGIN``.
 
+**Generic models** (:meth:`LPVIntervalObserver.design`). From the user's matrix functions and
+bounds (:class:`~intervalobs.systems.lpv.LPVSystem`) and a design of
+:func:`~intervalobs.design.lpv_gains.design_lpv_observer` (constant :math:`R`, so :math:`\dot R = 0`):
+the scheduling vector is measured at the samples and :math:`|\dot\vartheta| \le \rho` (``theta_rate``;
+``inf`` allowed: then only :math:`\vartheta \in \Theta` is used), so
+:math:`\Theta_k = [\vartheta_k \mp \rho h] \cap \Theta` holds over the step. Every matrix is
+evaluated over :math:`\Theta_k` by interval arithmetic (:mod:`intervalobs.inclusion`). The step box
+:math:`X_k` is the a-priori enclosure of Picard–Lindelöf type: if
+:math:`S_k + [0, h]\,f(X) \subseteq X` (with :math:`S_k` the box at :math:`t_k`, measured states exact,
+:math:`f` the interval right-hand side over every admissible :math:`\Delta A, \Delta B, d` and, for the
+UIO, :math:`u_{un}`), then :math:`x(t) \in S_k + [0, h] f(X)` on the step. The observer matrix of the
+step is :math:`F_k = F(\vartheta_k)` (designed left columns, right columns :math:`A_R(\vartheta_k)`;
+negative off-diagonal entries, possible off the design grid, are set to 0), and
+:math:`\psi = [R(A + \Delta A)(\Theta_k) - F_k R]\,X_k + R(B + \Delta B)(\Theta_k)u + R[d] + Rc
+(+ R\Delta B_{un}[u_{un}])`, the bracket evaluated as one interval matrix so that the unmeasured columns
+cancel to an :math:`O(\rho h)` interval. Soundness needs none of (17)–(18), Hurwitz or the LMI: those
+give boundedness.
+
 Step semantics: the box of :math:`x(t_k)` needs the current output (32), so
 ``step(state_k, y_k, u_k)`` returns a state whose ``lower``/``upper`` are the box of :math:`x(t_k)` and
 whose ``internal`` holds :math:`\underline z_{k+1}, \overline z_{k+1}` and the isolation signals at
@@ -48,10 +66,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
+from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer, rotate_bounds
 from ..errors import AssumptionError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
-from ..systems.lpv import SampledLPVModel
+from ..systems.lpv import LPVSystem, SampledLPVModel
 from ..validation import as_box, as_matrix
 from .base import Observer, ObserverState
 
@@ -85,6 +104,150 @@ def _sampled(f: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
     return np.maximum(e, 0.0), np.maximum(phi, 0.0)
 
 
+def _sampled_batch(f: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
+    """:func:`_sampled` for a stack of Metzler matrices (M, n, n)."""
+    m, n = f.shape[0], f.shape[-1]
+    block = np.zeros((m, 2 * n, 2 * n))
+    block[:, :n, :n] = f
+    block[:, :n, n:] = np.eye(n)
+    ex = expm(block * h)
+    e, phi = ex[:, :n, :n], ex[:, :n, n:]
+    scale = max(1.0, float(np.abs(ex).max()))
+    if np.any(e < -1e-14 * scale) or np.any(phi < -1e-14 * scale):
+        raise DesignError(
+            f"expm(F h): expected a nonnegative matrix for Metzler F, got min {min(e.min(), phi.min()):g}"
+        )
+    return np.maximum(e, 0.0), np.maximum(phi, 0.0)
+
+
+class _IntervalEnclosure:
+    """The generic between-sample enclosure of an :class:`LPVSystem` (module docstring, "Generic models")."""
+
+    def __init__(
+        self,
+        system: LPVSystem,
+        design: LPVObserverDesign,
+        theta_rate: ArrayLike,
+        h: float,
+        unknown_input: tuple[FloatArray, FloatArray] | None,
+    ) -> None:
+        self.system, self.design, self.h = system, design, h
+        rate = np.asarray(theta_rate, dtype=float).reshape(-1)
+        rate = np.broadcast_to(rate, (system.n_theta,)) if rate.size == 1 else rate
+        if rate.shape != (system.n_theta,) or np.any(np.isnan(rate)) or np.any(rate < 0):
+            raise DataError(
+                f"theta_rate: expected {system.n_theta} nonnegative bounds of |dθ/dt| (inf allowed), got {theta_rate!r}"
+            )
+        self.theta_rate = rate
+        self.u_un = unknown_input
+        self.R = design.R
+        pts = system.test_points()
+        right = (self.R @ system.matrix_at("A", pts))[..., design.p :]
+        self.constant_f = bool(np.allclose(right, right[0], rtol=0.0, atol=0.0))
+        self._cache: tuple[FloatArray, ...] | None = None
+        d = system.d if system.d is not None else (np.zeros(system.n), np.zeros(system.n))
+        rd_lo, rd_hi = matvec_bounds(self.R, *d)
+        self.rc_lo, self.rc_hi = rd_lo + self.R @ system.c, rd_hi + self.R @ system.c
+        self.d = d
+
+    def theta_box(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
+        lo, hi = self.system.theta_box
+        with np.errstate(invalid="ignore"):
+            pad = np.where(np.isinf(self.theta_rate), np.inf, self.theta_rate * self.h)
+        return np.maximum(theta - pad, lo), np.minimum(theta + pad, hi)
+
+    def _sum(self, name: str, bound: str, th_lo: FloatArray, th_hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+        lo, hi = self.system.matrix_box(name, th_lo, th_hi)
+        extra = self.system.bounds_box(bound, th_lo, th_hi)
+        if extra is not None:
+            lo, hi = lo + extra[0], hi + extra[1]
+        return lo, hi
+
+    def flow_box(
+        self,
+        s_lo: FloatArray,
+        s_hi: FloatArray,
+        a: tuple[FloatArray, FloatArray],
+        bu: tuple[FloatArray, FloatArray],
+        fault: tuple[FloatArray, FloatArray] | None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """A box containing x(t) on the step (Picard–Lindelöf a-priori enclosure, outward inflated)."""
+        const_lo, const_hi = bu[0] + self.d[0] + self.system.c, bu[1] + self.d[1] + self.system.c
+        if fault is not None:
+            const_lo, const_hi = const_lo + fault[0], const_hi + fault[1]
+        h = self.h
+
+        def image(x_lo: FloatArray, x_hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+            r_lo, r_hi = interval_matvec_bounds(a[0], a[1], x_lo, x_hi)
+            return inflate(s_lo + h * np.minimum(r_lo + const_lo, 0.0), s_hi + h * np.maximum(r_hi + const_hi, 0.0))
+
+        x_lo, x_hi = image(s_lo, s_hi)
+        for _ in range(30):
+            grow = 0.1 * (x_hi - x_lo) + 1e-9 * (1.0 + np.abs(x_lo) + np.abs(x_hi))
+            x_lo, x_hi = x_lo - grow, x_hi + grow
+            n_lo, n_hi = image(x_lo, x_hi)
+            if np.all(n_lo >= x_lo) and np.all(n_hi <= x_hi):
+                return n_lo, n_hi
+            x_lo, x_hi = np.minimum(x_lo, n_lo), np.maximum(x_hi, n_hi)
+        raise DataError(f"h: the a-priori enclosure over a step of h = {h:g} s did not converge; use a smaller h")
+
+    def step(
+        self, x_lo: FloatArray, x_hi: FloatArray, x_meas: FloatArray, u: FloatArray, theta: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """ψ bounds and the step matrices: returns psi_lo, psi_hi, E_lower, Phi_lower, E_upper, Phi_upper."""
+        sysm, r, p = self.system, self.R, self.design.p
+        th_lo, th_hi = self.theta_box(theta)
+        a = self._sum("A", "dA", th_lo, th_hi)
+        b = self._sum("B", "dB", th_lo, th_hi)
+        bu = interval_matvec_bounds(b[0], b[1], u, u)
+        fault = None
+        dbun = None
+        if self.u_un is not None:
+            bun = self._sum("B_un", "dB_un", th_lo, th_hi)
+            fault = interval_matvec_bounds(bun[0], bun[1], *self.u_un)
+            extra = sysm.bounds_box("dB_un", th_lo, th_hi)
+            if extra is not None:
+                dbun = interval_matvec_bounds(*rotate_bounds(r, *extra), *self.u_un)
+        s_lo, s_hi = x_lo.copy(), x_hi.copy()
+        s_lo[:, :p] = s_hi[:, :p] = x_meas
+        f_lo, f_hi = self.flow_box(s_lo, s_hi, a, bu, fault)
+        ra = rotate_bounds(r, *a)
+        fl, fu = self._f_matrices(theta)
+        k_lo = ra[0] - fl @ r
+        k_hi = ra[1] - fu @ r
+        psi_lo = interval_matvec_bounds(k_lo, ra[1] - fl @ r, f_lo, f_hi)[0]
+        psi_hi = interval_matvec_bounds(ra[0] - fu @ r, k_hi, f_lo, f_hi)[1]
+        rb = interval_matvec_bounds(*rotate_bounds(r, *b), u, u)
+        psi_lo, psi_hi = psi_lo + rb[0] + self.rc_lo, psi_hi + rb[1] + self.rc_hi
+        if dbun is not None:
+            psi_lo, psi_hi = psi_lo + dbun[0], psi_hi + dbun[1]
+        return (psi_lo, psi_hi, *self._matrices(fl, fu))
+
+    def _f_matrices(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
+        fl, fu = self.design.f_matrices(self.R @ self.system.matrix_at("A", theta))
+        n = fl.shape[-1]
+        off = ~np.eye(n, dtype=bool)
+        for f in (fl, fu):
+            f[:, off] = np.maximum(f[:, off], 0.0)
+        return fl, fu
+
+    def _matrices(self, fl: FloatArray, fu: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        if self.constant_f:
+            if self._cache is None:
+                el, pl = _sampled_batch(fl[:1], self.h)
+                eu, pu = _sampled_batch(fu[:1], self.h)
+                self._cache = (el, pl, eu, pu)
+            el, pl, eu, pu = self._cache
+            m = fl.shape[0]
+            return (
+                np.broadcast_to(el, (m, *el.shape[1:])),
+                np.broadcast_to(pl, (m, *pl.shape[1:])),
+                np.broadcast_to(eu, (m, *eu.shape[1:])),
+                np.broadcast_to(pu, (m, *pu.shape[1:])),
+            )
+        return (*_sampled_batch(fl, self.h), *_sampled_batch(fu, self.h))
+
+
 @dataclass(frozen=True)
 class IsolationRecord:
     r"""Isolation signals of a run of the interval UIO.
@@ -109,6 +272,11 @@ class IsolationRecord:
 class LPVIntervalObserver(Observer):
     r"""LPV interval observer (31)–(34), sampled soundly (module docstring).
 
+    Two ways to build one: from a model with its own sampled-data enclosures (a
+    :class:`~intervalobs.systems.lpv.SampledLPVModel`, e.g. the manipulator's, and given Metzler
+    :math:`F`), or from any :class:`~intervalobs.systems.lpv.LPVSystem` with :meth:`design` (F, R, T
+    from the LMIs, enclosures by interval evaluation).
+
     Parameters
     ----------
     model : SampledLPVModel
@@ -123,9 +291,8 @@ class LPVIntervalObserver(Observer):
     Raises
     ------
     AssumptionError
-        If F is not Metzler, C is not square invertible (the partitions (16)–(18) with unmeasured
-        states are not implemented), or the model has a disturbance d (not covered by the sampled
-        enclosure).
+        If F is not Metzler, C is not square invertible (a model-specific enclosure measures the whole
+        state; use :meth:`design` for n_y < n_x), or the model has a disturbance d.
     DesignError
         If F is not Hurwitz.
     """
@@ -145,19 +312,19 @@ class LPVIntervalObserver(Observer):
         if not isinstance(model, SampledLPVModel):
             raise DimensionError(f"model: expected a SampledLPVModel, got {type(model).__name__}")
         system = model.system
-        self.model = model
+        self.model: SampledLPVModel | None = model
+        self.generic: _IntervalEnclosure | None = None
+        self.design_result: LPVObserverDesign | None = None
         self.system = system
         self.n, self.p, self.m = system.n, system.p, system.m
         if self.p != self.n:
             raise AssumptionError(
-                f"C: expected n_y = n_x (the partitions (16)–(18) for unmeasured states are not "
-                f"implemented), got n_y = {self.p}, n_x = {self.n}"
+                f"C: expected n_y = n_x for a model-specific enclosure, got n_y = {self.p}, n_x = {self.n}; "
+                f"use LPVIntervalObserver.design for unmeasured states"
             )
         if system.d is not None:
-            raise AssumptionError("d: the sampled observer covers c but not a bounded disturbance d; got d")
-        if not (np.isfinite(h) and h > 0):
-            raise DataError(f"h: expected a positive sampling interval, got {h!r}")
-        self.h = float(h)
+            raise AssumptionError("d: the model-specific enclosure covers c but not a bounded disturbance d; got d")
+        self.h = self._check_h(h)
         self.f_lower = as_matrix("f_lower", f_lower, (self.n, self.n))
         self.f_upper = self.f_lower.copy() if f_upper is None else as_matrix("f_upper", f_upper, (self.n, self.n))
         _check_metzler_hurwitz("f_lower", self.f_lower)
@@ -167,12 +334,81 @@ class LPVIntervalObserver(Observer):
         self.c_inv = np.linalg.inv(system.C)
         self.x0 = None if x0 is None else as_box("x0", x0, self.n)
 
+    @staticmethod
+    def _check_h(h: float) -> float:
+        if not (np.isfinite(h) and h > 0):
+            raise DataError(f"h: expected a positive sampling interval, got {h!r}")
+        return float(h)
+
+    @classmethod
+    def design(
+        cls,
+        system: LPVSystem,
+        x0: tuple[ArrayLike, ArrayLike],
+        h: float,
+        theta_rate: ArrayLike,
+        **design_options: Any,
+    ) -> LPVIntervalObserver:
+        r"""Design from the LMIs (63)–(66) and run with interval enclosures of the model between samples.
+
+        Parameters
+        ----------
+        system : LPVSystem
+            Model with :math:`C = (\tilde C\ 0)` (measured states first) and matrix functions in the
+            component convention.
+        x0 : tuple of array_like
+            Prior box of :math:`x(t_0)` (20).
+        h : float
+            Sampling interval (s).
+        theta_rate : array_like, shape (n_theta,) or float
+            Bound of :math:`|\dot\vartheta|` (``inf``: only :math:`\vartheta \in \Theta` is used).
+        **design_options
+            Passed to :func:`~intervalobs.design.lpv_gains.design_lpv_observer` (``R``, ``grid``,
+            ``fine_grid``, ``eps2``, ``q_scale``, ``gain_bound``).
+
+        Returns
+        -------
+        LPVIntervalObserver
+
+        Raises
+        ------
+        DesignError
+            Naming the failed design condition.
+        """
+        unknown = {"R", "grid", "fine_grid", "eps2", "q_scale", "gain_bound"}
+        for key in design_options:
+            if key not in unknown:
+                raise TypeError(f"design() got an unexpected keyword argument {key!r}")
+        return cls._generic(system, x0, h, theta_rate, design_lpv_observer(system, **design_options), None)
+
+    @classmethod
+    def _generic(
+        cls,
+        system: LPVSystem,
+        x0: tuple[ArrayLike, ArrayLike],
+        h: float,
+        theta_rate: ArrayLike,
+        design: LPVObserverDesign,
+        unknown_input: tuple[FloatArray, FloatArray] | None,
+    ) -> Any:
+        if not isinstance(system, LPVSystem):
+            raise DimensionError(f"system: expected an LPVSystem, got {type(system).__name__}")
+        obs = cls.__new__(cls)
+        obs.model = None
+        obs.system = system
+        obs.n, obs.p, obs.m = system.n, system.p, system.m
+        obs.h = cls._check_h(h)
+        obs.design_result = design
+        obs.generic = _IntervalEnclosure(system, design, theta_rate, obs.h, unknown_input)
+        obs.x0 = as_box("x0", x0, system.n)
+        return obs
+
     # --- the recursion ----------------------------------------------------------------------------
     def _unknown_input_term(self, bul: FloatArray, buh: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         return None
 
     def advance(
-        self, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray
+        self, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray, theta: FloatArray | None = None
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         r"""One sample: box of :math:`x(t_k)`, isolation signals at :math:`t_k`, and :math:`z_{k+1}`.
 
@@ -182,12 +418,17 @@ class LPVIntervalObserver(Observer):
             Observer states at :math:`t_k`.
         y, u : numpy.ndarray, shape (M, p) and (M, m)
             Output and known input at :math:`t_k` (u held over the step).
+        theta : numpy.ndarray, shape (M, n_theta), optional
+            Scheduling vector at :math:`t_k` (designed observers only).
 
         Returns
         -------
         x_lower, x_upper, eps_lower, eps_upper, z_lower_next, z_upper_next : numpy.ndarray
         """
+        if self.generic is not None:
+            return self._advance_generic(z_lower, z_upper, y, u, theta)
         model = self.model
+        assert model is not None
         r = model.r_matrix(y)
         x_tilde = y @ self.c_inv.T  # (73)
         ty = x_tilde - np.einsum("mij,mj->mi", r, x_tilde)  # T y = (I - R) C^{-1} y, (36)
@@ -211,7 +452,55 @@ class LPVIntervalObserver(Observer):
         zl, zu = inflate(zl, zu)
         return x_lo, x_hi, eps_lo, eps_hi, zl, zu
 
+    def _advance_generic(
+        self, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray, theta: FloatArray | None
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        gen, des = self.generic, self.design_result
+        assert gen is not None and des is not None
+        if theta is None:
+            raise DataError(
+                f"theta: expected the measured scheduling vector, shape (..., {self.system.n_theta}), got None"
+            )
+        p = self.p
+        x_meas = y @ des.C_tilde_inv.T  # measured states, (9)
+        ty = y @ des.T.T
+        x_lo, x_hi = inflate(z_lower + ty, z_upper + ty)  # (32), (34)
+        eps_lo, eps_hi = np.zeros_like(x_lo), np.zeros_like(x_hi)
+        eps_lo[:, :p] = x_meas - x_lo[:, :p]  # (29): C† = (C̃⁻¹; 0)
+        eps_hi[:, :p] = x_hi[:, :p] - x_meas  # (30)
+        psi_lo, psi_hi, el, pl, eu, pu = gen.step(x_lo, x_hi, x_meas, u, theta)
+        zl = np.einsum("mij,mj->mi", el, z_lower) + np.einsum("mij,mj->mi", pl, psi_lo)
+        zu = np.einsum("mij,mj->mi", eu, z_upper) + np.einsum("mij,mj->mi", pu, psi_hi)
+        zl, zu = inflate(zl, zu)
+        return x_lo, x_hi, eps_lo, eps_hi, zl, zu
+
+    def _check_theta(self, theta: ArrayLike | None, lead: tuple[int, ...]) -> FloatArray | None:
+        if self.generic is None:
+            if theta is not None:
+                raise DataError("theta: this observer's model computes the scheduling vector itself; got theta")
+            return None
+        if theta is None:
+            raise DataError(
+                f"theta: expected the measured scheduling vector, shape (..., {self.system.n_theta}), got None"
+            )
+        th = np.asarray(theta, dtype=float)
+        n_t = self.system.n_theta
+        if n_t == 1 and th.shape in (lead, lead[-1:]):
+            th = th[..., None]
+        if th.shape[-1] != n_t or th.shape[:-1] not in (lead, lead[-1:]) or not np.all(np.isfinite(th)):
+            raise DataError(f"theta: expected finite values of shape {(*lead, n_t)}, got {np.shape(theta)}")
+        lo, hi = self.system.theta_box
+        if np.any(th < lo) or np.any(th > hi):
+            raise DataError(f"theta: expected values in theta_box [{lo.tolist()}, {hi.tolist()}], got values outside")
+        return np.asarray(np.broadcast_to(th, (*lead, n_t)))
+
     # --- protocol ---------------------------------------------------------------------------------
+    def _rx_bounds(self, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
+        if self.model is not None:
+            return self.model.rx_bounds(lo, hi)
+        assert self.design_result is not None
+        return matvec_bounds(self.design_result.R, lo, hi)
+
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at :math:`t_0` from the prior box: :math:`\\underline z_0, \\overline z_0` bound
         :math:`R(\\vartheta_0)x_0` over the box (the paper's :math:`\\underline\\xi_0`).
@@ -237,15 +526,17 @@ class LPVIntervalObserver(Observer):
                     f"x0: expected finite lower <= upper of shape (..., {self.n}), got {lo.shape}, {hi.shape}"
                 )
         lo2, hi2 = np.atleast_2d(lo), np.atleast_2d(hi)
-        zl, zu = inflate(*self.model.rx_bounds(lo2, hi2))
+        zl, zu = inflate(*self._rx_bounds(lo2, hi2))
         if lo.ndim == 1:
             zl, zu = zl[0], zu[0]
         return ObserverState(
             lower=np.array(lo, dtype=float), upper=np.array(hi, dtype=float), internal={"z_lower": zl, "z_upper": zu}
         )
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume ``y_k, u_k``; return the box of :math:`x(t_k)` and :math:`z_{k+1}` (module docstring).
+    def step(
+        self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None, theta: ArrayLike | None = None
+    ) -> ObserverState:
+        """Consume ``y_k, u_k`` (and ``theta_k``); return the box of :math:`x(t_k)` and :math:`z_{k+1}`.
 
         Parameters
         ----------
@@ -255,6 +546,8 @@ class LPVIntervalObserver(Observer):
             Output at :math:`t_k`.
         u : array_like, shape (m,) or (M, m), optional
             Known input at :math:`t_k` (default 0).
+        theta : array_like, shape (n_theta,) or (M, n_theta), optional
+            Scheduling vector at :math:`t_k` (required by designed observers).
 
         Returns
         -------
@@ -268,9 +561,11 @@ class LPVIntervalObserver(Observer):
         if y2.shape[-1] != self.p or not np.all(np.isfinite(y2)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {ys.shape}")
         u2 = self._input(u, y2.shape[:-1])
+        th = None if theta is None else np.atleast_2d(np.asarray(theta, dtype=float))
+        th = self._check_theta(th, (y2.shape[0],))
         zl = np.atleast_2d(state.internal["z_lower"])
         zu = np.atleast_2d(state.internal["z_upper"])
-        x_lo, x_hi, e_lo, e_hi, zl, zu = self.advance(zl, zu, y2, np.asarray(u2, dtype=float))
+        x_lo, x_hi, e_lo, e_hi, zl, zu = self.advance(zl, zu, y2, np.asarray(u2, dtype=float), th)
         if single:
             x_lo, x_hi, e_lo, e_hi, zl, zu = (a[0] for a in (x_lo, x_hi, e_lo, e_hi, zl, zu))
         return ObserverState(
@@ -286,6 +581,7 @@ class LPVIntervalObserver(Observer):
         u: ArrayLike | None = None,
         x0_lower: ArrayLike | None = None,
         x0_upper: ArrayLike | None = None,
+        theta: ArrayLike | None = None,
     ) -> tuple[Estimate, FloatArray, FloatArray]:
         """Like :meth:`run`, also returning :math:`\\underline\\varepsilon, \\overline\\varepsilon` (29)–(30).
 
@@ -299,6 +595,8 @@ class LPVIntervalObserver(Observer):
             Known inputs.
         x0_lower, x0_upper : array_like, optional
             Prior box (default: the constructor's ``x0``).
+        theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
+            Measured scheduling vector (required by designed observers).
 
         Returns
         -------
@@ -309,19 +607,21 @@ class LPVIntervalObserver(Observer):
         squeeze = ys.ndim == 2
         y3 = ys[None] if squeeze else ys
         u3 = np.broadcast_to(us[None] if us.ndim == 2 else us, (*y3.shape[:-1], self.m))
+        th3 = self._check_theta(theta, y3.shape[:-1])
         state = self.init(x0_lower, x0_upper)
         zl = np.broadcast_to(np.atleast_2d(state.internal["z_lower"]), (y3.shape[0], self.n)).copy()
         zu = np.broadcast_to(np.atleast_2d(state.internal["z_upper"]), (y3.shape[0], self.n)).copy()
         shape = (y3.shape[0], times.size, self.n)
         lo, hi, el, eh = (np.empty(shape) for _ in range(4))
         for k in range(times.size):
-            lo[:, k], hi[:, k], el[:, k], eh[:, k], zl, zu = self.advance(zl, zu, y3[:, k], u3[:, k])
+            th_k = None if th3 is None else th3[:, k]
+            lo[:, k], hi[:, k], el[:, k], eh[:, k], zl, zu = self.advance(zl, zu, y3[:, k], u3[:, k], th_k)
         if squeeze:
             lo, hi, el, eh = lo[0], hi[0], el[0], eh[0]
         meta: dict[str, Any] = {"method": self.method, "h": self.h, "transient_s": float(times[0])}
         return Estimate(times, lo, hi, meta=meta), el, eh
 
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
+    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, theta: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record; ``y`` is (T, p) or (M, T, p); row k is the box of :math:`x(t_k)`.
 
         Parameters
@@ -332,12 +632,14 @@ class LPVIntervalObserver(Observer):
             Outputs.
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs (held over each step).
+        theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
+            Measured scheduling vector (required by designed observers).
 
         Returns
         -------
         Estimate
         """
-        return self.run_with_signals(t, y, u)[0]
+        return self.run_with_signals(t, y, u, theta=theta)[0]
 
 
 class LPVIntervalUIO(LPVIntervalObserver):
@@ -384,11 +686,9 @@ class LPVIntervalUIO(LPVIntervalObserver):
         if system.B_un is None:
             raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
         self.q = system.q
-        self.u_un = as_box("unknown_input", unknown_input, self.q)
-        if np.any(self.u_un[0] > 0) or np.any(self.u_un[1] < 0):
-            raise AssumptionError("unknown_input: expected lower <= 0 <= upper (Assumption 2.2)")
+        self.u_un = self._unknown_input_box(system, unknown_input)
         points = system.test_points()
-        rb = np.einsum("kij,kjl->kil", model.r_matrix(points @ system.C.T), np.asarray(system.B_un(points)))
+        rb = np.einsum("kij,kjl->kil", model.r_matrix(points @ system.C.T), system.matrix_at("B_un", points))
         self.H = rb[0]
         if not np.allclose(rb, self.H, atol=1e-9 * max(1.0, float(np.abs(self.H).max()))):
             raise AssumptionError("R, B_un: expected R(θ) B_un(θ) = H constant on theta_box (26)")
@@ -396,8 +696,79 @@ class LPVIntervalUIO(LPVIntervalObserver):
             gam = np.linalg.pinv(self.H) @ f @ self.H
             if not np.allclose(f @ self.H, self.H @ np.diag(np.diag(gam)), atol=1e-9):
                 raise AssumptionError(f"{name}: expected F H = H Γ with Γ diagonal ((103)–(104))")
-        col_norm2 = np.sum(self.H**2, axis=0)
-        self._projector = (self.H / col_norm2).T  # rows: H_j^T / |H_j|^2
+        self._projector = self._make_projector(self.H)
+
+    @staticmethod
+    def _unknown_input_box(
+        system: LPVSystem, unknown_input: tuple[ArrayLike, ArrayLike]
+    ) -> tuple[FloatArray, FloatArray]:
+        box = as_box("unknown_input", unknown_input, system.q)
+        if np.any(box[0] > 0) or np.any(box[1] < 0):
+            raise AssumptionError("unknown_input: expected lower <= 0 <= upper (Assumption 2.2)")
+        return box
+
+    @staticmethod
+    def _make_projector(h: FloatArray) -> FloatArray:
+        col_norm2 = np.sum(h**2, axis=0)
+        return np.asarray((h / col_norm2).T)  # rows: H_j^T / |H_j|^2
+
+    @classmethod
+    def design(
+        cls,
+        system: LPVSystem,
+        x0: tuple[ArrayLike, ArrayLike],
+        h: float,
+        theta_rate: ArrayLike,
+        unknown_input: tuple[ArrayLike, ArrayLike] = ((), ()),
+        decay: float = 1.0,
+        **design_options: Any,
+    ) -> LPVIntervalUIO:
+        r"""Design from the LMIs (107)–(117) (Corollary 4.1, :math:`\Gamma = -\lambda I`) and run generically.
+
+        Parameters
+        ----------
+        system : LPVSystem
+            Model with :math:`C = (\tilde C\ 0)`, a constant ``B_un`` and Assumption 2.3 (ΔA12 = 0).
+        x0 : tuple of array_like
+            Prior box of :math:`x(t_0)`.
+        h : float
+            Sampling interval (s).
+        theta_rate : array_like, shape (n_theta,) or float
+            Bound of :math:`|\dot\vartheta|` (``inf`` allowed).
+        unknown_input : tuple of array_like
+            ``(lower, upper)`` of :math:`u_{un}`, lower ≤ 0 ≤ upper (Assumption 2.2).
+        decay : float
+            :math:`\lambda` of :math:`\Gamma = -\lambda I`.
+        **design_options
+            Passed to :func:`~intervalobs.design.lpv_gains.design_lpv_observer` (``grid``,
+            ``fine_grid``, ``eps2``, ``q_scale``, ``gain_bound``).
+
+        Returns
+        -------
+        LPVIntervalUIO
+
+        Raises
+        ------
+        AssumptionError
+            If Assumption 2.2 or 2.3 fails, or B_un is missing or not constant.
+        DesignError
+            Naming the failed design condition.
+        """
+        for key in design_options:
+            if key not in {"grid", "fine_grid", "eps2", "q_scale", "gain_bound"}:
+                raise TypeError(f"design() got an unexpected keyword argument {key!r}")
+        if system.B_un is None:
+            raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
+        box = cls._unknown_input_box(system, unknown_input)
+        _check_assumption_3(system)
+        design = design_lpv_observer(system, uio=True, decay=decay, **design_options)
+        obs = cls._generic(system, x0, h, theta_rate, design, box)
+        obs.q = system.q
+        obs.u_un = box
+        assert design.H is not None
+        obs.H = design.H
+        obs._projector = cls._make_projector(design.H)
+        return obs
 
     def _unknown_input_term(self, bul: FloatArray, buh: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         return interval_matvec_bounds(bul, buh, self.u_un[0], self.u_un[1])
@@ -415,7 +786,9 @@ class LPVIntervalUIO(LPVIntervalObserver):
         """
         return np.asarray(np.asarray(eps, dtype=float) @ self._projector.T)
 
-    def isolate(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> tuple[Estimate, IsolationRecord]:
+    def isolate(
+        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, theta: ArrayLike | None = None
+    ) -> tuple[Estimate, IsolationRecord]:
         """Run on a record and return the state bounds and the isolation signals.
 
         Parameters
@@ -426,11 +799,24 @@ class LPVIntervalUIO(LPVIntervalObserver):
             Outputs.
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs.
+        theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
+            Measured scheduling vector (required by designed observers).
 
         Returns
         -------
         estimate : Estimate
         record : IsolationRecord
         """
-        est, el, eh = self.run_with_signals(t, y, u)
+        est, el, eh = self.run_with_signals(t, y, u, theta=theta)
         return est, IsolationRecord(est.t, el, eh, self.fault_signals(el), self.fault_signals(eh))
+
+
+def _check_assumption_3(system: LPVSystem) -> None:
+    """Assumption 2.3 (25): the uncertainty does not couple the unmeasured states into the measured ones."""
+    p = system.p
+    points = system.test_points()
+    bounds = system.bounds_at("dA", points)
+    if bounds is not None and (np.any(bounds[0][:, :p, p:] != 0) or np.any(bounds[1][:, :p, p:] != 0)):
+        raise AssumptionError(
+            "dA: expected ΔA12 = 0 (Assumption 2.3, (25)): unmeasured states must act on measured ones exactly"
+        )

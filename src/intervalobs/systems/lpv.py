@@ -21,28 +21,36 @@ import itertools
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, BoundsError, DimensionError
+from ..errors import AssumptionError, BoundsError, DimensionError, IntervalObserverError
+from ..inclusion import Interval
 from ..validation import as_box, as_matrix, as_vector
 
 __all__ = ["LPVSystem", "SampledLPVModel", "StepEnclosure"]
 
 FloatArray = NDArray[np.float64]
-MatrixFunction = Callable[[FloatArray], FloatArray]
-BoundFunction = Callable[[FloatArray], tuple[FloatArray, FloatArray]]
+MatrixFunction = Callable[..., Any]
+BoundSpec = tuple[ArrayLike, ArrayLike] | Callable[..., Any]
 
 
 class LPVSystem:
     r"""An uncertain continuous-time LPV system, validated on construction.
 
-    Matrix functions take the scheduling vector with any leading axes, ``theta`` of shape
-    ``(..., n_theta)``, and return arrays of shape ``(..., rows, cols)``. They are evaluated at the
-    centre and the vertices of ``theta_box`` (at most 64 points) to check shapes, finiteness,
-    ``lower <= upper`` of every bound, and the rank condition :math:`\operatorname{rank}(CB_{un})
-    = n_{un}` of the problem statement.
+    Matrix functions follow the library's component convention (:mod:`intervalobs.inclusion`): they
+    take the *sequence of the* :math:`n_\vartheta` *scheduling components* and return the rows of
+    entries, e.g. ``A=lambda th: [[-1.0, th[0]], [0.0, -2.0]]``. Written with ``+ - * /`` and the
+    NumPy functions of :data:`~intervalobs.inclusion.SUPPORTED_UFUNCS`, one definition is evaluated at
+    points (arrays) and over boxes (:class:`~intervalobs.inclusion.Interval`), which is what the
+    generic sampled observer needs between samples (:meth:`matrix_box`). A function may instead
+    return an array of shape ``(N, rows, cols)`` at points (then it cannot be evaluated over boxes).
+    Bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` are either constant ``(lower, upper)`` arrays
+    or functions of the same convention returning ``(lower rows, upper rows)``. Everything is
+    evaluated at the centre and the vertices of ``theta_box`` (at most 64 points) to check shapes,
+    finiteness, ``lower <= upper`` and :math:`\operatorname{rank}(CB_{un}) = n_{un}`.
 
     Parameters
     ----------
@@ -54,9 +62,8 @@ class LPVSystem:
         ``(lower, upper)`` of :math:`\Theta`.
     B_un : callable, optional
         :math:`B_{un}(\vartheta)` (n×q), full column rank.
-    dA, dB, dB_un : callable, optional
-        Elementwise bounds ``theta -> (lower, upper)`` of :math:`\Delta A, \Delta B, \Delta B_{un}`
-        ((11), (12), (23)).
+    dA, dB, dB_un : tuple of array_like or callable, optional
+        Elementwise bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` ((11), (12), (23)).
     c : array_like, shape (n,), optional
         Known constant term.
     d : tuple of array_like, optional
@@ -79,22 +86,21 @@ class LPVSystem:
         C: ArrayLike,
         theta_box: tuple[ArrayLike, ArrayLike],
         B_un: MatrixFunction | None = None,
-        dA: BoundFunction | None = None,
-        dB: BoundFunction | None = None,
-        dB_un: BoundFunction | None = None,
+        dA: BoundSpec | None = None,
+        dB: BoundSpec | None = None,
+        dB_un: BoundSpec | None = None,
         c: ArrayLike | None = None,
         d: tuple[ArrayLike, ArrayLike] | None = None,
     ) -> None:
-        for name, f in (("A", A), ("B", B), ("B_un", B_un), ("dA", dA), ("dB", dB), ("dB_un", dB_un)):
+        for name, f in (("A", A), ("B", B), ("B_un", B_un)):
             if f is not None and not callable(f):
                 raise DimensionError(f"{name}: expected a callable of the scheduling vector, got {type(f).__name__}")
         self.theta_box = as_box("theta_box", theta_box)
         self.n_theta = self.theta_box[0].size
         self.A, self.B, self.B_un = A, B, B_un
-        self.dA, self.dB, self.dB_un = dA, dB, dB_un
         points = self.test_points()
         a0 = self._eval("A", A, points)
-        if a0.ndim != 3 or a0.shape[1] != a0.shape[2]:
+        if a0.shape[1] != a0.shape[2]:
             raise DimensionError(f"A: expected square matrices (n×n), got shape {a0.shape[1:]}")
         self.n = a0.shape[1]
         b0 = self._eval("B", B, points, rows=self.n)
@@ -116,9 +122,12 @@ class LPVSystem:
                     )
             if self.q > self.p:
                 raise AssumptionError(f"B_un: expected n_un <= n_y = {self.p}, got n_un = {self.q}")
-        for name, f, cols in (("dA", dA, self.n), ("dB", dB, self.m), ("dB_un", dB_un, self.q)):
-            if f is not None:
-                self._check_bounds(name, f, points, cols)
+        self.dA = self._bound_spec("dA", dA, self.n)
+        self.dB = self._bound_spec("dB", dB, self.m)
+        self.dB_un = self._bound_spec("dB_un", dB_un, self.q)
+        for name, spec, cols in (("dA", self.dA, self.n), ("dB", self.dB, self.m), ("dB_un", self.dB_un, self.q)):
+            if spec is not None:
+                self._check_bounds(name, spec, points, cols)
         self.c = np.zeros(self.n) if c is None else as_vector("c", c, self.n)
         self.d = None if d is None else as_box("d", d, self.n)
 
@@ -134,10 +143,83 @@ class LPVSystem:
         corners = itertools.islice(itertools.product(*zip(lo, hi)), 63)
         return np.array([centre, *[np.array(v) for v in corners]])
 
+    # --- evaluation ---------------------------------------------------------------------------------
+    def matrix_at(self, name: str, theta: ArrayLike) -> FloatArray:
+        """A matrix function (``"A"``, ``"B"`` or ``"B_un"``) at scheduling points.
+
+        Parameters
+        ----------
+        name : str
+            Which matrix.
+        theta : array_like, shape (N, n_theta)
+            Points.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, rows, cols)
+        """
+        f = getattr(self, name)
+        if f is None:
+            raise DimensionError(f"{name}: the system has no {name}")
+        return _matrix_at(f, np.atleast_2d(np.asarray(theta, dtype=float)))
+
+    def matrix_box(self, name: str, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Natural interval extension of a matrix function over boxes of the scheduling vector.
+
+        Parameters
+        ----------
+        name : str
+            ``"A"``, ``"B"`` or ``"B_un"``.
+        lower, upper : array_like, shape (N, n_theta)
+            Boxes.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (N, rows, cols)
+            Bounds containing the matrix for every scheduling value in the box.
+
+        Raises
+        ------
+        DimensionError
+            If the function cannot be evaluated on intervals (it returned an array).
+        """
+        f = getattr(self, name)
+        if f is None:
+            raise DimensionError(f"{name}: the system has no {name}")
+        return _matrix_box(name, f, np.atleast_2d(lower), np.atleast_2d(upper))
+
+    def bounds_box(self, name: str, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray] | None:
+        r"""Bounds of ΔA, ΔB or ΔB_un valid on boxes of the scheduling vector (natural extension).
+
+        Parameters
+        ----------
+        name : str
+            ``"dA"``, ``"dB"`` or ``"dB_un"``.
+        lower, upper : array_like, shape (N, n_theta)
+            Boxes.
+
+        Returns
+        -------
+        tuple of numpy.ndarray, shape (N, rows, cols), or None
+            None when the system has no such uncertainty.
+        """
+        spec = getattr(self, name)
+        if spec is None:
+            return None
+        lo_t, hi_t = np.atleast_2d(lower), np.atleast_2d(upper)
+        if isinstance(spec, tuple):
+            shape = (lo_t.shape[0], *spec[0].shape)
+            return np.broadcast_to(spec[0], shape), np.broadcast_to(spec[1], shape)
+        comps = [Interval._raw(lo_t[..., j], hi_t[..., j]) for j in range(lo_t.shape[-1])]
+        low, high = spec(comps)
+        return _rows_to_array(low, lo_t.shape[0], "lower")[0], _rows_to_array(high, lo_t.shape[0], "upper")[1]
+
     @staticmethod
     def _eval(name: str, f: MatrixFunction, points: FloatArray, rows: int | None = None) -> FloatArray:
         try:
-            val = np.asarray(f(points), dtype=float)
+            val = _matrix_at(f, points)
+        except IntervalObserverError:
+            raise
         except Exception as exc:  # a user callable may fail in any way; report it at the boundary
             raise DimensionError(f"{name}: evaluating at theta of shape {points.shape} failed: {exc}") from exc
         if val.ndim != 3 or val.shape[0] != points.shape[0] or (rows is not None and val.shape[1] != rows):
@@ -149,20 +231,90 @@ class LPVSystem:
             raise BoundsError(f"{name}: expected finite entries on theta_box, got NaN or inf")
         return val
 
-    def _check_bounds(self, name: str, f: BoundFunction, points: FloatArray, cols: int) -> None:
-        try:
-            lo, hi = f(points)
-        except Exception as exc:  # as in _eval
-            raise DimensionError(f"{name}: evaluating the bounds at theta failed: {exc}") from exc
-        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    def _bound_spec(self, name: str, spec: BoundSpec | None, cols: int) -> Any:
+        if spec is None or callable(spec):
+            return spec
+        lo, hi = (np.asarray(v, dtype=float) for v in spec)
+        if lo.shape != (self.n, cols) or hi.shape != (self.n, cols):
+            raise DimensionError(f"{name}: expected bounds of shape {(self.n, cols)}, got {lo.shape} and {hi.shape}")
+        return (lo, hi)
+
+    def _check_bounds(self, name: str, spec: Any, points: FloatArray, cols: int) -> None:
+        if isinstance(spec, tuple):
+            lo, hi = spec
+            lo, hi = lo[None], hi[None]
+        else:
+            try:
+                lo, hi = _bounds_at(spec, points)
+            except Exception as exc:  # as in _eval
+                raise DimensionError(f"{name}: evaluating the bounds at theta failed: {exc}") from exc
         want = (points.shape[0], self.n, cols)
-        if lo.shape != want or hi.shape != want:
+        if lo.shape[1:] != want[1:] or hi.shape[1:] != want[1:]:
             raise DimensionError(f"{name}: expected bounds of shape {want}, got {lo.shape} and {hi.shape}")
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
             raise BoundsError(f"{name}: expected finite bounds, got NaN or inf")
         if np.any(lo > hi):
             k = np.argwhere(lo > hi)[0]
             raise BoundsError(f"{name}: expected lower <= upper, got lower > upper at {tuple(int(i) for i in k)}")
+
+    def bounds_at(self, name: str, theta: ArrayLike) -> tuple[FloatArray, FloatArray] | None:
+        r"""Bounds of :math:`\Delta A`, :math:`\Delta B` or :math:`\Delta B_{un}` at scheduling points.
+
+        Parameters
+        ----------
+        name : str
+            ``"dA"``, ``"dB"`` or ``"dB_un"``.
+        theta : array_like, shape (N, n_theta)
+            Points.
+
+        Returns
+        -------
+        tuple of numpy.ndarray, shape (N, rows, cols), or None
+        """
+        spec = getattr(self, name)
+        if spec is None:
+            return None
+        pts = np.atleast_2d(np.asarray(theta, dtype=float))
+        if isinstance(spec, tuple):
+            shape = (pts.shape[0], *spec[0].shape)
+            return np.broadcast_to(spec[0], shape), np.broadcast_to(spec[1], shape)
+        return _bounds_at(spec, pts)
+
+
+def _rows_to_array(rows: Any, count: int, name: str) -> tuple[FloatArray, FloatArray]:
+    """Rows of entries (floats, arrays or :class:`Interval`) to lower/upper arrays (count, r, c)."""
+    if isinstance(rows, np.ndarray) and rows.ndim == 3:
+        return rows, rows
+    wrapped = [[Interval._wrap(e) for e in row] for row in rows]
+    lo = np.array([[np.broadcast_to(e.lower, (count,)) for e in row] for row in wrapped], dtype=float)
+    hi = np.array([[np.broadcast_to(e.upper, (count,)) for e in row] for row in wrapped], dtype=float)
+    if lo.ndim != 3:
+        raise DimensionError(f"{name}: expected rows of equal length, got ragged rows")
+    return np.moveaxis(lo, -1, 0), np.moveaxis(hi, -1, 0)
+
+
+def _matrix_at(f: Callable[..., Any], points: FloatArray) -> FloatArray:
+    out = f([points[:, j] for j in range(points.shape[1])])
+    if isinstance(out, np.ndarray):
+        return np.asarray(out, dtype=float)
+    return _rows_to_array(out, points.shape[0], "matrix")[0]
+
+
+def _bounds_at(f: Callable[..., Any], points: FloatArray) -> tuple[FloatArray, FloatArray]:
+    low, high = f([points[:, j] for j in range(points.shape[1])])
+    return _rows_to_array(low, points.shape[0], "lower")[0], _rows_to_array(high, points.shape[0], "upper")[0]
+
+
+def _matrix_box(
+    name: str, f: Callable[..., Any], lower: FloatArray, upper: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    comps = [Interval._raw(lower[:, j], upper[:, j]) for j in range(lower.shape[1])]
+    out = f(comps)
+    if isinstance(out, np.ndarray):
+        raise DimensionError(
+            f"{name}: expected rows of entries (component convention) for interval evaluation, got an array"
+        )
+    return _rows_to_array(out, lower.shape[0], name)
 
 
 @dataclass(frozen=True)

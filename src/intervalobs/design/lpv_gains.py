@@ -1,0 +1,487 @@
+r"""Design of the LPV interval observer and interval UIO from LMIs (seed 001, Corollaries 3.1 and 4.1).
+
+Coordinates: :math:`C = (\tilde C\ 0)` (9), measured states first. The coordinate matrix is constant,
+
+.. math:: R = \begin{pmatrix} R_{11} & 0 \\ R_{21} & I \end{pmatrix},\qquad
+          T = \begin{pmatrix} (I - R_{11})\tilde C^{-1} \\ -R_{21}\tilde C^{-1}\end{pmatrix}
+          \quad (TC = I - R,\ (36)).
+
+The paper's (16) has :math:`R_{21} = 0`; the proof of Theorem 3.1 uses only (36) and (39)–(40),
+which are solvable for any :math:`R_{21}` (a reduced-order injection: the unmeasured block becomes
+:math:`A_{R22} = R_{21}A_{12} + A_{22}`), so a user may pass one. (39)–(40) force the right block
+columns of :math:`F` to equal those of :math:`A_R = RA` ((35), (67)); the left block columns are
+designed. For the interval UIO, :math:`B_{un}` must be constant and :math:`R` is built so that
+:math:`RB_{un} = H = (I_q; 0)` (26): :math:`R_{11} = (B_1\ N)^{-1}` with :math:`N` completing a basis,
+:math:`R_{21} = -B_2B_1^\dagger`.
+
+**LMI.** With diagonal :math:`\underline P, \overline P` the change of variables (68)
+:math:`W = P\,F_{\text{left}}` makes the Metzler property (64) exact and linear (off-diagonal entries
+of :math:`W` nonnegative; the paper's :math:`W + P\Sigma \ge 0` with a "sufficiently large"
+:math:`\Sigma` is not a condition on :math:`F`), and (63)/(109) linear in :math:`P, W, \gamma, Q` for
+fixed :math:`\varepsilon_1, \varepsilon_2`. For the UIO the eigenvector condition (105)–(106),
+:math:`FH = H\Gamma`, is imposed as the linear equality :math:`W_{:,j} = \gamma_j p_j e_j` — the same
+set of :math:`F` as the parametrisation (101)–(102), (115)–(116), without :math:`R^{-1}`. The switching
+terms of (74) are covered for every pair of subsets :math:`S_1, S_2` of the measured columns
+(``eta_and_generator``, read with (95)–(100)). :math:`W` is constant, so
+:math:`F(\vartheta)` is defined between grid points: left columns constant, right columns
+:math:`A_R(\vartheta)`. Everything is re-checked after the solve on a finer grid: (17)–(18), Metzler,
+Hurwitz and the (1,1)/(2,2) blocks of (63)/(74) by eigenvalues.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import AssumptionError, DesignError, DimensionError
+from ..systems.lpv import LPVSystem
+from ..validation import as_matrix
+from .lpv import (
+    BoundednessCertificate,
+    _active_switchable,
+    _block_max_eig,
+    _subset_masks,
+    eta_and_generator,
+    verify_boundedness,
+)
+
+__all__ = ["LPVObserverDesign", "design_lpv_observer", "rotate_bounds", "scheduling_grid"]
+
+FloatArray = NDArray[np.float64]
+
+
+def rotate_bounds(r: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    r"""Bounds of :math:`R M` for a point matrix :math:`R` and an interval matrix :math:`[M]` ((14), (15), (24)).
+
+    .. math:: R^+\underline M - R^-\overline M \le RM \le R^+\overline M - R^-\underline M
+
+    (exact hull per entry: every entry of :math:`RM` is a sum of terms in distinct entries of M).
+
+    Parameters
+    ----------
+    r : array_like, shape (..., n, n)
+        Point matrix.
+    lower, upper : array_like, shape (..., n, k)
+        Interval matrix.
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (..., n, k)
+    """
+    rr = np.asarray(r, dtype=float)
+    rp, rn = np.maximum(rr, 0.0), np.maximum(-rr, 0.0)
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    return rp @ lo - rn @ hi, rp @ hi - rn @ lo
+
+
+def scheduling_grid(theta_box: tuple[FloatArray, FloatArray], points: int) -> FloatArray:
+    """A regular grid of ``points`` values per scheduling axis (ends included).
+
+    Parameters
+    ----------
+    theta_box : tuple of numpy.ndarray
+        ``(lower, upper)`` of Θ.
+    points : int
+        Values per axis (≥ 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (points**n_theta, n_theta)
+    """
+    if points < 2:
+        raise DimensionError(f"grid: expected at least 2 points per axis, got {points}")
+    axes = [np.linspace(lo, hi, points) for lo, hi in zip(*theta_box)]
+    return np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, len(axes))
+
+
+@dataclass(frozen=True)
+class LPVObserverDesign:
+    r"""Matrices of a designed LPV interval observer / UIO (read-only).
+
+    Attributes
+    ----------
+    R, T : numpy.ndarray, shapes (n, n), (n, p)
+        Coordinates :math:`v = Rx` and :math:`TC = I - R` (36).
+    C_tilde_inv : numpy.ndarray, shape (p, p)
+        :math:`\tilde C^{-1}`.
+    f_left_lower, f_left_upper : numpy.ndarray, shape (n, p)
+        Designed left block columns of :math:`\underline F, \overline F` (66)/(101).
+    H : numpy.ndarray or None, shape (n, q)
+        :math:`RB_{un}` (26), UIO only.
+    gamma_lower, gamma_upper : numpy.ndarray or None, shape (q,)
+        Diagonals of :math:`\underline\Gamma, \overline\Gamma` (UIO only).
+    certificate : BoundednessCertificate
+        The solved (63)/(109) with its fine-grid verification.
+    hurwitz_margin : float
+        Largest real part of the eigenvalues of :math:`\underline F(\vartheta), \overline F(\vartheta)`
+        on the fine grid (negative).
+    coarse_points, fine_points : int
+        Grid sizes of the solve and of the verification.
+    """
+
+    R: FloatArray
+    T: FloatArray
+    C_tilde_inv: FloatArray
+    f_left_lower: FloatArray
+    f_left_upper: FloatArray
+    H: FloatArray | None
+    gamma_lower: FloatArray | None
+    gamma_upper: FloatArray | None
+    certificate: BoundednessCertificate
+    hurwitz_margin: float
+    coarse_points: int
+    fine_points: int
+
+    @property
+    def p(self) -> int:
+        """Number of measured states (outputs)."""
+        return int(self.T.shape[1])
+
+    def f_matrices(self, a_r: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        r""":math:`\underline F, \overline F` given :math:`A_R = RA` at points ((35), (67)).
+
+        Parameters
+        ----------
+        a_r : array_like, shape (..., n, n)
+            :math:`R A(\vartheta)`.
+
+        Returns
+        -------
+        F_lower, F_upper : numpy.ndarray, shape (..., n, n)
+        """
+        ar = np.asarray(a_r, dtype=float)
+        p = self.p
+        fl, fu = ar.copy(), ar.copy()
+        fl[..., :, :p] = self.f_left_lower
+        fu[..., :, :p] = self.f_left_upper
+        return fl, fu
+
+    def s_matrices(self, system: LPVSystem, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        r""":math:`\underline S, \overline S` of (37)–(42) at scheduling points (for reporting; the sampled
+        observer uses the equivalent rate of :math:`v = Rx` directly).
+
+        Parameters
+        ----------
+        system : LPVSystem
+            The designed system.
+        theta : array_like, shape (N, n_theta)
+            Points.
+
+        Returns
+        -------
+        S_lower, S_upper : numpy.ndarray, shape (N, n, p)
+        """
+        ar = self.R @ system.matrix_at("A", theta)
+        out = []
+        for f in self.f_matrices(ar):
+            s1 = (ar - f)[..., :, : self.p] @ self.C_tilde_inv  # (39)-(40)
+            out.append(s1 + f @ self.T)  # (41)-(42)
+        return out[0], out[1]
+
+
+def _partition(system: LPVSystem) -> FloatArray:
+    """Check C = (C̃ 0) (9) and return C̃⁻¹."""
+    p = system.p
+    c = system.C
+    if np.any(c[:, p:] != 0.0):
+        raise AssumptionError(
+            f"C: expected the form (C̃ 0) of (9), measured states first (reorder the states), got nonzero columns "
+            f"{sorted(set(np.nonzero(c[:, p:])[1] + p))}"
+        )
+    ct = c[:, :p]
+    if np.linalg.cond(ct) > 1e12:
+        raise AssumptionError(f"C: expected an invertible C̃ (9), got condition number {np.linalg.cond(ct):.3g}")
+    return np.asarray(np.linalg.inv(ct))
+
+
+def _uio_coordinates(system: LPVSystem, points: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """R with R B_un = H = (I_q; 0) (26) for a constant B_un; returns (R, H)."""
+    p, n, q = system.p, system.n, system.q
+    bu = system.matrix_at("B_un", points)
+    if not np.allclose(bu, bu[0], rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(bu).max()))):
+        raise AssumptionError("B_un: expected a constant B_un(θ) for the designed UIO (R constant, (26))")
+    b1, b2 = bu[0][:p], bu[0][p:]
+    u, _, _ = np.linalg.svd(b1)
+    basis = np.hstack([b1, u[:, q:]])
+    r11 = np.linalg.inv(basis)
+    r21 = -b2 @ np.linalg.pinv(b1)
+    r = np.zeros((n, n))
+    r[:p, :p], r[p:, :p], r[p:, p:] = r11, r21, np.eye(n - p)
+    h = r @ bu[0]
+    return r, np.where(np.abs(h) < 1e-12, 0.0, h)
+
+
+def _check_r(r: FloatArray, p: int) -> None:
+    n = r.shape[0]
+    if np.any(r[:p, p:] != 0.0) or not np.array_equal(r[p:, p:], np.eye(n - p)):
+        raise AssumptionError(
+            "R: expected the form ((R11, 0), (R21, I)) (16) with the identity on the unmeasured states"
+        )
+
+
+def _structure_check(a_r: FloatArray, points: FloatArray, p: int) -> None:
+    """(17) A_R12 ≥ 0 and (18) A_R22 Metzler at every point."""
+    a12 = a_r[:, :p, p:]
+    if np.any(a12 < 0):
+        k, i, j = np.argwhere(a12 < 0)[0]
+        raise DesignError(
+            f"(17): expected A_R12 = (RA)[:p, p:] >= 0, got {a12[k, i, j]:.3g} at entry ({i}, {j + p}), "
+            f"theta = {points[k].tolist()}; choose R (R11) so that R11 A12 >= 0"
+        )
+    a22 = a_r[:, p:, p:].copy()
+    m = a22.shape[-1]
+    a22[:, np.arange(m), np.arange(m)] = 0.0
+    if np.any(a22 < 0):
+        k, i, j = np.argwhere(a22 < 0)[0]
+        raise DesignError(
+            f"(18): expected A_R22 = (RA)[p:, p:] Metzler, got {a22[k, i, j]:.3g} at entry ({i + p}, {j + p}), "
+            f"theta = {points[k].tolist()}; choose R21 so that R21 A12 + A22 is Metzler"
+        )
+
+
+def _rotated(system: LPVSystem, r: FloatArray, points: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    a_r = r @ system.matrix_at("A", points)
+    bounds = system.bounds_at("dA", points)
+    if bounds is None:
+        zero = np.zeros_like(a_r)
+        return a_r, zero, zero
+    lo, hi = rotate_bounds(r, *bounds)
+    return a_r, lo, hi
+
+
+def design_lpv_observer(
+    system: LPVSystem,
+    uio: bool = False,
+    R: ArrayLike | None = None,
+    decay: float = 1.0,
+    grid: int = 5,
+    fine_grid: int = 41,
+    eps2: float = 0.01,
+    q_scale: float = 1e-3,
+    gain_bound: float | None = None,
+) -> LPVObserverDesign:
+    r"""Design :math:`R, T, \underline F, \overline F` (and :math:`H, \Gamma` for the UIO) from the LMIs.
+
+    Observer: Corollary 3.1, (61)–(66). UIO: Corollary 4.1, (107)–(117), with
+    :math:`\underline\Gamma = \overline\Gamma = -\lambda I` (``decay``) as in Section 5. See the module
+    docstring for the parametrisation. :math:`\varepsilon_1` is searched over multiples of the
+    largest :math:`\eta` on the grid; the candidate with the most negative (1,1) block wins.
+
+    Parameters
+    ----------
+    system : LPVSystem
+        Model with :math:`C = (\tilde C\ 0)` (9).
+    uio : bool
+        Design the interval UIO (needs ``B_un``, constant).
+    R : array_like, shape (n, n), optional
+        Coordinates for the observer, of the form ((R11, 0), (R21, I)) (default I). Ignored for the UIO
+        (built from :math:`B_{un}`).
+    decay : float
+        :math:`\lambda` of :math:`\Gamma = -\lambda I` (UIO).
+    grid : int
+        Values per scheduling axis of the LMI grid.
+    fine_grid : int
+        Values per scheduling axis of the verification grid.
+    eps2 : float
+        :math:`\varepsilon_2` of (63).
+    q_scale : float
+        :math:`Q = qI`.
+    gain_bound : float, optional
+        Bound of :math:`|F_{\text{left}}|` entries (default 10 (1 + max |A_R|)).
+
+    Returns
+    -------
+    LPVObserverDesign
+
+    Raises
+    ------
+    AssumptionError
+        If C is not of the form (9), R not of the form (16), or B_un missing / not constant (UIO).
+    DesignError
+        Naming the failed condition: (17), (18), the LMI (63)/(109), or its verification (Metzler,
+        Hurwitz, the blocks of (63)/(74)) on the fine grid.
+    """
+    import cvxpy as cp
+
+    n, p = system.n, system.p
+    ct_inv = _partition(system)
+    if not (np.isfinite(decay) and decay > 0):
+        raise DimensionError(f"decay: expected a positive λ, got {decay!r}")
+    coarse = scheduling_grid(system.theta_box, grid)
+    fine = scheduling_grid(system.theta_box, fine_grid)
+    h_mat: FloatArray | None = None
+    gamma: FloatArray | None = None
+    if uio:
+        if system.B_un is None:
+            raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
+        r, h_mat = _uio_coordinates(system, np.vstack([coarse, fine]))
+        gamma = -decay * np.ones(system.q)
+        if np.linalg.cond(r) > 1e12:
+            raise DesignError("R: R B_un = H (26) gave a singular R")
+    else:
+        r = np.eye(n) if R is None else as_matrix("R", R, (n, n))
+        _check_r(r, p)
+    t_mat = np.vstack([(np.eye(p) - r[:p, :p]) @ ct_inv, -r[p:, :p] @ ct_inv])
+    a_r, dl, du = _rotated(system, r, coarse)
+    _structure_check(a_r, coarse, p)
+    switch = list(range(p)) if uio else []
+    masks = _subset_masks(n, _active_switchable(switch, dl, du))
+    s1 = masks[:, None, None, :]
+    s2 = masks[None, :, None, :]
+    _, eta = eta_and_generator(np.zeros((n, n)), np.zeros((n, n)), dl[None, None], du[None, None], s1, s2)
+    l1 = np.maximum(dl[None, None] * s1[..., None, :], 0.0) * np.ones((1, len(masks), 1, 1, 1))
+    u2 = np.maximum(du[None, None] * s2[..., None, :], 0.0) * np.ones((len(masks), 1, 1, 1, 1))
+    # one constraint per (S1, S2, point); drop duplicates
+    l1, u2, eta = l1.reshape(-1, n, n), u2.reshape(-1, n, n), eta.reshape(-1)
+    pts = np.tile(np.arange(coarse.shape[0]), len(masks) ** 2)
+    key = np.round(
+        np.concatenate([l1.reshape(len(l1), -1), u2.reshape(len(u2), -1), eta[:, None], pts[:, None]], 1), 12
+    )
+    _, keep = np.unique(key, axis=0, return_index=True)
+    keep = np.sort(keep)
+    l1, u2, eta, pts = l1[keep], u2[keep], eta[keep], pts[keep]
+    kappa = 10.0 * (1.0 + float(np.abs(a_r).max())) if gain_bound is None else float(gain_bound)
+    eta_max = float(eta.max())
+    eps1_candidates = sorted({max(eta_max, 0.05) * f for f in (0.5, 1.0, 2.0)})
+    off = ~np.eye(n, p, dtype=bool)
+    best: tuple[float, Any] | None = None
+    statuses = []
+    for eps1 in eps1_candidates:
+        pl, pu = cp.Variable(n), cp.Variable(n)
+        wl, wu = cp.Variable((n, p)), cp.Variable((n, p))
+        gam, t = cp.Variable(nonneg=True), cp.Variable()
+        cons = [pl >= 1e-3, pu >= 1e-3, cp.sum(pl) + cp.sum(pu) == 2 * n]
+        cons += [pl <= eps1 * gam, pu <= eps1 * gam]  # (2,2) block: P ≤ ε1 γ I
+        for w, pv in ((wl, pl), (wu, pu)):
+            cons += [w[off] >= 0]  # (64): F Metzler (P diagonal)
+            cons += [cp.abs(w) <= kappa * cp.reshape(pv, (n, 1), order="F") @ np.ones((1, p))]
+            if gamma is not None:
+                for j in range(system.q):
+                    col = np.zeros(n)
+                    col[j] = 1.0
+                    cons += [w[:, j] == gamma[j] * cp.multiply(pv, col)]  # (105)-(106)
+        for k in range(len(eta)):
+            right = a_r[pts[k]][:, p:]
+            for w, pv, extra in ((wl, pl, l1[k]), (wu, pu, u2[k])):
+                pg = cp.hstack([w, cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n - p)), right)])
+                pg = pg + cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n)), extra)
+                blk = pg + pg.T + (eps1 + eps2) * cp.diag(pv) + (q_scale + 0.0) * np.eye(n)
+                blk = blk + gam * float(eta[k]) ** 2 * np.eye(n)
+                cons.append(0.5 * (blk + blk.T) << t * np.eye(n))
+        prob = cp.Problem(cp.Minimize(t), cons)
+        try:
+            prob.solve(solver=cp.CLARABEL)
+        except cp.SolverError:
+            prob.solve(solver=cp.SCS)
+        statuses.append(str(prob.status))
+        if prob.status not in ("optimal", "optimal_inaccurate") or pl.value is None:
+            continue
+        pld, pud = np.maximum(np.asarray(pl.value), 1e-3), np.maximum(np.asarray(pu.value), 1e-3)
+        fl_left = np.asarray(wl.value) / pld[:, None]
+        fu_left = np.asarray(wu.value) / pud[:, None]
+        if gamma is not None:  # impose (105)-(106) exactly (the solver meets them to its tolerance)
+            for fleft in (fl_left, fu_left):
+                fleft[:, : system.q] = 0.0
+                fleft[np.arange(system.q), np.arange(system.q)] = gamma
+        for fleft in (fl_left, fu_left):
+            fleft[off & (fleft < 0)] = 0.0
+        pmat = np.diag(np.concatenate([pld, pud]))
+        gv = max(float(np.asarray(gam.value)), float(pmat.max()) / eps1 * (1 + 1e-12))
+        margin = _lmi_margin(pmat, q_scale, gv, eps1 + eps2, fl_left, fu_left, a_r, dl, du, masks)
+        if best is None or margin < best[0]:
+            best = (margin, (pmat, gv, eps1, str(prob.status), fl_left, fu_left))
+    if best is None or best[0] >= 0:
+        detail = f"best (1,1)-block eigenvalue {best[0]:+.3g}" if best is not None else f"statuses {statuses}"
+        raise DesignError(
+            f"LMI {'(109)' if uio else '(63)'}: no certificate on the {coarse.shape[0]}-point grid ({detail}); "
+            f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
+        )
+    margin, (pmat, gv, eps1, status, fl_left, fu_left) = best
+    n2 = 2 * n
+    cert = BoundednessCertificate(
+        P=pmat,
+        Q=q_scale * np.eye(n2),
+        gamma=gv,
+        eps1=eps1,
+        eps2=eps2,
+        solver_status=status,
+        coarse_margin=margin,
+        second_block_margin=float(np.max(np.linalg.eigvalsh(pmat / eps1 - gv * np.eye(n2)))),
+        subsets=len(masks) ** 2,
+    )
+    design = LPVObserverDesign(
+        R=r,
+        T=t_mat,
+        C_tilde_inv=ct_inv,
+        f_left_lower=fl_left,
+        f_left_upper=fu_left,
+        H=h_mat,
+        gamma_lower=gamma,
+        gamma_upper=gamma,
+        certificate=cert,
+        hurwitz_margin=0.0,
+        coarse_points=int(coarse.shape[0]),
+        fine_points=int(fine.shape[0]),
+    )
+    return _verify(system, design, fine, switch)
+
+
+def _lmi_margin(
+    pmat: FloatArray,
+    q_scale: float,
+    gamma: float,
+    eps_sum: float,
+    fl_left: FloatArray,
+    fu_left: FloatArray,
+    a_r: FloatArray,
+    dl: FloatArray,
+    du: FloatArray,
+    masks: FloatArray,
+) -> float:
+    p = fl_left.shape[1]
+    fl, fu = a_r.copy(), a_r.copy()
+    fl[..., :p], fu[..., :p] = fl_left, fu_left
+    g, eta = eta_and_generator(fl, fu, dl[None, None], du[None, None], masks[:, None, None, :], masks[None, :, None, :])
+    q = q_scale * np.eye(pmat.shape[0])
+    return float(np.max(_block_max_eig(pmat, q, gamma, eps_sum, g, eta)))
+
+
+def _verify(system: LPVSystem, design: LPVObserverDesign, fine: FloatArray, switch: list[int]) -> LPVObserverDesign:
+    """Re-check the design on the fine grid: (17)-(18), Metzler, Hurwitz, (63)/(74) by eigenvalues."""
+    a_r, dl, du = _rotated(system, design.R, fine)
+    _structure_check(a_r, fine, design.p)
+    fl, fu = design.f_matrices(a_r)
+    n = fl.shape[-1]
+    off = ~np.eye(n, dtype=bool)
+    for name, f in (("F_lower", fl), ("F_upper", fu)):
+        if np.any(f[:, off] < 0):
+            raise DesignError(
+                f"{name}: expected a Metzler matrix (64) on the fine grid, got min off-diagonal {f[:, off].min():.3g}"
+            )
+    abscissa = float(np.max(np.linalg.eigvals(np.concatenate([fl, fu])).real))
+    if not abscissa < 0:
+        raise DesignError(f"F: expected Hurwitz F(θ) on the fine grid, got spectral abscissa {abscissa:+.3g}")
+    cert = verify_boundedness(design.certificate, fl, fu, dl, du, switchable=switch)
+    if not cert.feasible:
+        raise DesignError(
+            f"verification of {'(74)' if switch else '(63)'} on the {fine.shape[0]}-point grid failed: "
+            f"(1,1)-block eigenvalue {cert.fine_margin:+.3g}, (2,2)-block {cert.second_block_margin:+.3g}; refine grid"
+        )
+    return LPVObserverDesign(
+        R=design.R,
+        T=design.T,
+        C_tilde_inv=design.C_tilde_inv,
+        f_left_lower=design.f_left_lower,
+        f_left_upper=design.f_left_upper,
+        H=design.H,
+        gamma_lower=design.gamma_lower,
+        gamma_upper=design.gamma_upper,
+        certificate=cert,
+        hurwitz_margin=abscissa,
+        coarse_points=design.coarse_points,
+        fine_points=int(fine.shape[0]),
+    )
