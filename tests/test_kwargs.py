@@ -67,6 +67,33 @@ def _nullspace_gsisio_design(**kwargs: Any) -> Any:
     return NullSpaceGSISIO.design(gsisio.paper_system(), gsisio.X0_BOX, **kwargs)
 
 
+def _lpv_system() -> Any:
+    from intervalobs import LPVSystem
+
+    return LPVSystem(
+        A=lambda th: [[-1.0, 0.5], [0.0, -1.0 - 0.1 * th[0]]],
+        B=lambda th: [[1.0], [0.0]],
+        C=[[1.0, 0.0]],
+        theta_box=([-1.0], [1.0]),
+        B_un=lambda th: [[1.0], [0.0]],
+    )
+
+
+def _lpv_design(**kwargs: Any) -> Any:
+    from intervalobs import LPVIntervalObserver
+
+    return LPVIntervalObserver.design(_lpv_system(), x0=(-np.ones(2), np.ones(2)), h=0.01, theta_rate=1.0, **kwargs)
+
+
+def _lpv_uio_design(**kwargs: Any) -> Any:
+    from intervalobs import LPVIntervalUIO
+
+    box = (-np.ones(1), np.ones(1))
+    return LPVIntervalUIO.design(
+        _lpv_system(), x0=(-np.ones(2), np.ones(2)), h=0.01, theta_rate=1.0, unknown_input=box, **kwargs
+    )
+
+
 # qualified name -> (call with extra keywords, keywords the function documents and must accept)
 CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
     "intervalobs.observers.interval_observer.IntervalObserver.design": (
@@ -80,6 +107,8 @@ CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
     ),
     "intervalobs.observers.zonotopic.IntegratedObserver.design": (_integrated_design, {"fallback": "hinf"}),
     "intervalobs.observers.zonotopic.ZonotopicObserver.design": (_zonotopic_design, {"order": 12}),
+    "intervalobs.observers.lpv.LPVIntervalObserver.design": (_lpv_design, {"grid": 3, "fine_grid": 5}),
+    "intervalobs.observers.lpv.LPVIntervalUIO.design": (_lpv_uio_design, {"grid": 3, "fine_grid": 5}),
     "intervalobs.systems.lti.LTISystem.from_control": (_from_control, {"E": np.eye(2)}),
 }
 

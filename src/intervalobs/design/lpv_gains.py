@@ -291,7 +291,7 @@ def design_lpv_observer(
     q_scale : float
         :math:`Q = qI`.
     gain_bound : float, optional
-        Bound of :math:`|F_{\text{left}}|` entries (default 10 (1 + max |A_R|)).
+        Bound of the entries of the designed columns of F (default 10 (1 + max of the entries of RA)).
 
     Returns
     -------
