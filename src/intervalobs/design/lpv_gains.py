@@ -30,6 +30,7 @@ Hurwitz and the (1,1)/(2,2) blocks of (63)/(74) by eigenvalues.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass
 from typing import Any
@@ -471,17 +472,4 @@ def _verify(system: LPVSystem, design: LPVObserverDesign, fine: FloatArray, swit
             f"verification of {'(74)' if switch else '(63)'} on the {fine.shape[0]}-point grid failed: "
             f"(1,1)-block eigenvalue {cert.fine_margin:+.3g}, (2,2)-block {cert.second_block_margin:+.3g}; refine grid"
         )
-    return LPVObserverDesign(
-        R=design.R,
-        T=design.T,
-        C_tilde_inv=design.C_tilde_inv,
-        f_left_lower=design.f_left_lower,
-        f_left_upper=design.f_left_upper,
-        H=design.H,
-        gamma_lower=design.gamma_lower,
-        gamma_upper=design.gamma_upper,
-        certificate=cert,
-        hurwitz_margin=abscissa,
-        coarse_points=design.coarse_points,
-        fine_points=int(fine.shape[0]),
-    )
+    return dataclasses.replace(design, certificate=cert, hurwitz_margin=abscissa, fine_points=int(fine.shape[0]))
