@@ -43,9 +43,15 @@ from ..validation import as_matrix
 
 __all__ = [
     "Disk",
+    "HalfPlane",
+    "HorizontalStrip",
     "ModalDecomposition",
+    "Region",
     "RegionPlacement",
+    "Sector",
+    "VerticalStrip",
     "canonical_eigenvectors",
+    "in_region",
     "modal_decomposition",
     "place_in_disks",
     "radius_matrix",
@@ -123,6 +129,158 @@ class Disk:
     def is_real(self) -> bool:
         """True when the centre is on the real axis (the disk is its own conjugate)."""
         return complex(self.center).imag == 0.0
+
+
+class _LinearRegion:
+    r"""Shared part of the :math:`R_{11} = 0` regions: :math:`\{s : R_{00} + R_{10}s + (R_{10}s)^H \prec 0\}`."""
+
+    def matrices(self) -> tuple[FloatArray, ComplexArray]:
+        """``(R00, R10)`` of eq. (6) (``R11 = 0``)."""
+        raise NotImplementedError
+
+    def characteristic(self, s: complex | ComplexArray) -> Any:
+        """Largest eigenvalue of :math:`R_{00} + R_{10}s + (R_{10}s)^H` (eq. (6)); negative inside.
+
+        Parameters
+        ----------
+        s : complex or numpy.ndarray
+            Point(s) of the complex plane.
+
+        Returns
+        -------
+        float or numpy.ndarray
+        """
+        r00, r10 = self.matrices()
+        s_arr = np.asarray(s, dtype=complex)
+        term = r10 * s_arr[..., None, None]
+        value = r00 + term + np.conj(np.swapaxes(term, -1, -2))
+        return np.linalg.eigvalsh(value)[..., -1]
+
+    def contains(self, s: complex | ComplexArray) -> Any:
+        """True strictly inside the region.
+
+        Parameters
+        ----------
+        s : complex or numpy.ndarray
+            Point(s) of the complex plane.
+
+        Returns
+        -------
+        bool or numpy.ndarray
+        """
+        return self.characteristic(s) < 0
+
+
+@dataclass(frozen=True)
+class HalfPlane(_LinearRegion):
+    r"""The half-plane :math:`\operatorname{Re}s < -\sigma` (decay rate at least :math:`\sigma`), degree 1:
+    :math:`R_{00} = 2\sigma`, :math:`R_{10} = 1`.
+
+    Parameters
+    ----------
+    shift : float
+        :math:`\sigma`, nonnegative.
+    """
+
+    shift: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.shift) and self.shift >= 0):
+            raise BoundsError(f"HalfPlane.shift: expected a nonnegative decay rate, got {self.shift!r}")
+
+    def matrices(self) -> tuple[FloatArray, ComplexArray]:
+        """``(R00, R10)``: ``[[2σ]]``, ``[[1]]``."""
+        return np.array([[2.0 * self.shift]]), np.array([[1.0 + 0j]])
+
+
+@dataclass(frozen=True)
+class VerticalStrip(_LinearRegion):
+    r"""The strip :math:`a < \operatorname{Re}s < b`, degree 2: :math:`R_{00} = \operatorname{diag}(-2b, 2a)`,
+    :math:`R_{10} = \operatorname{diag}(1, -1)`.
+
+    Parameters
+    ----------
+    left, right : float
+        :math:`a < b`.
+    """
+
+    left: float
+    right: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.left) and np.isfinite(self.right) and self.left < self.right):
+            raise BoundsError(f"VerticalStrip: expected finite left < right, got {self.left!r}, {self.right!r}")
+
+    def matrices(self) -> tuple[FloatArray, ComplexArray]:
+        """``(R00, R10)``: ``diag(-2b, 2a)``, ``diag(1, -1)``."""
+        return np.diag([-2.0 * self.right, 2.0 * self.left]), np.diag([1.0 + 0j, -1.0 + 0j])
+
+
+@dataclass(frozen=True)
+class HorizontalStrip(_LinearRegion):
+    r"""The strip :math:`|\operatorname{Im}s| < \omega` (oscillation frequency below :math:`\omega`), degree 2:
+    :math:`R_{00} = -2\omega I`, :math:`R_{10} = \operatorname{diag}(-i, i)`.
+
+    Parameters
+    ----------
+    bound : float
+        :math:`\omega`, positive.
+    """
+
+    bound: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.bound) and self.bound > 0):
+            raise BoundsError(f"HorizontalStrip.bound: expected a positive frequency, got {self.bound!r}")
+
+    def matrices(self) -> tuple[FloatArray, ComplexArray]:
+        """``(R00, R10)``: ``-2ω I``, ``diag(-i, i)``."""
+        return -2.0 * self.bound * np.eye(2), np.diag([-1j, 1j])
+
+
+@dataclass(frozen=True)
+class Sector(_LinearRegion):
+    r"""The conic sector of half-angle :math:`\beta` about the negative real axis (damping ratio at least
+    :math:`\cos\beta`), degree 2: :math:`R_{00} = 0`,
+    :math:`R_{10} = [\sin\beta,\ \cos\beta;\ -\cos\beta,\ \sin\beta]`.
+
+    Parameters
+    ----------
+    angle : float
+        :math:`\beta` in radians, in :math:`(0, \pi/2)`.
+    """
+
+    angle: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.angle) and 0 < self.angle < np.pi / 2):
+            raise BoundsError(f"Sector.angle: expected a half-angle in (0, pi/2) rad, got {self.angle!r}")
+
+    def matrices(self) -> tuple[FloatArray, ComplexArray]:
+        """``(R00, R10)``: ``0``, ``[[sin β, cos β], [-cos β, sin β]]``."""
+        sb, cb = np.sin(self.angle), np.cos(self.angle)
+        return np.zeros((2, 2)), np.array([[sb, cb], [-cb, sb]], dtype=complex)
+
+
+Region = Disk | HalfPlane | VerticalStrip | HorizontalStrip | Sector
+r"""Any of the LMI (:math:`\mathbb{D}_R`) regions of seed 004, Section 2 (eq. (6))."""
+
+
+def in_region(region: Region, s: complex | ComplexArray) -> Any:
+    """True where ``s`` lies strictly inside ``region`` (its characteristic function (6) is negative).
+
+    Parameters
+    ----------
+    region : Disk, HalfPlane, VerticalStrip, HorizontalStrip or Sector
+        The region.
+    s : complex or numpy.ndarray
+        Point(s) of the complex plane.
+
+    Returns
+    -------
+    bool or numpy.ndarray
+    """
+    return np.asarray(region.characteristic(s)) < 0
 
 
 @dataclass(frozen=True)

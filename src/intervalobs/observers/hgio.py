@@ -57,7 +57,8 @@ from .base import Observer, ObserverState
 
 if TYPE_CHECKING:
     from ..design.high_gain import ThetaDesign
-    from ..design.regions import Disk, RegionPlacement
+    from ..design.regions import Disk, Region, RegionPlacement
+    from ..design.width import WidthDesign
 
 __all__ = ["HighGainIntervalObserver"]
 
@@ -96,6 +97,7 @@ class _Modal:
         from ..design.regions import modal_decomposition
 
         self.L = L
+        self.ca = system.C @ system.A
         self.decomposition = modal_decomposition(system.A, system.C, L, order=order)
         lam = self.decomposition.eigenvalues
         p, w = lam.real, lam.imag
@@ -118,6 +120,7 @@ class _Modal:
         rot = np.exp(-1j * self.omega[None, :] * t[:, None])  # (T, n)
         rv = rot[:, :, None] * self.v1[None, :, :]  # diag(e^{-iωt}) v1
         back = self.v1_inv[None, :, :] * np.conj(rot)[:, None, :]  # v1^{-1} diag(e^{iωt})
+        ca_back = self.ca[None, :, :] @ back  # C A x = Re(C A v1^{-1} diag(e^{iωt}) ζ)
         return {
             "in_centre": rv * self.psi[None, :, None],
             "in_re": self.phi1[None, :, None] * (np.abs(rv.real) + self.slack[None]),
@@ -126,6 +129,11 @@ class _Modal:
             "back": back,
             "back_re": np.abs(back.real),
             "back_im": np.abs(back.imag),
+            "rv_re": np.abs(rv.real),
+            "rv_im": np.abs(rv.imag),
+            "ca_back": ca_back,
+            "ca_back_re": np.abs(ca_back.real),
+            "ca_back_im": np.abs(ca_back.imag),
         }
 
     def to_box(
@@ -135,6 +143,39 @@ class _Modal:
         centre = np.real(zc @ back.T)
         radius = zr @ b_re.T + zi @ b_im.T
         return inflate(centre - radius, centre + radius)
+
+    def rewrap(
+        self,
+        rot: dict[str, Any],
+        k: int,
+        lo: FloatArray,
+        hi: FloatArray,
+        zc: ComplexArray,
+        zr: FloatArray,
+        zi: FloatArray,
+    ) -> tuple[ComplexArray, FloatArray, FloatArray]:
+        """``ζ ∈ zc ± (zr + i zi)`` intersected with the rectangle of ``diag(e^{-iωt_k}) v1 [lo, hi]``.
+
+        Both rectangles contain ζ(t_k) (Theorem 2.1 for the second), so their intersection, per real and
+        imaginary part, does too; centre and radius are rounded outward.
+        """
+        xc, xr = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        image = xc @ rot["rv"][k].T
+        image_r = xr @ rot["rv_re"][k].T
+        image_i = xr @ rot["rv_im"][k].T
+        re_lo = np.maximum(zc.real - zr, image.real - image_r)
+        re_hi = np.minimum(zc.real + zr, image.real + image_r)
+        im_lo = np.maximum(zc.imag - zi, image.imag - image_i)
+        im_hi = np.minimum(zc.imag + zi, image.imag + image_i)
+        pad = _ROUND * (np.abs(re_lo) + np.abs(re_hi) + np.abs(im_lo) + np.abs(im_hi))
+        centre = 0.5 * (re_lo + re_hi) + 1j * (0.5 * (im_lo + im_hi))
+        return centre, 0.5 * (re_hi - re_lo) + pad, 0.5 * (im_hi - im_lo) + pad
+
+    def output_derivative_part(
+        self, rot: dict[str, Any], k: int, zc: ComplexArray, zr: FloatArray, zi: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Bounds of ``C A x(t_k)`` over the modal enclosure (Theorem 2.1 with ``C A v1^{-1} diag(e^{iωt_k})``)."""
+        return self.to_box(rot["ca_back"][k], rot["ca_back_re"][k], rot["ca_back_im"][k], zc, zr, zi)
 
     def advance(
         self,
@@ -183,8 +224,18 @@ class HighGainIntervalObserver(Observer):
     refine : bool
         Report the intersection of the state-bound box (Theorem 4.5), the output-observer box and the
         slab ``{x : Cx ∈ output bounds}`` (all three enclose ``x(t_k)``) instead of the Theorem 4.5 box
-        alone (kept in ``Estimate.meta['theorem45_lower'/'theorem45_upper']``). The observer's own
-        coordinates are not re-wrapped, so this changes only what is reported and the a-priori boxes.
+        alone (kept in ``Estimate.meta['theorem45_lower'/'theorem45_upper']``: the state-bound
+        observer's own box, tightened by ``rewrap`` when that is on). Without ``rewrap`` this changes
+        only what is reported and the a-priori boxes.
+    predictor : {"modal", "box"}
+        Bound of ``C ẋ`` over a step for the intersample predictor (12c): ``"box"`` is ``C F(B)`` over
+        the a-priori box (the paper's predictor in interval form); ``"modal"`` (default) intersects it
+        with ``CA x(t_k) + [0, h] CA F(B) + C(φ(B) + [d])``, ``CA x(t_k)`` bounded over both modal
+        enclosures, which keep the correlations between the states that a box loses.
+    rewrap : bool
+        Intersect each observer's modal enclosure, after every step, with the rectangle of the
+        reported box in its modal coordinates (both contain ζ; default True). With ``False`` the two
+        observers run as the paper's Theorems 4.2 and 4.5 and only the report is refined.
     scheme : {"exact", "paper-euler"}
         ``"exact"`` (sound, default) or the paper's explicit Euler step in the θ-shifted coordinates
         (evaluated rescaled, so it cannot overflow), with every input bounded at ``t_k`` only. The
@@ -205,6 +256,8 @@ class HighGainIntervalObserver(Observer):
         input_rate: float = 0.0,
         order: list[complex] | None = None,
         refine: bool = True,
+        predictor: str = "modal",
+        rewrap: bool = True,
         scheme: str = "exact",
     ) -> None:
         if not isinstance(system, SampledSystem):
@@ -222,6 +275,10 @@ class HighGainIntervalObserver(Observer):
         self.input_rate = float(input_rate)
         self.theta = float(theta)
         self.refine = bool(refine)
+        if predictor not in ("box", "modal"):
+            raise ValueError(f"predictor: expected 'box' or 'modal', got {predictor!r}")
+        self.predictor = predictor
+        self.rewrap = bool(rewrap)
         gain = as_matrix("L", L, (self.n, self.p))
         out_gain = gain if output_gain is None else as_matrix("output_gain", output_gain, (self.n, self.p))
         if scheme not in ("exact", "paper-euler"):
@@ -241,11 +298,13 @@ class HighGainIntervalObserver(Observer):
         self.d_lower, self.d_upper = full.w
         self._A = _Split(system.A)
         self._C = _Split(system.C)
+        self._CA = _Split(system.C @ system.A)
         self._L = _Split(self.L)
         self._Lw = _Split(self.output_gain)
         self.v_lower, self.v_upper = full.v
         self.placement: RegionPlacement | None = None
         self.theta_design: ThetaDesign | None = None
+        self.width_design: WidthDesign | None = None
 
     @classmethod
     def design(
@@ -261,6 +320,8 @@ class HighGainIntervalObserver(Observer):
         input_rate: float = 0.0,
         refine: bool = True,
         output_gain: ArrayLike | None = None,
+        predictor: str = "modal",
+        rewrap: bool = True,
     ) -> HighGainIntervalObserver:
         """The constructive design of seed 004: Algorithm 1 for ``L1``, then (optionally) Theorem 4.4.
 
@@ -286,6 +347,7 @@ class HighGainIntervalObserver(Observer):
         output_gain : array_like, shape (n, p), optional
             Gain of the output-bound observer (default: the placed ``L1``; give a small one, e.g.
             zeros, when the placed gain makes its radius system unstable).
+        predictor, rewrap : see the class parameters (``"box"`` and ``False``: the paper's observer).
 
         Returns
         -------
@@ -313,9 +375,86 @@ class HighGainIntervalObserver(Observer):
             order=[d.center for d in placement.disks],
             refine=refine,
             output_gain=output_gain,
+            predictor=predictor,
+            rewrap=rewrap,
         )
         observer.placement = placement
         observer.theta_design = design
+        return observer
+
+    @classmethod
+    def design_for_width(
+        cls,
+        system: SampledSystem,
+        bounds: Bounds,
+        h: float,
+        *,
+        phi_radius: ArrayLike,
+        input_rate: float,
+        weights: ArrayLike | None = None,
+        regions: Sequence[Region] = (),
+        output_radius: ArrayLike | None = None,
+        output_gain: ArrayLike | None = None,
+        max_condition: float = 100.0,
+    ) -> HighGainIntervalObserver:
+        """Gain and LMI regions chosen for width (:func:`~intervalobs.design.width.design_for_width`).
+
+        Parameters
+        ----------
+        system : SampledSystem
+            Model (8).
+        bounds : Bounds
+            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        h : float
+            Grid step.
+        phi_radius : array_like, shape (n,)
+            Radius of the range of φ over any box and the input over one step (design value).
+        input_rate : float
+            Bound of ``|du/dt|`` (the observer's soundness depends on it: no default).
+        weights : array_like, shape (n,), optional
+            Weights of the mean widths in the objective.
+        regions : sequence of Disk, HalfPlane, VerticalStrip, HorizontalStrip, Sector
+            Constraint regions for every eigenvalue of ``A - L1 C``.
+        output_radius : array_like, shape (p,), optional
+            Output radius of the bound (default: the noise radius δ).
+        output_gain : array_like, shape (n, p), optional
+            Gain of the output-bound observer (default zero; its radius system must be stable).
+        max_condition : float
+            Largest accepted ``cond(v1)``.
+
+        Returns
+        -------
+        HighGainIntervalObserver
+            With ``width_design`` and ``placement`` set.
+        """
+        from ..design.width import design_for_width
+
+        full = bounds.for_system(system)  # type: ignore[arg-type]
+        assert full.w is not None and full.v is not None
+        d_radius = 0.5 * (full.w[1] - full.w[0])
+        v_radius = np.maximum(np.abs(full.v[0]), np.abs(full.v[1]))
+        result = design_for_width(
+            system.A,
+            system.C,
+            h,
+            d_radius=d_radius,
+            phi_radius=phi_radius,
+            output_radius=v_radius if output_radius is None else output_radius,
+            weights=weights,
+            regions=regions,
+            max_condition=max_condition,
+        )
+        observer = cls(
+            system,
+            bounds,
+            result.L,
+            h,
+            input_rate=input_rate,
+            output_gain=np.zeros_like(result.L) if output_gain is None else output_gain,
+            order=[d.center for d in result.disks],
+        )
+        observer.placement = result.placement
+        observer.width_design = result
         return observer
 
     def _output_radius_abscissa(self) -> float:
@@ -556,6 +695,32 @@ class HighGainIntervalObserver(Observer):
         f_lo, f_hi = a_lo + p_lo + self.d_lower, a_hi + p_hi + self.d_upper
         return f_lo, f_hi, p_lo, p_hi
 
+    def _output_derivative(
+        self,
+        internal: dict[str, Any],
+        k: int,
+        rots: tuple[dict[str, Any], dict[str, Any]],
+        box: tuple[FloatArray, FloatArray],
+        field: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    ) -> tuple[FloatArray, FloatArray]:
+        """Bound of ``C ẋ(s)`` over the step: ``CA x(t_k) + [0, h] CA F(B) + C(φ(B) + [d])``.
+
+        ``x(s) = x(t_k) + ∫ ẋ`` with ``ẋ ∈ F(B)`` gives ``CA x(s) ∈ CA x(t_k) + τ CA F(B)``, ``τ ∈ [0, h]``;
+        ``CA x(t_k)`` is bounded over the box ``box`` at ``t_k`` and over both modal enclosures (Theorem
+        2.1), which keep the correlations a box loses. ``field`` is ``(F_lo, F_hi, φ_lo, φ_hi)`` over B.
+        """
+        f_lo, f_hi, p_lo, p_hi = field
+        ca_lo, ca_hi = self._CA.bounds(*box)
+        for key, mod, rot in zip(("s", "w"), (self.state_modal, self.output_modal), rots):
+            zeta = (internal[key + "c"], internal[key + "r"], internal[key + "i"])
+            m_lo, m_hi = mod.output_derivative_part(rot, k, *zeta)
+            ca_lo, ca_hi = np.maximum(ca_lo, m_lo), np.minimum(ca_hi, m_hi)
+        caf_lo, caf_hi = self._CA.bounds(f_lo, f_hi)
+        rest_lo, rest_hi = self._C.bounds(p_lo + self.d_lower, p_hi + self.d_upper)
+        return inflate(
+            ca_lo + self.h * np.minimum(0.0, caf_lo) + rest_lo, ca_hi + self.h * np.maximum(0.0, caf_hi) + rest_hi
+        )
+
     def _advance(
         self,
         state: ObserverState,
@@ -586,6 +751,9 @@ class HighGainIntervalObserver(Observer):
             b_lo, b_hi, p_lo, p_hi, f_lo, f_hi = self._enclosure(x_lo, x_hi, t, u_lo, u_hi, internal.get("f"))
         cb_lo, cb_hi = self._C.bounds(b_lo, b_hi)
         cf_lo, cf_hi = self._C.bounds(f_lo, f_hi)
+        if self.predictor == "modal":
+            md_lo, md_hi = self._output_derivative(internal, k, (rot_s, rot_w), (x_lo, x_hi), (f_lo, f_hi, p_lo, p_hi))
+            cf_lo, cf_hi = np.maximum(cf_lo, md_lo), np.minimum(cf_hi, md_hi)
         # intersample predictor (12c)-(12d): Cx(s) ∈ Cx(t_k) + [0, h]·C F(B), intersected with C B
         step_lo = np.maximum(cb_lo, y_lo + np.minimum(0.0, self.h * cf_lo))
         step_hi = np.minimum(cb_hi, y_hi + np.maximum(0.0, self.h * cf_hi))
@@ -614,4 +782,9 @@ class HighGainIntervalObserver(Observer):
             out_lo, out_hi = self._refined(nx_lo, nx_hi, new["y_lower"], new["y_upper"])
         else:
             out_lo, out_hi = boxes["s"]
+        if self.rewrap:
+            for key, mod, rot in (("s", self.state_modal, rot_s), ("w", self.output_modal, rot_w)):
+                new[key + "c"], new[key + "r"], new[key + "i"] = mod.rewrap(
+                    rot, k + 1, out_lo, out_hi, new[key + "c"], new[key + "r"], new[key + "i"]
+                )
         return ObserverState(out_lo, out_hi, internal=new), (y_lo, y_hi)
