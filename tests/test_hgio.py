@@ -171,3 +171,21 @@ def test_design_runs_algorithm_1_and_theorem_44() -> None:
     assert observer.theta == pytest.approx(np.log(1.6 / 0.08), abs=1e-3)  # sound reading, recorded only
     with pytest.raises(TypeError):
         HighGainIntervalObserver.design(example.system(), example.bounds(), example.DISKS, example.STEP, gain=1.0)  # type: ignore[call-arg]
+
+
+def test_modal_predictor_and_rewrap_only_tighten(gains: dict[str, np.ndarray]) -> None:
+    """Both only intersect sound enclosures, and every later map is inclusion-monotone."""
+    system, bounds = example.system(), example.bounds()
+    t = np.arange(0.0, HORIZON + 1e-12, example.STEP)
+    sim = simulate_sampled(system, bounds, t, u=example.input_signal, noise="extreme", seed=7, runs=2, substeps=4)
+    widths = {}
+    for options in ({"predictor": "box", "rewrap": False}, {"predictor": "modal", "rewrap": True}):
+        observer = HighGainIntervalObserver(
+            system, bounds, gains["center"], example.STEP, input_rate=example.INPUT_RATE, **options
+        )
+        est = observer.run(t, sim.y, sim.u)
+        assert est.enclosure(sim.x).max_violation == 0.0
+        widths[options["predictor"]] = est.upper - est.lower
+    # rounding pads differ between the two paths: 1e-9 relative is far above them and far below any gain
+    assert np.all(widths["modal"] <= widths["box"] * (1 + 1e-9) + 1e-12)
+    assert widths["modal"][:, t >= 0.5].mean() < 0.95 * widths["box"][:, t >= 0.5].mean()

@@ -58,6 +58,8 @@ _DISK_FRACTION = 0.3
 _SHIFTS = (0.25, 0.5, 1.0, 2.0)
 _IMAG_SCALES = (1.0, 1.3)
 _SEARCHED_STARTS = 3
+_SHRINKS = 3
+_RING_POINTS = 64
 _SEARCH_POINTS_INV = 1.0 / 100.0
 
 
@@ -120,8 +122,9 @@ def modal_width_bound(modal: ModalDecomposition, input_radius: ArrayLike, h: flo
     drive_re = phi1[None, :] * ((np.abs(rv.real) + slack[None]) @ gr)
     drive_im = phi1[None, :] * ((np.abs(rv.imag) + slack[None]) @ gr)
     eph = np.exp(p * h)
-    zr = np.column_stack([lfilter([1.0], [1.0, -eph[j]], drive_re[:, j]) for j in range(n)])
-    zi = np.column_stack([lfilter([1.0], [1.0, -eph[j]], drive_im[:, j]) for j in range(n)])
+    # ζ^r_{k+1} = e^{ph} ζ^r_k + drive_k from ζ^r_0 = 0: the filter of the drive delayed by one step
+    zr = np.column_stack([lfilter([0.0, 1.0], [1.0, -eph[j]], drive_re[:, j]) for j in range(n)])
+    zi = np.column_stack([lfilter([0.0, 1.0], [1.0, -eph[j]], drive_im[:, j]) for j in range(n)])
     back = modal.v1_inv[None, :, :] * np.conj(rot)[:, None, :]
     xr = np.einsum("tij,tj->ti", np.abs(back.real), zr) + np.einsum("tij,tj->ti", np.abs(back.imag), zi)
     steady = xr[t >= settle]
@@ -182,22 +185,25 @@ def _starts(a: FloatArray, c: FloatArray) -> list[FloatArray]:
     return starts
 
 
-def _disks(vals: NDArray[np.complex128], regions: Sequence[Region]) -> tuple[Disk, ...]:
-    """One disk per eigenvalue: disjoint, in the left half-plane, inside every constraint region."""
+def _disks(vals: NDArray[np.complex128], regions: Sequence[Region], shrink: int) -> tuple[Disk, ...] | None:
+    """One disk per eigenvalue, centred on it: disjoint, in the left half-plane, inside every region.
+
+    The radius starts at ``_DISK_FRACTION`` of the distance to the nearest other eigenvalue and to the
+    imaginary axis and is halved up to ``shrink`` times until the disk fits (None if it never does).
+    """
     n = vals.size
     gaps = np.abs(vals[:, None] - vals[None, :]) + np.diag(np.full(n, np.inf))
-    boundary = np.exp(2j * np.pi * np.arange(64) / 64)
+    boundary = np.exp(2j * np.pi * np.arange(_RING_POINTS) / _RING_POINTS)
     disks = []
     for j, lam in enumerate(vals):
         radius = _DISK_FRACTION * min(float(np.min(gaps[j])) if n > 1 else np.inf, float(-lam.real))
         centre = complex(lam.real, 0.0) if lam.imag == 0 else complex(lam)
-        for _ in range(30):
-            ring = centre + radius * boundary
-            if all(np.all(in_region(r, ring)) for r in regions):
+        for _ in range(shrink + 1):
+            if all(np.all(in_region(r, centre + radius * boundary)) for r in regions):
                 break
             radius /= 2
         else:
-            raise DesignError(f"design_for_width: no disk around the eigenvalue {lam:.4g} fits the constraint regions")
+            return None
         disks.append(Disk(centre, radius))
     return tuple(disks)
 
@@ -270,8 +276,8 @@ def design_for_width(
             return None
         if modal.condition > max_condition or modal.separation < min_separation:
             return None
-        if not all(np.all(in_region(r, modal.eigenvalues)) for r in constraint):
-            return None
+        if constraint and _disks(modal.eigenvalues, constraint, _SHRINKS) is None:
+            return None  # every eigenvalue keeps room for its own disk inside the regions
         return modal
 
     def bound_of(gain: FloatArray, modal: ModalDecomposition, step: float) -> WidthBound:
@@ -309,7 +315,8 @@ def design_for_width(
     optimum = best[1]
     optimum_modal = modal_of(optimum)
     assert optimum_modal is not None
-    disks = _disks(optimum_modal.eigenvalues, constraint)
+    disks = _disks(optimum_modal.eigenvalues, constraint, _SHRINKS)
+    assert disks is not None
     placement = place_in_disks(a, c, disks, objective="center")
     final = modal_of(placement.L)
     if final is None:

@@ -30,6 +30,7 @@ __all__ = [
     "DISKS",
     "INPUT_RATE",
     "PAPER",
+    "PHI_RADIUS",
     "SAMPLE_PERIOD",
     "STEP",
     "T_FINAL",
@@ -53,6 +54,8 @@ SAMPLE_PERIOD = 5e-3
 T_FINAL = 30.0
 INPUT_RATE = 9.0
 """Bound of ``|du/dt|`` for u = 3 sin t − 2 sin 3t (3 + 6)."""
+PHI_RADIUS = 0.5 + np.abs(B_U[:, 0]) * INPUT_RATE * STEP
+"""Radius of the range of φ over any box and one step: ``e^{-|x|} ∈ (0, 1]`` and ``B_u u`` with ``|u̇| ≤ 9``."""
 
 PAPER = {
     "L1": [1.111e-4, 1.25e-4, 1.0e-4],
