@@ -43,13 +43,13 @@ def test_region_characteristic_matches_its_geometry(region: object, inside: obje
 
 
 def test_region_validation() -> None:
-    with pytest.raises(BoundsError, match="Sector.angle"):
+    with pytest.raises(BoundsError, match=r"Sector\.angle"):
         Sector(2.0)
     with pytest.raises(BoundsError, match="VerticalStrip"):
         VerticalStrip(-1.0, -2.0)
-    with pytest.raises(BoundsError, match="HalfPlane.shift"):
+    with pytest.raises(BoundsError, match=r"HalfPlane\.shift"):
         HalfPlane(-1.0)
-    with pytest.raises(BoundsError, match="HorizontalStrip.bound"):
+    with pytest.raises(BoundsError, match=r"HorizontalStrip\.bound"):
         HorizontalStrip(0.0)
 
 
