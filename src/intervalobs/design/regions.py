@@ -135,7 +135,13 @@ class _LinearRegion:
     r"""Shared part of the :math:`R_{11} = 0` regions: :math:`\{s : R_{00} + R_{10}s + (R_{10}s)^H \prec 0\}`."""
 
     def matrices(self) -> tuple[FloatArray, ComplexArray]:
-        """``(R00, R10)`` of eq. (6) (``R11 = 0``)."""
+        """``(R00, R10)`` of eq. (6) (``R11 = 0``).
+
+        Returns
+        -------
+        R00 : numpy.ndarray, shape (d, d)
+        R10 : numpy.ndarray, shape (d, d), complex
+        """
         raise NotImplementedError
 
     def characteristic(self, s: complex | ComplexArray) -> Any:
@@ -189,7 +195,13 @@ class HalfPlane(_LinearRegion):
             raise BoundsError(f"HalfPlane.shift: expected a nonnegative decay rate, got {self.shift!r}")
 
     def matrices(self) -> tuple[FloatArray, ComplexArray]:
-        """``(R00, R10)``: ``[[2σ]]``, ``[[1]]``."""
+        """``(R00, R10)``: ``[[2σ]]``, ``[[1]]``.
+
+        Returns
+        -------
+        R00 : numpy.ndarray, shape (d, d)
+        R10 : numpy.ndarray, shape (d, d), complex
+        """
         return np.array([[2.0 * self.shift]]), np.array([[1.0 + 0j]])
 
 
@@ -212,7 +224,13 @@ class VerticalStrip(_LinearRegion):
             raise BoundsError(f"VerticalStrip: expected finite left < right, got {self.left!r}, {self.right!r}")
 
     def matrices(self) -> tuple[FloatArray, ComplexArray]:
-        """``(R00, R10)``: ``diag(-2b, 2a)``, ``diag(1, -1)``."""
+        """``(R00, R10)``: ``diag(-2b, 2a)``, ``diag(1, -1)``.
+
+        Returns
+        -------
+        R00 : numpy.ndarray, shape (d, d)
+        R10 : numpy.ndarray, shape (d, d), complex
+        """
         return np.diag([-2.0 * self.right, 2.0 * self.left]), np.diag([1.0 + 0j, -1.0 + 0j])
 
 
@@ -234,7 +252,13 @@ class HorizontalStrip(_LinearRegion):
             raise BoundsError(f"HorizontalStrip.bound: expected a positive frequency, got {self.bound!r}")
 
     def matrices(self) -> tuple[FloatArray, ComplexArray]:
-        """``(R00, R10)``: ``-2ω I``, ``diag(-i, i)``."""
+        """``(R00, R10)``: ``-2ω I``, ``diag(-i, i)``.
+
+        Returns
+        -------
+        R00 : numpy.ndarray, shape (d, d)
+        R10 : numpy.ndarray, shape (d, d), complex
+        """
         return -2.0 * self.bound * np.eye(2), np.diag([-1j, 1j])
 
 
@@ -257,7 +281,13 @@ class Sector(_LinearRegion):
             raise BoundsError(f"Sector.angle: expected a half-angle in (0, pi/2) rad, got {self.angle!r}")
 
     def matrices(self) -> tuple[FloatArray, ComplexArray]:
-        """``(R00, R10)``: ``0``, ``[[sin β, cos β], [-cos β, sin β]]``."""
+        """``(R00, R10)``: ``0``, ``[[sin β, cos β], [-cos β, sin β]]``.
+
+        Returns
+        -------
+        R00 : numpy.ndarray, shape (d, d)
+        R10 : numpy.ndarray, shape (d, d), complex
+        """
         sb, cb = np.sin(self.angle), np.cos(self.angle)
         return np.zeros((2, 2)), np.array([[sb, cb], [-cb, sb]], dtype=complex)
 
