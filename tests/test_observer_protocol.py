@@ -144,3 +144,29 @@ def test_discrete_run_refuses_a_record_not_sampled_every_dt(name: str) -> None:
     with pytest.raises(DataError, match=r"^t: expected uniform spacing h = 0.5"):
         observer.run(t, y, u)
     observer.run(0.5 * t, y, u)
+
+
+# The HGIO accepts its a-priori (Picard) box for the whole batch at once, so a run's box depends on
+# the others in its batch (sound either way): only shapes and finiteness are compared.
+SHARED_ACROSS_RUNS = ("HighGainIntervalObserver",)
+
+
+def test_batched_step_equals_steps_of_each_run(observer: Observer) -> None:
+    """A leading Monte Carlo axis on ``y``/``u`` in ``step`` gives each run's own numbers."""
+    if "(M, p)" not in (type(observer).step.__doc__ or ""):
+        pytest.skip("step documents one run only")
+    rng = np.random.default_rng(3)
+    runs, steps = 3, 4
+    y = 0.01 * rng.uniform(-1, 1, (runs, steps, observer.p))
+    u = 0.1 * rng.uniform(-1, 1, (runs, steps, observer.m))
+    batched = observer.init()
+    single = [observer.init() for _ in range(runs)]
+    for k in range(steps):
+        batched = observer.step(batched, y[:, k], u[:, k])
+        single = [observer.step(s, y[i, k], u[i, k]) for i, s in enumerate(single)]
+        for i, s in enumerate(single):
+            if type(observer).__name__ in SHARED_ACROSS_RUNS:
+                assert batched.lower[i].shape == s.lower.shape and np.all(np.isfinite(batched.upper[i]))
+            else:
+                np.testing.assert_allclose(batched.lower[i], s.lower, rtol=1e-12, atol=1e-12)
+                np.testing.assert_allclose(batched.upper[i], s.upper, rtol=1e-12, atol=1e-12)

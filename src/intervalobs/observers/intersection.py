@@ -241,7 +241,8 @@ class IntersectionObserver(Observer):
             With ``internal["filtered_lower"/"filtered_upper"]``: the box of ``x_k`` given ``y_0 … y_k``.
         """
         yk, uk = self._sample(y, u)
-        lo, hi = state.lower, state.upper
+        lead = np.broadcast_shapes(state.lower.shape[:-1], yk.shape[:-1], uk.shape[:-1])  # runs of a batched y or u
+        lo, hi = np.broadcast_to(state.lower, (*lead, self.n)), np.broadcast_to(state.upper, (*lead, self.n))
         if self.contract:
             lo, hi = output_contraction(lo, hi, self.system.C, yk - self._fv_hi, yk - self._fv_lo, self.sweeps)
         new_states = []

@@ -361,7 +361,11 @@ class IntervalObserver(Observer):
             return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance}
         k = internal["k"]
         queue, history = internal["rho_queue"], internal["d_history"]
-        disturbance = np.broadcast_to(disturbance, z_r.shape)
+        # A batched y or u (or a batched ΔA disturbance) gives the queues their leading axes.
+        lead = np.broadcast_shapes(np.shape(disturbance)[:-1], z_r.shape[:-1], new_c.shape[:-1])
+        disturbance = np.broadcast_to(disturbance, (*lead, self.n))
+        history = np.broadcast_to(history, (*lead, self.horizon, self.n))
+        queue = np.broadcast_to(queue, (*lead, self.horizon, self.n))
         history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
         lag = min(k + 1, self.horizon)
         new_r = queue[..., 0, :] @ self._abs_powers[lag].T + np.einsum(

@@ -216,7 +216,10 @@ class ZonotopicObserver(Observer):
         ObserverState
         """
         yk, uk = self._sample(y, u)
-        c, g = self._advance(state.internal["center"], state.internal["generators"], yk, uk)
+        c, g = state.internal["center"], state.internal["generators"]
+        lead = np.broadcast_shapes(c.shape[:-1], yk.shape[:-1], uk.shape[:-1])  # runs of a batched y or u
+        c, g = np.broadcast_to(c, (*lead, self.n)), np.broadcast_to(g, (*lead, *g.shape[-2:]))
+        c, g = self._advance(c, g, yk, uk)
         lower, upper = self._hull(c, g)
         return ObserverState(lower, upper, internal={"center": c, "generators": g})
 
