@@ -9,12 +9,15 @@ A leading axis of ``y`` and ``u`` holds Monte Carlo runs and is carried through 
 
 from __future__ import annotations
 
+import functools
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from threadpoolctl import ThreadpoolController
 
 from ..errors import DataError
 from ..estimate import Estimate
@@ -23,6 +26,21 @@ from ..validation import as_box, as_signal, as_time
 __all__ = ["Observer", "ObserverState"]
 
 FloatArray = NDArray[np.float64]
+
+_BLAS = ThreadpoolController()
+
+
+def _one_blas_thread(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
+    """Run with one BLAS thread: the recursions multiply tiny matrices, where BLAS threads only
+    fight over the cores (n = 20: 10 µs instead of 0.6 µs per step under OpenBLAS's default)."""
+
+    @functools.wraps(run)
+    def limited(*args: Any, **kwargs: Any) -> Estimate:
+        with _BLAS.limit(limits=1, user_api="blas"):
+            return run(*args, **kwargs)
+
+    return limited
+
 
 SPACING_TOLERANCE = 1e-9
 """Relative deviation of a record's sample spacing from ``h`` that :meth:`Observer._check_spacing` accepts."""
@@ -61,6 +79,13 @@ class Observer(ABC):
     p: int
     m: int
     h: float | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Every ``run`` written by a subclass runs its hot loop on one BLAS thread (see ``_one_blas_thread``)."""
+        super().__init_subclass__(**kwargs)
+        if "run" in cls.__dict__:
+            cls.run = _one_blas_thread(cls.__dict__["run"])  # type: ignore[method-assign]
+
     """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
 
     @abstractmethod
