@@ -181,11 +181,18 @@ def test_modal_predictor_and_rewrap_only_tighten(gains: dict[str, np.ndarray]) -
     widths = {}
     for options in ({"predictor": "box", "rewrap": False}, {"predictor": "modal", "rewrap": True}):
         observer = HighGainIntervalObserver(
-            system, bounds, gains["center"], example.STEP, input_rate=example.INPUT_RATE, **options
+            system,
+            bounds,
+            gains["center"],
+            example.STEP,
+            output_gain=gains["constructive"],  # the output-bound observer needs a gain whose radius system is Hurwitz
+            input_rate=example.INPUT_RATE,
+            **options,
         )
         est = observer.run(t, sim.y, sim.u)
         assert est.enclosure(sim.x).max_violation == 0.0
         widths[options["predictor"]] = est.upper - est.lower
     # rounding pads differ between the two paths: 1e-9 relative is far above them and far below any gain
     assert np.all(widths["modal"] <= widths["box"] * (1 + 1e-9) + 1e-12)
-    assert widths["modal"][:, t >= 0.5].mean() < 0.95 * widths["box"][:, t >= 0.5].mean()
+    # the modal predictor bounds Cẋ between samples: the measured state x₁ gains most
+    assert widths["modal"][:, t >= 0.5, 0].mean() < 0.8 * widths["box"][:, t >= 0.5, 0].mean()
