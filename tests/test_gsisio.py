@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from intervalobs.design.gsisio import gsisio_design
 from intervalobs.errors import AssumptionError
 from intervalobs.examples import gsisio as ex
-from intervalobs.observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
+from intervalobs.observers.gsisio import GSISIO
+from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
 from intervalobs.systems import NonlinearSystem, simulate_nonlinear
 
 

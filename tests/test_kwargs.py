@@ -62,7 +62,7 @@ def _gsisio_design(**kwargs: Any) -> Any:
 
 def _nullspace_gsisio_design(**kwargs: Any) -> Any:
     from intervalobs.examples import gsisio
-    from intervalobs.observers.gsisio import NullSpaceGSISIO
+    from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
 
     return NullSpaceGSISIO.design(gsisio.paper_system(), gsisio.X0_BOX, **kwargs)
 
@@ -101,7 +101,7 @@ CASES: dict[str, tuple[Callable[..., Any], dict[str, Any]]] = {
         {"candidates": {"identity": np.eye(2)}},
     ),
     "intervalobs.observers.gsisio.GSISIO.design": (_gsisio_design, {"tight": False, "splits": 2}),
-    "intervalobs.observers.gsisio.NullSpaceGSISIO.design": (
+    "intervalobs.observers.null_space_gsisio.NullSpaceGSISIO.design": (
         _nullspace_gsisio_design,
         {"direction": "output", "gain_factors": (1.0,), "splits": 3, "newton_steps": 2},
     ),

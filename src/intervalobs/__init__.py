@@ -3,6 +3,7 @@
 from .complex_interval import cabs, ctimes, linear_image
 from .design.abstraction import AffineAbstraction, affine_abstraction
 from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
+from .design.gsisio import gsisio_design
 from .design.high_gain import ThetaDesign, theta_design
 from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from .design.lpv import CertifiedVertexBounds, boundedness_lmi, certify_vertex_extremes, verify_boundedness
@@ -23,10 +24,11 @@ from .inclusion import Interval
 from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
 from .observers.fir import FiniteMemoryObserver
-from .observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
+from .observers.gsisio import GSISIO
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
+from .observers.null_space_gsisio import NullSpaceGSISIO
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver

@@ -2,16 +2,19 @@
 
 from .base import Observer, ObserverState
 from .fir import FiniteMemoryObserver
+from .gsisio import GSISIO
 from .hgio import HighGainIntervalObserver
 from .hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .lpv import LPVIntervalObserver, LPVIntervalUIO
+from .null_space_gsisio import NullSpaceGSISIO
 from .robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
+    "GSISIO",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
@@ -21,6 +24,7 @@ __all__ = [
     "IntervalObserver",
     "LPVIntervalObserver",
     "LPVIntervalUIO",
+    "NullSpaceGSISIO",
     "Observer",
     "ObserverState",
     "RobustHullEstimator",

@@ -29,13 +29,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..design.gsisio import gsisio_design
 from ..design.mixed_monotone import jacobian_bounds, lipschitz_bound
 from ..errors import AssumptionError
 from ..estimate import Estimate
 from ..examples import gsisio as ex
 from ..inclusion import evaluate_matrix
 from ..interval import Box
-from ..observers.gsisio import GSISIO, NullSpaceGSISIO, gsisio_design
+from ..observers.gsisio import GSISIO
+from ..observers.null_space_gsisio import NullSpaceGSISIO
 from ..systems.nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
 from .contract import Example, base_summary, write_reproduction
 
