@@ -1,7 +1,7 @@
 """Write docs/benchmarks.md from benchmarks/results.json and benchmarks/tightness.json.
 
-``make bench`` runs it after the two benchmarks, ``make docs`` before building, and a test checks that
-the committed page matches the JSON files. Usage: ``python benchmarks/report.py``.
+``make bench`` runs it after the benchmarks; ``make docs`` and a test only check that the committed page
+matches the JSON files (building the docs never writes a tracked file). Usage: ``python benchmarks/report.py``.
 """
 
 from __future__ import annotations

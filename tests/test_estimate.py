@@ -29,3 +29,13 @@ def test_plot_returns_a_figure():
     est = Estimate(np.arange(3.0), np.zeros((3, 2)), np.ones((3, 2)))
     fig = est.plot(truth=np.full((3, 2), 0.5))
     assert len(fig.axes) == 2
+
+
+def test_repr_is_short_for_long_monte_carlo_records():
+    t = np.arange(10_000.0)
+    lower = np.zeros((20, t.size, 3))
+    est = Estimate(t, lower, lower + 2.0, np.zeros((20, t.size, 1)), np.ones((20, t.size, 1)), meta={"method": "tube"})
+    assert repr(est) == ("Estimate(method='tube', runs=20, samples=10000, t=[0, 9999], n=3, q=1, final_mean_width=2)")
+    assert repr(Estimate(t[:2], lower[0, :2], lower[0, :2])) == (
+        "Estimate(samples=2, t=[0, 1], n=3, final_mean_width=0)"
+    )

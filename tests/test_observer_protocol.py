@@ -170,3 +170,12 @@ def test_batched_step_equals_steps_of_each_run(observer: Observer) -> None:
             else:
                 np.testing.assert_allclose(batched.lower[i], s.lower, rtol=1e-12, atol=1e-12)
                 np.testing.assert_allclose(batched.upper[i], s.upper, rtol=1e-12, atol=1e-12)
+
+
+def test_repr_is_short_and_names_dimensions_and_method_facts(observer: Observer) -> None:
+    text = repr(observer)
+    assert text.startswith(f"{type(observer).__name__}(n={observer.n}, p={observer.p}, m={observer.m}, ")
+    assert " at 0x" not in text and "\n" not in text and len(text) < 160
+    for name in observer.summary_fields:
+        if getattr(observer, name, None) is not None:
+            assert f"{name}=" in text

@@ -12,7 +12,12 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import BoundsError, DataError, DimensionError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+    from .simulate import Simulation
 
 __all__ = ["ENCLOSURE_TOL", "EnclosureReport", "Estimate", "enclosure_report"]
 
@@ -141,6 +146,18 @@ class Estimate:
                     f"got {self.input_lower.shape} and {self.input_upper.shape}"
                 )
 
+    def __repr__(self) -> str:
+        """Method, runs, samples, time span, dimensions and the mean width at the last sample."""
+        runs = f"runs={self.lower.shape[0]}, " if self.lower.ndim == 3 else ""
+        inputs = f", q={self.input_lower.shape[-1]}" if self.input_lower is not None else ""
+        span = f"[{self.t[0]:.4g}, {self.t[-1]:.4g}]" if self.t.size else "[]"
+        final = float(np.mean(self.width()[..., -1, :])) if self.t.size and self.lower.shape[-1] else float("nan")
+        method = f"method={self.meta['method']!r}, " if "method" in self.meta else ""
+        return (
+            f"Estimate({method}{runs}samples={self.t.size}, t={span}, n={self.lower.shape[-1]}{inputs}, "
+            f"final_mean_width={final:.4g})"
+        )
+
     @property
     def transient(self) -> float:
         """Time after which the method claims enclosure (``meta['transient_s']``, default the first time)."""
@@ -236,15 +253,35 @@ class Estimate:
             inputs = {k: data[k] for k in ("input_lower", "input_upper") if k in data.files}
             return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **inputs)
 
-    def plot(self, truth: ArrayLike | None = None, labels: list[str] | None = None) -> Figure:
+    def plot(
+        self,
+        truth: ArrayLike | Simulation | None = None,
+        labels: Sequence[str] | None = None,
+        *,
+        inputs: bool = False,
+        input_truth: ArrayLike | None = None,
+        run: int | None = None,
+        ax: Axes | Sequence[Axes] | None = None,
+        time_unit: str | None = None,
+    ) -> Figure:
         """Plot each state's bounds (and the truth); see :func:`intervalobs.plotting.plot_estimate`.
 
         Parameters
         ----------
-        truth : array_like, shape (T, n), optional
-            True state, drawn as a line.
-        labels : list of str, optional
-            Panel titles.
+        truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
+            True state (of a :class:`~intervalobs.simulate.Simulation`, its ``x``), drawn as a line.
+        labels : sequence of str, optional
+            Panel labels.
+        inputs : bool
+            Also plot the unknown-input bounds.
+        input_truth : array_like, shape (T, q) or (M, T, q), optional
+            True unknown input.
+        run : int, optional
+            The Monte Carlo run to draw; None: the envelope over runs.
+        ax : matplotlib.axes.Axes or sequence of Axes, optional
+            Where to draw, one axes per panel; default: a new figure.
+        time_unit : str, optional
+            Unit of ``t`` for the time axis label (default ``meta["time_unit"]`` if present).
 
         Returns
         -------
@@ -252,7 +289,16 @@ class Estimate:
         """
         from .plotting import plot_estimate
 
-        return plot_estimate(self, truth=truth, labels=labels)
+        return plot_estimate(
+            self,
+            truth=truth,
+            labels=labels,
+            inputs=inputs,
+            input_truth=input_truth,
+            run=run,
+            ax=ax,
+            time_unit=time_unit,
+        )
 
 
 def _jsonable(value: Any) -> Any:

@@ -2,70 +2,164 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import DimensionError
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from .estimate import Estimate
+    from .simulate import Simulation
+
+FloatArray = NDArray[np.float64]
 
 __all__ = ["plot_estimate", "plot_widths", "save_figure"]
 
 
 def plot_estimate(
     estimate: Estimate,
-    truth: ArrayLike | None = None,
-    labels: list[str] | None = None,
+    truth: ArrayLike | Simulation | None = None,
+    labels: Sequence[str] | None = None,
     inputs: bool = False,
     input_truth: ArrayLike | None = None,
+    run: int | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
+    time_unit: str | None = None,
 ) -> Figure:
     """One panel per state (and per unknown input): the bounds as a band, the truth as a line.
+
+    A Monte Carlo estimate (bounds of shape (M, T, n)) is drawn for the run ``run``, or, when ``run``
+    is None, as the envelope of all runs (lowest lower and highest upper bound at each time) with
+    every run's truth as a thin line.
 
     Parameters
     ----------
     estimate : Estimate
-        A single-run estimate (2-D bounds).
-    truth : array_like, shape (T, n), optional
-        True state.
-    labels : list of str, optional
-        Panel titles.
+        Single-run (bounds (T, n)) or Monte Carlo (bounds (M, T, n)) estimate.
+    truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
+        True state; of a :class:`~intervalobs.simulate.Simulation`, its ``x`` is used.
+    labels : sequence of str, optional
+        Panel labels, states first, then unknown inputs (default ``x_1``, …, ``d_1``, …).
     inputs : bool
         Also plot the unknown-input bounds.
-    input_truth : array_like, shape (T, q), optional
+    input_truth : array_like, shape (T, q) or (M, T, q), optional
         True unknown input.
+    run : int, optional
+        The run to draw when the estimate or the truth has a run axis; None: the envelope over runs.
+    ax : matplotlib.axes.Axes or sequence of Axes, optional
+        Where to draw, one axes per panel (a single Axes when there is one panel); default: a new
+        figure with the panels stacked.
+    time_unit : str, optional
+        Unit of ``estimate.t`` for the time axis label (default ``estimate.meta["time_unit"]`` if
+        present, else no unit).
 
     Returns
     -------
     matplotlib.figure.Figure
+        The figure holding the panels (that of ``ax`` when given).
+
+    Raises
+    ------
+    DimensionError
+        When ``truth``, ``input_truth``, ``run`` or ``ax`` does not match the estimate.
     """
+    from matplotlib.figure import SubFigure
+
+    from .simulate import Simulation
+
+    times = estimate.t
+    state_truth = truth.x if isinstance(truth, Simulation) else truth
+    blocks = [("truth", estimate.lower, estimate.upper, state_truth, "x")]
+    if inputs and estimate.input_lower is not None and estimate.input_upper is not None:
+        blocks.append(("input_truth", estimate.input_lower, estimate.input_upper, input_truth, "d"))
+    panels = [_panel_data(*block, run, times.size) for block in blocks]
+    count = sum(lower.shape[-1] for _, lower, _, _ in panels)
+    if labels is not None and len(labels) != count:
+        raise DimensionError(f"labels: expected {count} labels (one per panel), got {len(labels)}")
+    axes = _panel_axes(ax, count)
+    names = (
+        list(labels)
+        if labels is not None
+        else [f"${n}_{{{i + 1}}}$" for n, lo, _, _ in panels for i in range(lo.shape[-1])]
+    )
+    batch = run is None and estimate.lower.ndim == 3
+    band = f"envelope of {estimate.lower.shape[0]} runs" if batch else "bounds"
+    row = 0
+    for _, lower, upper, true in panels:
+        for i in range(lower.shape[-1]):
+            axis = axes[row]
+            axis.fill_between(times, lower[:, i], upper[:, i], color="tab:blue", alpha=0.25, lw=0, label=band)
+            axis.plot(times, lower[:, i], color="tab:blue", lw=0.8)
+            axis.plot(times, upper[:, i], color="tab:blue", lw=0.8)
+            if true is not None:
+                curves = true[..., i].reshape(-1, times.size)
+                thin = curves.shape[0] > 1
+                for j, curve in enumerate(curves):
+                    label = (f"truth of {curves.shape[0]} runs" if thin else "truth") if j == 0 else None
+                    axis.plot(
+                        times, curve, color="black", lw=0.5 if thin else 1.0, alpha=0.6 if thin else 1.0, label=label
+                    )
+            axis.set_ylabel(names[row])
+            row += 1
+    unit = time_unit if time_unit is not None else estimate.meta.get("time_unit")
+    for axis in axes if ax is not None else axes[-1:]:  # given axes may sit side by side
+        axis.set_xlabel(f"t ({unit})" if unit else "t")
+    axes[0].legend(loc="upper right", fontsize="small")
+    figure = axes[0].figure
+    if isinstance(figure, SubFigure):  # axes given inside a subfigure: return the figure holding it
+        figure = figure.figure
+    if ax is None:
+        figure.tight_layout()
+    return figure
+
+
+def _panel_data(
+    name: str, lower: FloatArray, upper: FloatArray, truth: ArrayLike | None, symbol: str, run: int | None, steps: int
+) -> tuple[str, FloatArray, FloatArray, FloatArray | None]:
+    """Bounds (T, k) and truth (T, k) or (M, T, k) of one block, for ``run`` or the envelope over runs."""
+    true = None if truth is None else np.asarray(truth, dtype=float)
+    k = lower.shape[-1]
+    if true is not None and (true.ndim not in (2, 3) or true.shape[-2:] != (steps, k)):
+        raise DimensionError(f"{name}: expected shape ({steps}, {k}) or (M, {steps}, {k}), got {true.shape}")
+    total = lower.shape[0] if lower.ndim == 3 else None
+    if true is not None and true.ndim == 3:
+        if total is not None and true.shape[0] != total:
+            raise DimensionError(f"{name}: expected {total} runs (those of the estimate), got {true.shape[0]}")
+        total = true.shape[0]
+    if run is not None:
+        if total is None:
+            raise DimensionError(f"run: expected None (neither the estimate nor {name} has a run axis), got {run}")
+        if not -total <= run < total:
+            raise DimensionError(f"run: expected an index in [0, {total}), got {run}")
+        lower, upper = (lower[run], upper[run]) if lower.ndim == 3 else (lower, upper)
+        true = true[run] if true is not None and true.ndim == 3 else true
+    elif lower.ndim == 3:
+        lower, upper = lower.min(axis=0), upper.max(axis=0)
+    elif true is not None and true.ndim == 3:
+        raise DimensionError(
+            f"{name}: expected shape ({steps}, {k}) for a single-run estimate (or choose run=), got {true.shape}"
+        )
+    return symbol, lower, upper, true
+
+
+def _panel_axes(ax: Axes | Sequence[Axes] | None, count: int) -> list[Axes]:
+    """The axes to draw ``count`` panels in: those given (checked), or a new figure's."""
     import matplotlib.pyplot as plt
 
-    blocks = [(estimate.lower, estimate.upper, truth, "x")]
-    if inputs and estimate.input_lower is not None and estimate.input_upper is not None:
-        blocks.append((estimate.input_lower, estimate.input_upper, input_truth, "d"))
-    count = sum(b[0].shape[-1] for b in blocks)
-    fig, axes = plt.subplots(count, 1, figsize=(7, 1.8 * count + 0.6), sharex=True, squeeze=False)
-    row = 0
-    for lower, upper, true, name in blocks:
-        for i in range(lower.shape[-1]):
-            ax = axes[row, 0]
-            ax.fill_between(estimate.t, lower[:, i], upper[:, i], color="tab:blue", alpha=0.25, lw=0, label="bounds")
-            ax.plot(estimate.t, lower[:, i], color="tab:blue", lw=0.8)
-            ax.plot(estimate.t, upper[:, i], color="tab:blue", lw=0.8)
-            if true is not None:
-                ax.plot(estimate.t, np.asarray(true)[:, i], color="black", lw=1.0, label="truth")
-            title = labels[row] if labels is not None and row < len(labels) else f"${name}_{{{i + 1}}}$"
-            ax.set_ylabel(title)
-            row += 1
-    axes[0, 0].legend(loc="upper right", fontsize="small")
-    axes[-1, 0].set_xlabel("t")
-    fig.tight_layout()
-    return fig
+    if ax is None:
+        _, grid = plt.subplots(count, 1, figsize=(7, 1.8 * count + 0.6), sharex=True, squeeze=False)
+        return list(grid[:, 0])
+    axes = list(np.ravel(np.asarray(ax, dtype=object)))
+    if len(axes) != count:
+        raise DimensionError(f"ax: expected {count} axes (one per panel), got {len(axes)}")
+    return axes
 
 
 def plot_widths(

@@ -59,6 +59,15 @@ class Simulation:
     v: FloatArray
     dA: FloatArray
 
+    def __repr__(self) -> str:
+        """Runs, samples, time span and the dimensions of x, y and u."""
+        runs = f"runs={self.x.shape[0]}, " if self.x.ndim == 3 else ""
+        span = f"[{self.t[0]:.4g}, {self.t[-1]:.4g}]" if self.t.size else "[]"
+        return (
+            f"Simulation({runs}samples={self.t.size}, t={span}, n={self.x.shape[-1]}, p={self.y.shape[-1]}, "
+            f"m={self.u.shape[-1]})"
+        )
+
 
 def noise_signal(
     kind: str,

@@ -79,6 +79,8 @@ class Observer(ABC):
     p: int
     m: int
     h: float | None = None
+    summary_fields: tuple[str, ...] = ()
+    """Attributes that :meth:`__repr__` shows after ``n, p, m, h``: the method's own facts (gain, window, …)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Every ``run`` written by a subclass runs its hot loop on one BLAS thread (see ``_one_blas_thread``)."""
@@ -139,6 +141,12 @@ class Observer(ABC):
         Estimate
             Row ``k`` is the box of ``x(t_k)``; row 0 is the initial box.
         """
+
+    def __repr__(self) -> str:
+        """``Name(n=…, p=…, m=…, h=…, fact=…)`` with the facts named by :attr:`summary_fields` that are set."""
+        facts = {name: getattr(self, name, None) for name in ("n", "p", "m", "h", *self.summary_fields)}
+        shown = ", ".join(f"{name}={_short(value)}" for name, value in facts.items() if value is not None)
+        return f"{type(self).__name__}({shown})"
 
     def _sample(self, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
         """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,) or (M, m) (None only if m = 0)."""
@@ -210,3 +218,16 @@ class Observer(ABC):
                     f"t: expected uniform spacing h = {h:g} (the design's sampling period), "
                     f"got spacings in [{spacing.min():g}, {spacing.max():g}]"
                 )
+
+
+def _short(value: Any) -> str:
+    """A few characters for a repr: 4 significant digits, class names for objects, shapes for arrays."""
+    if isinstance(value, (bool, int, str)):
+        return repr(value)
+    if isinstance(value, (float, np.floating)):
+        return f"{float(value):.4g}"
+    if isinstance(value, np.ndarray):
+        return f"array{value.shape}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    return type(value).__name__

@@ -102,6 +102,8 @@ class FiniteMemoryObserver(Observer):
         like :class:`~intervalobs.observers.hull.HullEstimator` with ``filtered=True``).
     """
 
+    summary_fields = ("window", "filtered")
+
     h: float
 
     def __init__(

@@ -113,6 +113,8 @@ class GSISIO(Observer):
         "tight" holds only relative to the J-based box). Default False.
     """
 
+    summary_fields = ("tight", "input_hull")
+
     def __init__(
         self,
         system: NonlinearSystem,

@@ -242,6 +242,8 @@ class HighGainIntervalObserver(Observer):
         latter is NOT sound; it exists to measure what θ and the Euler step do to the paper's bounds.
     """
 
+    summary_fields = ("theta", "predictor", "rewrap", "scheme")
+
     h: float
 
     def __init__(

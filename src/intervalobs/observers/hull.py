@@ -754,6 +754,8 @@ class HullEstimator(Observer):
     Carlo axis of ``y`` is processed run by run (LPs do not vectorise).
     """
 
+    summary_fields = ("horizon",)
+
     h: float
 
     def __init__(

@@ -115,6 +115,8 @@ class IntersectionObserver(Observer):
         Passes of the contractor over the output rows (1 is exact for one output).
     """
 
+    summary_fields = ("members", "contract")
+
     def __init__(
         self,
         members: Sequence[Observer],

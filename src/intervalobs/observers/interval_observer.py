@@ -86,6 +86,8 @@ class IntervalObserver(Observer):
     realisation, inside the sampling intervals too.
     """
 
+    summary_fields = ("method", "spectral_radius", "horizon")
+
     h: float
 
     def __init__(

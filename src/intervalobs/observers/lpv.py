@@ -297,6 +297,8 @@ class LPVIntervalObserver(Observer):
         If F is not Hurwitz.
     """
 
+    summary_fields: tuple[str, ...] = ("method",)
+
     h: float
 
     method = "lpv-interval-observer"
@@ -669,6 +671,8 @@ class LPVIntervalUIO(LPVIntervalObserver):
         If :math:`RB_{un}` is not constant, the bounds do not contain 0, or H's columns are not
         eigenvectors of F.
     """
+
+    summary_fields = ("method", "q")
 
     method = "lpv-interval-uio"
 

@@ -241,6 +241,8 @@ class NullSpaceGSISIO(Observer):
         the whole space (the existence condition).
     """
 
+    summary_fields = ("hidden", "newton_steps")
+
     def __init__(
         self,
         system: NonlinearSystem,

@@ -234,6 +234,8 @@ class RobustHullEstimator(Observer):
     ``meta()["delta_box"]`` holds the identified box of ``ΔA`` at the end of the last run.
     """
 
+    summary_fields = ("horizon", "identify")
+
     def __init__(
         self,
         system: LTISystem,

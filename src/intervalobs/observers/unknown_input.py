@@ -222,6 +222,8 @@ class UnknownInputIntervalObserver(Observer):
         Asymptotic widths of the state and input bounds (eqs. (34), (48) for this observer).
     """
 
+    summary_fields = ("q", "derivative")
+
     h: float
 
     def __init__(

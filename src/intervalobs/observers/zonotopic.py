@@ -98,6 +98,8 @@ class ZonotopicObserver(Observer):
         When :math:`\rho(A_0 + \mathrm{mid}\,\Delta A - LC) \ge 1` and not ``allow_unstable``.
     """
 
+    summary_fields = ("order", "spectral_radius", "width_spectral_radius")
+
     h: float
 
     def __init__(
