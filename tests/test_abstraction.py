@@ -10,7 +10,7 @@ from intervalobs.design.abstraction import abstraction_sigma, affine_abstraction
 from intervalobs.design.mixed_monotone import decomposition_bounds, jacobian_bounds
 from intervalobs.examples import gsisio
 from intervalobs.inclusion import evaluate_function
-from intervalobs.interval import Box
+from intervalobs.interval import Interval
 from test_mixed_monotone import random_map
 
 
@@ -23,7 +23,7 @@ def test_affine_bounds_hold_on_the_whole_box(seed, scale):
     hi = lo + rng.uniform(0.01, scale, size=2)
     jb = jacobian_bounds(jac, lo, hi)
     ab = affine_abstraction(q, lo, hi, abstraction_sigma(lo, hi, *jb))
-    pts = np.concatenate([Box(lo, hi).vertices(), rng.uniform(lo, hi, size=(3000, 2))])
+    pts = np.concatenate([Interval(lo, hi).vertices(), rng.uniform(lo, hi, size=(3000, 2))])
     vals = evaluate_function(q, pts)
     assert np.all(pts @ ab.A_lower.T + ab.e_lower <= vals)
     assert np.all(vals <= pts @ ab.A_upper.T + ab.e_upper)

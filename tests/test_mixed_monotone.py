@@ -18,7 +18,7 @@ from intervalobs.design.mixed_monotone import (
 )
 from intervalobs.errors import AssumptionError
 from intervalobs.examples import gsisio
-from intervalobs.interval import Box
+from intervalobs.interval import Interval
 
 
 def random_map(seed: int, n: int, m: int):
@@ -42,7 +42,7 @@ def random_map(seed: int, n: int, m: int):
 
 
 def _points(lo, hi, rng, count=200):
-    return np.concatenate([Box(lo, hi).vertices(), rng.uniform(lo, hi, size=(count, lo.size))])
+    return np.concatenate([Interval(lo, hi).vertices(), rng.uniform(lo, hi, size=(count, lo.size))])
 
 
 @settings(max_examples=40, deadline=None)
@@ -120,7 +120,7 @@ def test_vertex_decomposition_is_exact_for_monotone_functions(seed):
     hi = lo + rng.uniform(0, 2, size=3)
     dec = VertexDecomposition(q, s)
     dlo, dhi = dec.bounds(lo, hi)
-    verts = Box(lo, hi).vertices()
+    verts = Interval(lo, hi).vertices()
     vv = np.stack(q([verts[:, j] for j in range(3)]), -1)
     pts = _points(lo, hi, rng)
     pv = np.stack(q([pts[:, j] for j in range(3)]), -1)

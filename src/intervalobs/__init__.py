@@ -20,8 +20,8 @@ from .errors import (
     IntervalObserverError,
 )
 from .estimate import EnclosureReport, Estimate
-from .inclusion import Interval
-from .interval import Box, interval_matvec_bounds, matvec_bounds, neg, pos
+from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
+from .interval import Interval, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
 from .observers.fir import FiniteMemoryObserver
 from .observers.gsisio import GSISIO
@@ -45,7 +45,6 @@ __all__ = [
     "AssumptionError",
     "Bounds",
     "BoundsError",
-    "Box",
     "DataError",
     "DesignError",
     "DimensionError",

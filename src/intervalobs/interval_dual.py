@@ -1,12 +1,12 @@
 r"""Forward-mode automatic differentiation in interval arithmetic: sound Jacobian bounds from f alone.
 
-An :class:`IntervalDual` is a pair of :class:`~intervalobs.inclusion.Interval` objects: a *value* box
+An :class:`IntervalDual` is a pair of :class:`~intervalobs.interval.Interval` objects: a *value* box
 (shape ``(...)``) and a *derivative* box (shape ``(..., n)``, one entry per independent variable).
 Seeding variable :math:`j` with value :math:`[\underline x_j, \overline x_j]` and derivative
 :math:`e_j` and pushing the duals through a user function written with NumPy functions gives, for
 every output component :math:`q_i`, a value box containing :math:`q_i(x)` and a derivative box
 containing :math:`\nabla q_i(x)` for **every** :math:`x` of the box. Each rule is the chain rule
-evaluated in the interval arithmetic of :mod:`intervalobs.inclusion` (outward rounded):
+evaluated in the interval arithmetic of :mod:`intervalobs.interval` (outward rounded):
 
 =================  ======================================================================
 operation          derivative box
@@ -44,7 +44,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import DimensionError
-from .inclusion import Interval, MatrixFunction, VectorFunction
+from .inclusion import MatrixFunction, VectorFunction
+from .interval import Interval, round_outward
 
 __all__ = ["IntervalDual", "automatic_jacobian"]
 
@@ -60,9 +61,8 @@ def _reciprocal_nonnegative(x: Interval) -> Interval:
     """``1/x`` for ``x >= 0``; the upper end is ``+inf`` where ``x`` reaches 0."""
     lo, hi = x.lower, x.upper
     with np.errstate(divide="ignore"):
-        low = np.nextafter(1.0 / hi, -np.inf)
-        high = np.where(lo > 0, np.nextafter(1.0 / np.where(lo > 0, lo, 1.0), np.inf), np.inf)
-    return Interval._raw(np.maximum(low, 0.0), high)
+        low, high = round_outward(1.0 / hi, 1.0 / np.where(lo > 0, lo, 1.0))
+    return Interval._raw(np.maximum(low, 0.0), np.where(lo > 0, high, np.inf))
 
 
 def _zero(d: Interval) -> NDArray[np.bool_]:
@@ -254,7 +254,7 @@ def automatic_jacobian(func: VectorFunction, n: int) -> MatrixFunction:
     ----------
     func : callable
         Component-convention vector function of ``n`` variables, written with the operations listed in
-        the module docstring (those of :data:`intervalobs.inclusion.SUPPORTED_UFUNCS`).
+        the module docstring (those of :data:`intervalobs.interval.SUPPORTED_UFUNCS`).
     n : int
         Number of variables.
 
@@ -281,7 +281,7 @@ def automatic_jacobian(func: VectorFunction, n: int) -> MatrixFunction:
                 entries: list[Any] = [d[..., j] for j in range(n)]
             else:
                 entries = [Interval(np.zeros(lead)) for _ in range(n)]
-            rows.append(entries if boxes else [e.mid for e in entries])
+            rows.append(entries if boxes else [e.centre for e in entries])
         return rows
 
     return jacobian

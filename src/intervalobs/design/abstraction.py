@@ -42,9 +42,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
-from ..errors import AssumptionError, DesignError, DimensionError
+from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..inclusion import VectorFunction, evaluate_function
-from ..interval import ROUNDING_MARGIN, Box, inflate, matvec_bounds
+from ..interval import Interval, inflate, matvec_bounds
 
 __all__ = ["AffineAbstraction", "abstraction_sigma", "affine_abstraction", "corollary1_bounds"]
 
@@ -65,7 +65,7 @@ class AffineAbstraction:
         Optimal value of LP (1) as reported by the solver.
     sigma : numpy.ndarray, shape (m,)
         The margin used for each component.
-    domain : Box
+    domain : Interval
         The box on which the bounds hold.
     status : str
         Solver message.
@@ -77,7 +77,7 @@ class AffineAbstraction:
     e_upper: FloatArray
     theta: float
     sigma: FloatArray
-    domain: Box
+    domain: Interval
     status: str
 
     def range_bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -137,7 +137,7 @@ def abstraction_sigma(
     sigma = np.min(np.stack(candidates), axis=0)
     if not np.all(np.isfinite(sigma)):
         raise AssumptionError("abstraction_sigma: unbounded derivative on the box (Assumption 1)")
-    return np.asarray(sigma * (1 + ROUNDING_MARGIN))
+    return inflate(-sigma, sigma, floor=0.0)[1]  # an affine component keeps sigma = 0 exactly
 
 
 def affine_abstraction(
@@ -169,9 +169,11 @@ def affine_abstraction(
     DesignError
         If HiGHS does not return an optimal solution.
     """
-    box = Box(lower, upper)
+    box = Interval(lower, upper)
     if box.lower.ndim != 1:
         raise DimensionError(f"affine_abstraction: expected a single box, got shape {box.lower.shape}")
+    if not np.all(np.isfinite(box.width)):
+        raise BoundsError(f"lower, upper: expected finite ends, got {box.lower} and {box.upper}")
     vertices = box.vertices()
     values = evaluate_function(func, vertices, m)
     nv, n = vertices.shape
@@ -213,8 +215,7 @@ def affine_abstraction(
     e_up = np.max(values - vertices @ a_up.T, axis=0) + sig
     e_lo = np.min(values - vertices @ a_lo.T, axis=0) - sig
     scale = np.max(np.abs(values), axis=0) + (np.abs(a_lo) + np.abs(a_up)) @ np.max(np.abs(vertices), axis=0)
-    pad = ROUNDING_MARGIN * scale + np.finfo(float).tiny
-    e_lo, e_up = e_lo - pad, e_up + pad
+    e_lo, e_up = inflate(e_lo, e_up, scale=scale)
     return AffineAbstraction(a_lo, a_up, e_lo, e_up, float(result.fun), sig, box, str(result.message))
 
 

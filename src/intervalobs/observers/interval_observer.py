@@ -16,7 +16,7 @@ from ..design.cooperative import FramerDesign, design_framer, framer_matrices, i
 from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
 from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
-from ..interval import ROUNDING_MARGIN
+from ..interval import inflate, recursion_margin
 from ..recursion import LinearRecursion
 from ..systems.lti import Bounds, LTISystem
 from ..systems.sampling import SampledModel, sampled_model
@@ -163,9 +163,7 @@ class IntervalObserver(Observer):
             self._abs_powers = abs_powers(self.M, horizon + 1)
             amplification = self._center_recursion.error_factor
             contraction = float(np.max(np.abs(np.linalg.eigvals(self.M))))
-        # Worst-case linear accumulation of rounding through a recursion contracting at rate ρ, amplified
-        # at most by the conditioning of the fast evaluation.
-        self.margin = max(ROUNDING_MARGIN, 8 * self.n * np.finfo(float).eps * amplification / (1 - contraction))
+        self.margin = recursion_margin(self.n, amplification, contraction)
         self.design_result: FramerDesign | TubeDesign | None = None
 
     @classmethod
@@ -379,8 +377,7 @@ class IntervalObserver(Observer):
     def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
         x_c = z_c @ self.T_inv.T
         x_r = z_r @ self._abs_T_inv.T
-        pad = self.margin * ((np.abs(z_c) + z_r) @ self._abs_T_inv.T) + np.finfo(float).tiny
-        return x_c - x_r - pad, x_c + x_r + pad
+        return inflate(x_c - x_r, x_c + x_r, self.margin, scale=(np.abs(z_c) + z_r) @ self._abs_T_inv.T)
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.

@@ -35,7 +35,7 @@ from ..errors import AssumptionError
 from ..estimate import Estimate
 from ..examples import gsisio as ex
 from ..inclusion import evaluate_matrix
-from ..interval import Box
+from ..interval import Interval
 from ..observers.gsisio import GSISIO
 from ..observers.null_space_gsisio import NullSpaceGSISIO
 from ..systems.nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
@@ -222,8 +222,8 @@ def _known_state_inner_hull(
                 )
             cands.append(v[..., :-1, :] + np.min(room, axis=-1, keepdims=True) * dirn)
     d1 = np.stack([((res - vk) @ U1) / sig for vk in cands], axis=-2)  # (..., K, C, r)
-    w_vert = Box(*system.w).vertices()
-    v_vert = Box(vl, vh).vertices()
+    w_vert = Interval(*system.w).vertices()
+    v_vert = Interval(vl, vh).vertices()
     base = c[..., None, None, None, :] + (d1 @ (system.G @ V1).T)[..., :, None, None, :] + w_vert[:, None, :]
     tau = (y[..., 1:, None, None, None, :] - v_vert) @ U2  # (..., K, 1, 1, Vv, p - r)
     base = np.broadcast_to(base, (*base.shape[:-2], v_vert.shape[0], n))
