@@ -107,13 +107,13 @@ def round_outward(lower: ArrayLike, upper: ArrayLike, ulps: int = 1) -> tuple[Fl
     BoundsError
         If ``ulps`` is not a positive integer.
     """
+    if ulps == 1:  # the common case, kept lean: it runs on every interval operation
+        return np.nextafter(lower, -np.inf), np.nextafter(upper, np.inf)
     if not (isinstance(ulps, (int, np.integer)) and ulps >= 1):
         raise BoundsError(f"ulps: expected a positive integer, got {ulps!r}")
-    lo = np.asarray(lower, dtype=float)
-    hi = np.asarray(upper, dtype=float)
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     for _ in range(int(ulps)):
-        lo = np.nextafter(lo, -np.inf)
-        hi = np.nextafter(hi, np.inf)
+        lo, hi = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
     return lo, hi
 
 
@@ -438,8 +438,13 @@ class Interval:
         return Interval._wrap(other) - self
 
     def __mul__(self, other: Any) -> Interval:
-        o = Interval._wrap(other)
-        return Interval._raw(*round_outward(*_product_hull(self.lower, self.upper, o.lower, o.upper)))
+        if isinstance(other, Interval):
+            return Interval._raw(*round_outward(*_product_hull(self.lower, self.upper, other.lower, other.upper)))
+        c = np.asarray(other, dtype=float)
+        with np.errstate(invalid="ignore"):
+            a, b = c * self.lower, c * self.upper
+        a, b = np.where(np.isnan(a), 0.0, a), np.where(np.isnan(b), 0.0, b)  # 0 * inf = 0
+        return Interval._raw(*round_outward(np.minimum(a, b), np.maximum(a, b)))
 
     __rmul__ = __mul__
 
