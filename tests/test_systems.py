@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, BoundsError, DimensionError, IntervalObserverError, LTISystem
+from intervalobs import BoundsError, DimensionError, IntervalObserverError, LTISystem
 
 
 def test_shapes_are_checked_with_the_argument_name():
@@ -13,17 +13,13 @@ def test_shapes_are_checked_with_the_argument_name():
         LTISystem(np.eye(2), np.ones((1, 2)), B=np.ones((3, 1)))
 
 
-def test_bounds_are_checked():
-    with pytest.raises(BoundsError, match=r"x0: expected lower <= upper, got lower\[1\]=2 > upper\[1\]=1"):
-        Bounds(([0, 2], [1, 1]))
+def test_model_bounds_are_checked():
     with pytest.raises(BoundsError, match="dA: expected bounds that contain 0"):
         LTISystem(np.eye(2), np.ones((1, 2)), dA=(np.ones((2, 2)), 2 * np.ones((2, 2))))
     with pytest.raises(BoundsError, match="dt: expected a positive"):
         LTISystem(np.eye(2), np.ones((1, 2)), dt=-1.0)
     with pytest.raises(BoundsError, match="finite"):
         LTISystem(np.array([[np.nan]]), [[1.0]])
-    with pytest.raises(DimensionError, match=r"bounds\.w: expected length 2"):
-        Bounds(([0, 0], [1, 1]), w=([0], [1])).for_system(LTISystem(np.eye(2), np.ones((1, 2))))
 
 
 def test_errors_share_the_base_class_and_value_error():

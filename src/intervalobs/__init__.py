@@ -33,7 +33,7 @@ from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate
-from .systems import Bounds, LTISystem, SampledModel, SampledSystem, sampled_model, simulate_sampled
+from .systems import Bounds, LTISystem, ResolvedBounds, SampledModel, SampledSystem, sampled_model, simulate_sampled
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem, simulate_nonlinear
 from .tightness import format_tightness, tightness_reference, tightness_report
@@ -62,6 +62,7 @@ __all__ = [
     "Observer",
     "ObserverState",
     "RegionPlacement",
+    "ResolvedBounds",
     "RobustHullEstimator",
     "SampledModel",
     "SampledSystem",

@@ -16,7 +16,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from .errors import DataError
-from .systems.lti import Bounds, LTISystem
+from .systems.bounds import Bounds
+from .systems.lti import LTISystem
 from .validation import as_signal, as_time
 
 __all__ = ["NOISE_KINDS", "Simulation", "noise_signal", "simulate"]
@@ -165,8 +166,7 @@ def simulate(
     Simulation
     """
     times = as_time("t", t)
-    full = bounds.for_system(system)
-    assert full.w is not None and full.v is not None
+    full = bounds.resolve(system)
     steps = times.size
     rng = np.random.default_rng(seed)
     count = 1 if runs is None else int(runs)

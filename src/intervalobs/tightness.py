@@ -26,7 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 from .estimate import Estimate
 from .observers.hull import HullEstimator, HullLowerBound, _delta_samples
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
-from .systems.lti import Bounds, LTISystem
+from .systems.bounds import Bounds
+from .systems.lti import LTISystem
 
 __all__ = ["add_tightness", "format_tightness", "tightness_reference", "tightness_report"]
 

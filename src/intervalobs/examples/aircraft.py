@@ -36,7 +36,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 
 from ..errors import DimensionError
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 
 __all__ = [
     "B_CONTROL",

@@ -60,7 +60,8 @@ from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..simulate import simulate
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds, ResolvedBounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_box
 from .base import Observer, ObserverState
@@ -119,7 +120,7 @@ class FiniteMemoryObserver(Observer):
         if system.dA is not None:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
         self.system = system
-        self.bounds = bounds.for_system(system)
+        self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         model = sampled_model(system, self.bounds, h)
         self.h = model.h if system.continuous else float(system.dt or 1.0)
@@ -140,7 +141,6 @@ class FiniteMemoryObserver(Observer):
         if system.continuous:  # the sound sampled model's noise is a box
             noise = (np.eye(self.n), model.noise_center, model.noise_radius)
         else:  # x+ = Ax + Bu + Ew exactly: keep the channels (tighter than the box of Ew when E mixes)
-            assert self.bounds.w is not None
             w_lo, w_hi = self.bounds.w
             noise = (system.E, 0.5 * (w_lo + w_hi), 0.5 * (w_hi - w_lo))
         self._setup(model.Phi, model.Gamma, *noise)
@@ -176,10 +176,11 @@ class FiniteMemoryObserver(Observer):
         -------
         FiniteMemoryObserver
         """
-        gains, elapsed = _worst_case_gains(system, bounds, window, h)
+        full = bounds.resolve(system)
+        gains, elapsed = _worst_case_gains(system, full, window, h)
         if fallback is None:
-            fallback = IntervalObserver.design(system, bounds.for_system(system), h=h)
-        return cls(system, bounds, gains, fallback, h=h, lp_seconds=elapsed)
+            fallback = IntervalObserver.design(system, full, h=h)
+        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed)
 
     @classmethod
     def learn(
@@ -239,7 +240,7 @@ class FiniteMemoryObserver(Observer):
         for name, value, least in checks:
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
                 raise DataError(f"{name}: expected an integer >= {least}, got {value!r}")
-        full = bounds.for_system(system)
+        full = bounds.resolve(system)
         worst, elapsed = _worst_case_gains(system, full, window, h)
         if filtered:  # a predicted filter is a filtered one with no weight on y_k
             worst = np.concatenate([worst, np.zeros_like(worst[:, :1])], axis=1)
@@ -281,9 +282,8 @@ class FiniteMemoryObserver(Observer):
         n, big_n, k = self.n, self.window, self.K
         weights = k.shape[2]  # N, or N + 1 when y_k is used
         c_mat, f_mat = self.system.C, self.system.F
-        assert self.bounds.v is not None
-        v_c = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
-        v_r = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
+        v_c = self.bounds.centre("v")
+        v_r = self.bounds.radius("v")
         powers, abs_powers = [np.eye(n)], [np.eye(n)]
         for _ in range(big_n):
             powers.append(phi @ powers[-1])
@@ -501,19 +501,19 @@ class FiniteMemoryObserver(Observer):
         }
 
 
-def _worst_case_gains(system: LTISystem, bounds: Bounds, window: int, h: float | None) -> tuple[FloatArray, float]:
+def _worst_case_gains(
+    system: LTISystem, full: ResolvedBounds, window: int, h: float | None
+) -> tuple[FloatArray, float]:
     """Weights ``(n, N, p)`` minimising each component's evaluated worst-case error with ``R = 0``, and the LP time."""
     if system.dA is not None:
         raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
     if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
         raise DataError(f"window: expected a positive integer, got {window!r}")
-    full = bounds.for_system(system)
     model = sampled_model(system, full, h)
-    assert full.v is not None
     n, p, nv, big_n = system.n, system.p, system.F.shape[1], int(window)
     phi, c_mat, f_mat = model.Phi, system.C, system.F
     r = model.noise_radius
-    vr = 0.5 * (full.v[1] - full.v[0])
+    vr = full.radius("v")
     powers = [np.eye(n)]
     for _ in range(big_n):
         powers.append(phi @ powers[-1])
@@ -554,11 +554,12 @@ def _worst_case_gains(system: LTISystem, bounds: Bounds, window: int, h: float |
     return gains, elapsed
 
 
-def _training_noise(system: LTISystem, bounds: Bounds, steps: int, record: int, rng: np.random.Generator) -> Any:
+def _training_noise(
+    system: LTISystem, bounds: ResolvedBounds, steps: int, record: int, rng: np.random.Generator
+) -> Any:
     """Extreme training noise: i.i.d. vertices (even records) or the simulator's switching bang-bang."""
     if record % 2:
         return "extreme"
-    assert bounds.w is not None and bounds.v is not None
     fine = 10 if system.continuous else 1  # simulate's default substeps
     w_bits = rng.integers(0, 2, size=(steps * fine, system.nw))
     v_bits = rng.integers(0, 2, size=(steps, system.nv))

@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
-from ..systems.lti import Bounds
+from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
 from ..validation import as_box, as_matrix, as_time
 from .base import Observer, ObserverState
@@ -266,8 +266,7 @@ class HighGainIntervalObserver(Observer):
             raise DimensionError(f"system: expected a SampledSystem, got {type(system).__name__}")
         self.system = system
         self.n, self.p, self.m = system.n, system.p, system.m
-        full = bounds.for_system(system)  # type: ignore[arg-type]
-        assert full.w is not None and full.v is not None
+        full = bounds.resolve(system)
         self.bounds = full
         if not (np.isfinite(h) and h > 0):
             raise BoundsError(f"h: expected a positive step, got {h!r}")
@@ -360,16 +359,15 @@ class HighGainIntervalObserver(Observer):
         from ..design.regions import place_in_disks
 
         placement = place_in_disks(system.A, system.C, disks, objective=objective)
-        full = bounds.for_system(system)  # type: ignore[arg-type]
+        full = bounds.resolve(system)
         design = None
         if alpha_d is not None and alpha_n is not None:
-            assert full.w is not None and full.v is not None
-            d_radius = 0.5 * (full.w[1] - full.w[0])
+            d_radius = full.radius("w")
             v_radius = np.maximum(np.abs(full.v[0]), np.abs(full.v[1]))
             design = theta_design(placement.modal, placement.L, system.C, d_radius, v_radius, alpha_d, alpha_n)
         observer = cls(
             system,
-            bounds,
+            full,
             placement.L,
             h,
             theta=0.0 if design is None else design.theta_sound,
@@ -431,9 +429,8 @@ class HighGainIntervalObserver(Observer):
         """
         from ..design.width import design_for_width
 
-        full = bounds.for_system(system)  # type: ignore[arg-type]
-        assert full.w is not None and full.v is not None
-        d_radius = 0.5 * (full.w[1] - full.w[0])
+        full = bounds.resolve(system)
+        d_radius = full.radius("w")
         v_radius = np.maximum(np.abs(full.v[0]), np.abs(full.v[1]))
         result = design_for_width(
             system.A,
@@ -448,7 +445,7 @@ class HighGainIntervalObserver(Observer):
         )
         observer = cls(
             system,
-            bounds,
+            full,
             result.L,
             h,
             input_rate=input_rate,

@@ -57,7 +57,8 @@ from scipy.linalg import expm
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds, ResolvedBounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
@@ -144,11 +145,9 @@ class _LinearModel:
         return inflate(lo + drive, hi + drive, 8 * ROUNDING_MARGIN)
 
 
-def _outer_model(system: LTISystem, bounds: Bounds, h: float | None) -> _LinearModel:
+def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _LinearModel:
     """The exact (discrete) or sound sampled (continuous) model of a system without ``ΔA``."""
-    full = bounds.for_system(system)
     model = sampled_model(system, full, h)
-    assert full.w is not None and full.v is not None
     if system.continuous or _single_support(system.E):
         G, w_lo, w_hi = None, model.noise_center - model.noise_radius, model.noise_center + model.noise_radius
     else:
@@ -158,7 +157,7 @@ def _outer_model(system: LTISystem, bounds: Bounds, h: float | None) -> _LinearM
 
 
 def _inner_model(
-    system: LTISystem, bounds: Bounds, h: float | None, delta_a: FloatArray, substeps: int = 1
+    system: LTISystem, full: ResolvedBounds, h: float | None, delta_a: FloatArray, substeps: int = 1
 ) -> _LinearModel:
     """A model whose consistent set lies *inside* the true one: ``A + ΔA`` fixed, noise held per sub-step.
 
@@ -166,8 +165,6 @@ def _inner_model(
     interval is admissible, so the exact sampled matrices with one noise vector per sub-step give a
     subset of the true consistent set (the simulator's noise is of that form, so its truth lies in it).
     """
-    full = bounds.for_system(system)
-    assert full.w is not None
     a = system.A + delta_a
     if system.continuous:
         if h is None or not h > 0:
@@ -197,8 +194,7 @@ def _inner_model(
     return _LinearModel(phi, gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi)
 
 
-def _measurement_noise(system: LTISystem, full: Bounds) -> tuple[FloatArray | None, FloatArray, FloatArray]:
-    assert full.v is not None
+def _measurement_noise(system: LTISystem, full: ResolvedBounds) -> tuple[FloatArray | None, FloatArray, FloatArray]:
     if _single_support(system.F):
         lo, hi = matvec_bounds(system.F, full.v[0], full.v[1])
         return None, lo, hi
@@ -779,7 +775,7 @@ class HullEstimator(Observer):
             )
         if horizon is not None and (int(horizon) != horizon or horizon < 1):
             raise DataError(f"horizon: expected a positive integer or None, got {horizon!r}")
-        self.system, self.bounds = system, bounds.for_system(system)
+        self.system, self.bounds = system, bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.horizon = None if horizon is None else int(horizon)
         self.filtered = bool(filtered)
@@ -1184,7 +1180,7 @@ def hull_lower_bound(
     if u is None and system.m > 0:
         raise DataError(f"u: expected the known input, shape ({times.size}, {system.m}), got None")
     us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
-    full = bounds.for_system(system)
+    full = bounds.resolve(system)
     if np.ndim(samples) == 0:
         deltas = _delta_samples(system, int(samples), seed)  # type: ignore[arg-type]
     else:

@@ -30,7 +30,8 @@ from ..design.cooperative import coordinate_candidates
 from ..errors import DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from .base import Observer, ObserverState
 from .interval_observer import IntervalObserver
@@ -141,11 +142,10 @@ class IntersectionObserver(Observer):
         self.members = list(members)
         self.h = periods.pop()
         self.system = system
-        self.bounds = bounds.for_system(system)
+        self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.contract = bool(contract)
         self.sweeps = int(sweeps)
-        assert self.bounds.v is not None
         self._fv_lo, self._fv_hi = matvec_bounds(system.F, self.bounds.v[0], self.bounds.v[1])
         self._restart = [isinstance(o, IntervalObserver) and o.method == "framer" for o in self.members]
 
@@ -188,14 +188,13 @@ class IntersectionObserver(Observer):
         DesignError
             When no candidate coordinates give a stable framer.
         """
-        full = bounds.for_system(system)
-        assert full.v is not None
+        full = bounds.resolve(system)
         model = sampled_model(system, full, h)
-        v_radius = 0.5 * (full.v[1] - full.v[0])
+        v_radius = full.radius("v")
         found: list[tuple[float, IntervalObserver]] = []
         for name, T in coordinate_candidates(model, system.C, system.F, v_radius).items():
             try:
-                obs = IntervalObserver.design(system, bounds, h, method="framer", candidates={name: T})
+                obs = IntervalObserver.design(system, full, h, method="framer", candidates={name: T})
             except DesignError:
                 continue
             assert obs.design_result is not None
@@ -205,7 +204,7 @@ class IntersectionObserver(Observer):
         found.sort(key=lambda item: item[0])
         members: list[Observer] = [obs for _, obs in found[: int(max_members)]]
         members.extend(extra)
-        return cls(members, system, bounds, contract, sweeps)
+        return cls(members, system, full, contract, sweeps)
 
     # -- protocol ------------------------------------------------------------------------------
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:

@@ -18,7 +18,8 @@ from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
 from ..recursion import LinearRecursion
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
@@ -109,7 +110,7 @@ class IntervalObserver(Observer):
             raise DimensionError("T: a coordinate change is only used by method='framer', got T with method='tube'")
         self.system = system
         self.method = method
-        self.bounds = bounds.for_system(system)
+        self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.model: SampledModel = sampled_model(system, self.bounds, h)
         self.h = self.model.h if system.continuous else float(system.dt or 1.0)
@@ -121,9 +122,8 @@ class IntervalObserver(Observer):
             )
         self.T_inv = np.linalg.inv(self.T)
         width_matrix, self.M = framer_matrices(self.model, system.C, self.L, self.T)
-        assert self.bounds.v is not None
-        v_center = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
-        v_radius = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
+        v_center = self.bounds.centre("v")
+        v_radius = self.bounds.radius("v")
         F = system.F
         self._abs_T = np.abs(self.T)
         self._abs_T_inv = np.abs(self.T_inv)
@@ -203,10 +203,9 @@ class IntervalObserver(Observer):
         method = options.get("method", "tube")
         if method not in METHODS:
             raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-        full = bounds.for_system(system)
+        full = bounds.resolve(system)
         model = sampled_model(system, full, h)
-        assert full.v is not None
-        v_radius = 0.5 * (full.v[1] - full.v[0])
+        v_radius = full.radius("v")
         if not is_detectable(model, system.C):
             raise DesignError("system: the pair (A, C) is not detectable, so no interval observer gain exists")
         framer: FramerDesign | None = None
@@ -217,7 +216,7 @@ class IntervalObserver(Observer):
                 raise
         if method == "framer":
             assert framer is not None
-            observer = cls(system, bounds, framer.L, framer.T, h, method="framer")
+            observer = cls(system, full, framer.L, framer.T, h, method="framer")
             observer.design_result = framer
             return observer
         extra = {} if framer is None else {f"framer-{framer.coordinates}": framer.L}
@@ -227,7 +226,7 @@ class IntervalObserver(Observer):
                 "IntervalObserver.design: no candidate gain gives a bounded error tube; "
                 "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
             )
-        observer = cls(system, bounds, tube.L, None, h, method="tube")
+        observer = cls(system, full, tube.L, None, h, method="tube")
         observer.design_result = tube
         return observer
 

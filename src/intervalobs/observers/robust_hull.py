@@ -65,7 +65,8 @@ from scipy.linalg import expm, expm_frechet
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds, ResolvedBounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
@@ -106,11 +107,9 @@ class _DeltaModel:
     v_hi: FloatArray
 
 
-def _delta_model(system: LTISystem, bounds: Bounds, h: float | None) -> _DeltaModel:
+def _delta_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _DeltaModel:
     """The linearisation of the (sampled) model in ``δ = ΔA - ΔA_c`` (module docstring)."""
     assert system.dA is not None
-    full = bounds.for_system(system)
-    assert full.v is not None
     sampled = sampled_model(system, full, h)
     n, m = system.n, system.m
     center = 0.5 * (system.dA[0] + system.dA[1])
@@ -255,7 +254,7 @@ class RobustHullEstimator(Observer):
             raise DataError(f"horizon: expected a positive integer, got {horizon!r}")
         if system.continuous and (h is None or not (np.isfinite(h) and h > 0)):
             raise DataError(f"h: expected a positive sampling period for a continuous-time system, got {h!r}")
-        self.system, self.bounds = system, bounds.for_system(system)
+        self.system, self.bounds = system, bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.horizon = int(horizon)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
@@ -643,7 +642,7 @@ def robust_hull_lower_bound(
     if ys.ndim != 2:
         raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
     us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
-    full = bounds.for_system(system)
+    full = bounds.resolve(system)
     n = system.n
     if np.any(np.count_nonzero(system.F, axis=0) > 1):
         raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")

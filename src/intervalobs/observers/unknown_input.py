@@ -109,7 +109,8 @@ from ..errors import BoundsError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..recursion import LinearRecursion
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 from ..validation import as_box, as_matrix, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState
 
@@ -247,7 +248,7 @@ class UnknownInputIntervalObserver(Observer):
         if system.dA is not None:
             raise DimensionError("system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)")
         self.system = system
-        self.bounds = bounds.for_system(system)
+        self.bounds = bounds.resolve(system)
         n, p = system.n, system.p
         self.n, self.p, self.m = n, p, system.m
         self.D = as_matrix("D", D, (n, None))
@@ -355,19 +356,18 @@ class UnknownInputIntervalObserver(Observer):
         DesignError
             No suitable gain/coordinates.
         """
-        bounds = bounds.for_system(system)
+        full = bounds.resolve(system)
         d = as_matrix("D", D, (system.n, None))
         decoupling = uio_decoupling(system.A, system.C, d, W)
-        assert bounds.w is not None and bounds.v is not None
-        omega_radius = np.abs(system.E) @ (0.5 * (bounds.w[1] - bounds.w[0]))
-        delta_radius = np.abs(system.F) @ (0.5 * (bounds.v[1] - bounds.v[0]))
+        omega_radius = np.abs(system.E) @ full.radius("w")
+        delta_radius = np.abs(system.F) @ full.radius("v")
         if K is not None:
             coords = check_cooperative(system.A, system.C, decoupling, K, T)
         else:
             coords = design_uio_coordinates(system.A, system.C, decoupling, omega_radius, delta_radius, poles)
         return cls(
             system,
-            bounds,
+            full,
             d,
             h,
             decoupling,
@@ -384,7 +384,6 @@ class UnknownInputIntervalObserver(Observer):
     def _precompute(self) -> _Precomputed:
         sys, dec, co = self.system, self.decoupling, self.coords
         h, n = self.h, self.n
-        assert self.bounds.w is not None and self.bounds.v is not None
         mm = co.M
         # top block row of expm([[Mh, I, 0, 0], [0, 0, I, 0], [0, 0, 0, I], 0]) = (e^{Mh}, φ1, φ2, φ3)(Mh)
         big = np.zeros((4 * n, 4 * n))
@@ -530,8 +529,7 @@ class UnknownInputIntervalObserver(Observer):
         m0 = dec.M0
         m1 = -m0 @ self.system.C @ self.system.A @ co.S
         m3 = -m0 @ self.system.C @ self.system.E
-        assert self.bounds.w is not None
-        w_r = 0.5 * (self.bounds.w[1] - self.bounds.w[0])
+        w_r = self.bounds.radius("w")
         rho_xi = np.abs(m1) @ rho_z + 2 * (
             np.abs(m3) @ w_r + 2 * np.abs(m0) @ self.rate_radius + np.abs(m0) @ (self.beta - self.rate_radius)
         )

@@ -39,7 +39,8 @@ from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError, DesignError
 from ..estimate import Estimate
 from ..interval import inflate
-from ..systems.lti import Bounds, LTISystem
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
@@ -117,7 +118,7 @@ class ZonotopicObserver(Observer):
         if system.continuous:
             raise AssumptionError("system: the zonotopic observer of seed 002 is discrete time, got dt=None")
         self.system = system
-        self.bounds = bounds.for_system(system)
+        self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.h = float(system.dt or 1.0)
         self.L = as_matrix("L", L, (self.n, self.p))
@@ -135,11 +136,10 @@ class ZonotopicObserver(Observer):
         width = np.abs(self.M) + self.D
         self.width_spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width))))
         self.certified = self.width_spectral_radius < 1
-        assert self.bounds.w is not None and self.bounds.v is not None
-        w_c = 0.5 * (self.bounds.w[0] + self.bounds.w[1])
-        w_r = 0.5 * (self.bounds.w[1] - self.bounds.w[0])
-        v_c = 0.5 * (self.bounds.v[0] + self.bounds.v[1])
-        v_r = 0.5 * (self.bounds.v[1] - self.bounds.v[0])
+        w_c = self.bounds.centre("w")
+        w_r = self.bounds.radius("w")
+        v_c = self.bounds.centre("v")
+        v_r = self.bounds.radius("v")
         LF = self.L @ system.F
         self._B = model.Gamma
         self._offset = system.E @ w_c - LF @ v_c

@@ -35,8 +35,8 @@ def naive_framer(
 
     Returns the raw ``(lower, upper)`` arrays: with a non-monotone ``M`` they may even cross.
     """
-    full = bounds.for_system(system)
-    assert full.w is not None and full.v is not None and system.dA is not None
+    full = bounds.resolve(system)
+    assert system.dA is not None
     gain = np.asarray(L, dtype=float).reshape(system.n, system.p)
     m = system.A - gain @ system.C
     noise_lo, noise_hi = matvec_bounds(

@@ -1,7 +1,8 @@
 """Model classes, one module per kind of model; every shape and bound is validated on construction."""
 
+from .bounds import Bounds, ResolvedBounds
 from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
-from .lti import Bounds, LTISystem
+from .lti import LTISystem
 from .nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
 from .sampled import SampledSimulation, SampledSystem, simulate_sampled
 from .sampling import SampledModel, sampled_model
@@ -12,6 +13,7 @@ __all__ = [
     "LTISystem",
     "NonlinearSimulation",
     "NonlinearSystem",
+    "ResolvedBounds",
     "SampledLPVModel",
     "SampledModel",
     "SampledSimulation",

@@ -1,4 +1,4 @@
-r"""Linear time-invariant models with interval uncertainty, and the bounds of their unknowns.
+r"""Linear time-invariant models with interval uncertainty.
 
 .. math::
 
@@ -7,21 +7,21 @@ r"""Linear time-invariant models with interval uncertainty, and the bounds of th
     x_{k+1} = (A + \Delta A)x_k + Bu_k + Ew_k,\qquad y_k = Cx_k + Fv_k \qquad (\text{discrete time})
 
 with :math:`\underline{\Delta A} \le \Delta A \le \overline{\Delta A}` constant and unknown,
-:math:`w`, :math:`v` unknown signals in boxes and :math:`x(0)` in a box.
+:math:`w`, :math:`v` unknown signals in boxes and :math:`x(0)` in a box (the boxes are
+:class:`~intervalobs.systems.bounds.Bounds`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import BoundsError, DimensionError
-from ..validation import as_box, as_matrix
+from ..validation import as_matrix
 
-__all__ = ["Bounds", "LTISystem"]
+__all__ = ["LTISystem"]
 
 FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
@@ -173,56 +173,3 @@ class LTISystem:
         kind = "continuous" if self.continuous else f"discrete, dt={self.dt:g}"
         extra = ", interval dA" if self.dA is not None else ""
         return f"LTISystem(n={self.n}, m={self.m}, p={self.p}, {kind}{extra})"
-
-
-@dataclass(frozen=True)
-class Bounds:
-    """Boxes of the unknowns: the initial state and the noises.
-
-    Parameters
-    ----------
-    x0 : tuple of array_like
-        ``(lower, upper)`` of the initial state.
-    w : tuple of array_like, optional
-        ``(lower, upper)`` of the process noise (default: zero noise).
-    v : tuple of array_like, optional
-        ``(lower, upper)`` of the measurement noise (default: zero noise).
-    """
-
-    x0: BoxPair
-    w: BoxPair | None = None
-    v: BoxPair | None = None
-
-    def __init__(
-        self,
-        x0: tuple[ArrayLike, ArrayLike],
-        w: tuple[ArrayLike, ArrayLike] | None = None,
-        v: tuple[ArrayLike, ArrayLike] | None = None,
-    ) -> None:
-        object.__setattr__(self, "x0", as_box("x0", x0))
-        object.__setattr__(self, "w", None if w is None else as_box("w", w))
-        object.__setattr__(self, "v", None if v is None else as_box("v", v))
-
-    def for_system(self, system: LTISystem) -> Bounds:
-        """Check the sizes against ``system`` and fill absent noise boxes with zeros.
-
-        Parameters
-        ----------
-        system : LTISystem
-            The model these bounds belong to.
-
-        Returns
-        -------
-        Bounds
-            With ``w`` and ``v`` always present.
-        """
-        for name, box, size in (
-            ("x0", self.x0, system.n),
-            ("w", self.w, system.nw),
-            ("v", self.v, system.nv),
-        ):
-            if box is not None and box[0].size != size:
-                raise DimensionError(f"bounds.{name}: expected length {size} for this system, got {box[0].size}")
-        zeros_w = (np.zeros(system.nw), np.zeros(system.nw))
-        zeros_v = (np.zeros(system.nv), np.zeros(system.nv))
-        return Bounds(self.x0, self.w if self.w is not None else zeros_w, self.v if self.v is not None else zeros_v)

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..validation import as_matrix, as_signal, as_time
-from .lti import Bounds
+from .bounds import Bounds
 
 __all__ = ["PhiBounds", "PhiFunction", "SampledSimulation", "SampledSystem", "simulate_sampled"]
 
@@ -279,8 +279,7 @@ def simulate_sampled(
         raise DataError(f"t: the sample period {system.sample_period:g} is not a multiple of the grid step {h:g}")
     if not (isinstance(substeps, int) and substeps >= 1):
         raise DimensionError(f"substeps: expected a positive integer, got {substeps!r}")
-    full = bounds.for_system(system)  # type: ignore[arg-type]
-    assert full.w is not None and full.v is not None
+    full = bounds.resolve(system)
     rng = np.random.default_rng(seed)
     count = 1 if runs is None else int(runs)
     n, m = system.n, system.m

@@ -145,7 +145,8 @@ from scipy.linalg import expm, schur
 
 from ..errors import AssumptionError, BoundsError
 from ..interval import ROUNDING_MARGIN
-from .lti import Bounds, LTISystem
+from .bounds import Bounds
+from .lti import LTISystem
 
 __all__ = ["SampledModel", "sampled_model"]
 
@@ -401,10 +402,9 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     >>> bool(model.noise_radius[0] < 1.01e-3)
     True
     """
-    bounds = bounds.for_system(system)
-    assert bounds.w is not None
-    w_center = 0.5 * (bounds.w[0] + bounds.w[1])
-    w_radius = 0.5 * (bounds.w[1] - bounds.w[0])
+    full = bounds.resolve(system)
+    w_center = full.centre("w")
+    w_radius = full.radius("w")
     n, m, nw = system.n, system.m, system.nw
     if system.dA is None:
         a_mid, a_rad = system.A, np.zeros((n, n))
