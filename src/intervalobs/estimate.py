@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -9,7 +10,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _tables
 from .errors import BoundsError, DataError, DimensionError
+from .validation import as_names
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -113,6 +116,10 @@ class Estimate:
         (e.g. a delayed estimate).
     meta : dict
         Method name, gains, transient time (key ``"transient_s"``) and other design facts.
+    state_names : sequence of str, optional
+        Names of the states (default ``x1 …``; an observer's ``run`` gives its model's names).
+    input_names : sequence of str, optional
+        Names of the unknown inputs (default ``d1 …``).
     """
 
     t: FloatArray
@@ -121,6 +128,8 @@ class Estimate:
     input_lower: FloatArray | None = None
     input_upper: FloatArray | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    state_names: Sequence[str] = ()
+    input_names: Sequence[str] = ()
 
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=float)
@@ -145,6 +154,9 @@ class Estimate:
                     f"Estimate: input bounds must have shape {self.lower.shape[:-1]} + (q,), "
                     f"got {self.input_lower.shape} and {self.input_upper.shape}"
                 )
+        self.state_names = as_names("state_names", self.state_names or None, self.lower.shape[-1], "x")
+        q = 0 if self.input_lower is None else self.input_lower.shape[-1]
+        self.input_names = as_names("input_names", self.input_names or None, q, "d")
 
     def __repr__(self) -> str:
         """Method, runs, samples, time span, dimensions and the mean width at the last sample."""
@@ -231,7 +243,9 @@ class Estimate:
         arrays: dict[str, Any] = {"t": self.t, "lower": self.lower, "upper": self.upper}
         if self.input_lower is not None:
             arrays.update(input_lower=self.input_lower, input_upper=self.input_upper)
-        arrays["meta"] = np.array(json.dumps(self.meta, default=_jsonable))
+        arrays["meta"] = np.array(json.dumps(self.meta, default=_tables.jsonable))
+        arrays["state_names"] = np.array(self.state_names, dtype=str)
+        arrays["input_names"] = np.array(self.input_names, dtype=str)
         np.savez_compressed(path, **arrays)
 
     @classmethod
@@ -250,8 +264,109 @@ class Estimate:
         import json
 
         with np.load(path) as data:
-            inputs = {k: data[k] for k in ("input_lower", "input_upper") if k in data.files}
-            return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **inputs)
+            extra: dict[str, Any] = {k: data[k] for k in ("input_lower", "input_upper") if k in data.files}
+            extra.update({k: tuple(data[k].tolist()) for k in ("state_names", "input_names") if k in data.files})
+            return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **extra)
+
+    def to_pandas(self) -> Any:
+        """The bounds as a pandas ``DataFrame`` (needs the ``data`` extra).
+
+        Indexed by time ``t`` (by ``run`` and ``t`` for a Monte Carlo estimate), with the columns
+        ``NAME_lower``, ``NAME_upper`` and ``NAME_width`` of every state, then of every unknown input;
+        ``attrs`` holds ``meta`` (as JSON-compatible values) and the names (``state_names``,
+        ``input_names``). :meth:`from_pandas` reads it back.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        attrs = {
+            **_tables.plain(self.meta),
+            "state_names": list(self.state_names),
+            "input_names": list(self.input_names),
+        }
+        return _tables.to_frame(self.t, self._columns(), attrs, "Estimate.to_pandas")
+
+    def to_xarray(self) -> Any:
+        """The bounds as an xarray ``Dataset`` (needs the ``data`` extra).
+
+        Variables ``lower``, ``upper``, ``width`` over the dimensions ``t`` and ``state`` (``run``
+        first for a Monte Carlo estimate), and ``input_lower``, ``input_upper`` over ``t`` and
+        ``input`` when the estimate has unknown-input bounds; the coordinates are the times and the
+        names, ``attrs`` holds ``meta`` as JSON-compatible values.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        variables = {
+            name: (values, "state", tuple(self.state_names))
+            for name, values in (("lower", self.lower), ("upper", self.upper), ("width", self.width()))
+        }
+        if self.input_lower is not None and self.input_upper is not None:
+            names = tuple(self.input_names)
+            variables.update(
+                input_lower=(self.input_lower, "input", names), input_upper=(self.input_upper, "input", names)
+            )
+        return _tables.to_dataset(self.t, variables, _tables.plain(self.meta), "Estimate.to_xarray")
+
+    @classmethod
+    def from_pandas(cls, frame: Any, input_names: Sequence[str] | None = None) -> Estimate:
+        """Read an estimate from a ``DataFrame`` of ``NAME_lower``/``NAME_upper`` columns (:meth:`to_pandas`).
+
+        The index is the time (or ``run`` and time). The names come from ``frame.attrs`` when it has
+        them (a frame made by :meth:`to_pandas`); otherwise every ``NAME_lower`` column with a matching
+        ``NAME_upper`` is a state, except the names in ``input_names``. ``NAME_width`` columns and any
+        other column are ignored; ``meta`` is the rest of ``attrs``.
+
+        Parameters
+        ----------
+        frame : pandas.DataFrame
+            The table, e.g. ``pandas.read_csv(path, index_col="t")`` of a file written with ``to_csv``.
+        input_names : sequence of str, optional
+            The unknown inputs among the bound columns, when ``attrs`` does not name them.
+
+        Returns
+        -------
+        Estimate
+        """
+        t, columns, attrs = _tables.from_frame(frame, "Estimate.from_pandas")
+        states = attrs.pop("state_names", None)
+        inputs = attrs.pop("input_names", None) if input_names is None else list(input_names)
+        bounded = [c[: -len("_lower")] for c in columns if c.endswith("_lower") and f"{c[:-6]}_upper" in columns]
+        inputs = list(inputs or [])
+        states = [c for c in bounded if c not in inputs] if states is None else list(states)
+        missing = [
+            f"{n}_{end}" for n in [*states, *inputs] for end in ("lower", "upper") if f"{n}_{end}" not in columns
+        ]
+        if missing or not states:
+            raise DataError(
+                f"frame: expected NAME_lower and NAME_upper columns, got {list(columns)}: missing {missing}"
+            )
+
+        def stack(names: list[str], end: str) -> FloatArray:
+            return np.stack([columns[f"{n}_{end}"] for n in names], axis=-1)
+
+        extra: dict[str, Any] = {}
+        if inputs:
+            extra.update(input_lower=stack(inputs, "lower"), input_upper=stack(inputs, "upper"), input_names=inputs)
+        return cls(t, stack(states, "lower"), stack(states, "upper"), meta=attrs, state_names=states, **extra)
+
+    def _columns(self) -> list[tuple[str, FloatArray]]:
+        """Named (T,) or (M, T) columns of the bounds, in the order of :meth:`to_pandas`."""
+        columns: list[tuple[str, FloatArray]] = []
+        blocks = [(self.state_names, self.lower, self.upper)]
+        if self.input_lower is not None and self.input_upper is not None:
+            blocks.append((self.input_names, self.input_lower, self.input_upper))
+        for names, lower, upper in blocks:
+            for i, name in enumerate(names):
+                width = upper[..., i] - lower[..., i]
+                columns += [
+                    (f"{name}_lower", lower[..., i]),
+                    (f"{name}_upper", upper[..., i]),
+                    (f"{name}_width", width),
+                ]
+        return columns
 
     def plot(
         self,
@@ -271,7 +386,7 @@ class Estimate:
         truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
             True state (of a :class:`~intervalobs.simulate.Simulation`, its ``x``), drawn as a line.
         labels : sequence of str, optional
-            Panel labels.
+            Panel labels (default: the state and input names).
         inputs : bool
             Also plot the unknown-input bounds.
         input_truth : array_like, shape (T, q) or (M, T, q), optional
@@ -299,11 +414,3 @@ class Estimate:
             ax=ax,
             time_unit=time_unit,
         )
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return str(value)

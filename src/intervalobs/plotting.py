@@ -46,7 +46,7 @@ def plot_estimate(
     truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
         True state; of a :class:`~intervalobs.simulate.Simulation`, its ``x`` is used.
     labels : sequence of str, optional
-        Panel labels, states first, then unknown inputs (default ``x_1``, …, ``d_1``, …).
+        Panel labels, states first, then unknown inputs (default: the estimate's state and input names).
     inputs : bool
         Also plot the unknown-input bounds.
     input_truth : array_like, shape (T, q) or (M, T, q), optional
@@ -76,18 +76,16 @@ def plot_estimate(
 
     times = estimate.t
     state_truth = truth.x if isinstance(truth, Simulation) else truth
-    blocks = [("truth", estimate.lower, estimate.upper, state_truth, "x")]
+    blocks = [("truth", estimate.lower, estimate.upper, state_truth, estimate.state_names)]
     if inputs and estimate.input_lower is not None and estimate.input_upper is not None:
-        blocks.append(("input_truth", estimate.input_lower, estimate.input_upper, input_truth, "d"))
+        blocks.append(("input_truth", estimate.input_lower, estimate.input_upper, input_truth, estimate.input_names))
     panels = [_panel_data(*block, run, times.size) for block in blocks]
     count = sum(lower.shape[-1] for _, lower, _, _ in panels)
     if labels is not None and len(labels) != count:
         raise DimensionError(f"labels: expected {count} labels (one per panel), got {len(labels)}")
     axes = _panel_axes(ax, count)
     names = (
-        list(labels)
-        if labels is not None
-        else [f"${n}_{{{i + 1}}}$" for n, lo, _, _ in panels for i in range(lo.shape[-1])]
+        list(labels) if labels is not None else [name for names, lo, _, _ in panels for name in names[: lo.shape[-1]]]
     )
     batch = run is None and estimate.lower.ndim == 3
     band = f"envelope of {estimate.lower.shape[0]} runs" if batch else "bounds"
@@ -121,8 +119,14 @@ def plot_estimate(
 
 
 def _panel_data(
-    name: str, lower: FloatArray, upper: FloatArray, truth: ArrayLike | None, symbol: str, run: int | None, steps: int
-) -> tuple[str, FloatArray, FloatArray, FloatArray | None]:
+    name: str,
+    lower: FloatArray,
+    upper: FloatArray,
+    truth: ArrayLike | None,
+    names: Sequence[str],
+    run: int | None,
+    steps: int,
+) -> tuple[Sequence[str], FloatArray, FloatArray, FloatArray | None]:
     """Bounds (T, k) and truth (T, k) or (M, T, k) of one block, for ``run`` or the envelope over runs."""
     true = None if truth is None else np.asarray(truth, dtype=float)
     k = lower.shape[-1]
@@ -146,7 +150,7 @@ def _panel_data(
         raise DimensionError(
             f"{name}: expected shape ({steps}, {k}) for a single-run estimate (or choose run=), got {true.shape}"
         )
-    return symbol, lower, upper, true
+    return names, lower, upper, true
 
 
 def _panel_axes(ax: Axes | Sequence[Axes] | None, count: int) -> list[Axes]:

@@ -9,16 +9,19 @@ Measurements are taken at the sample times with their own noise ``v``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
+from . import _tables
 from .errors import DataError
 from .systems.bounds import Bounds
 from .systems.lti import LTISystem
-from .validation import as_signal, as_time
+from .validation import as_names, as_signal, as_time
 
 __all__ = ["NOISE_KINDS", "Simulation", "noise_signal", "simulate"]
 
@@ -50,6 +53,9 @@ class Simulation:
         Measurement noise.
     dA : numpy.ndarray, shape (..., n, n)
         The constant uncertainty drawn for each run.
+    state_names, output_names, input_names : sequence of str, optional
+        Names of the states, outputs and known inputs (default ``x1 …``, ``y1 …``, ``u1 …``;
+        :func:`simulate` gives the model's names).
     """
 
     t: FloatArray
@@ -59,6 +65,101 @@ class Simulation:
     w: FloatArray
     v: FloatArray
     dA: FloatArray
+    state_names: Sequence[str] = ()
+    output_names: Sequence[str] = ()
+    input_names: Sequence[str] = ()
+
+    def __post_init__(self) -> None:
+        for kind, signal, prefix in (("state", self.x, "x"), ("output", self.y, "y"), ("input", self.u, "u")):
+            name = f"{kind}_names"
+            object.__setattr__(self, name, as_names(name, getattr(self, name) or None, np.shape(signal)[-1], prefix))
+
+    def to_pandas(self) -> Any:
+        """The record as a pandas ``DataFrame`` (needs the ``data`` extra).
+
+        Indexed by time ``t`` (by ``run`` and ``t`` for several runs), one column per state, output
+        and known input, named by the names (the known input, shared by the runs, is repeated in
+        each run). The noise, on its own finer grid in continuous time, is not part of the table; ``attrs``
+        holds ``dA`` and the names. :meth:`from_pandas` reads it back.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
+        return _tables.to_frame(self.t, self._columns(), self._attrs(), "Simulation.to_pandas")
+
+    def to_xarray(self) -> Any:
+        """The record as an xarray ``Dataset`` (needs the ``data`` extra).
+
+        Variables ``x``, ``y``, ``u`` over ``t`` and the dimensions ``state``, ``output``, ``input``
+        (``run`` first for several runs), with the names as coordinates; ``attrs`` holds ``dA``.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        u = np.broadcast_to(self.u, (*self.x.shape[:-1], self.u.shape[-1]))
+        variables = {
+            "x": (self.x, "state", tuple(self.state_names)),
+            "y": (self.y, "output", tuple(self.output_names)),
+            "u": (u, "input", tuple(self.input_names)),
+        }
+        return _tables.to_dataset(self.t, variables, {"dA": self.dA.tolist()}, "Simulation.to_xarray")
+
+    @classmethod
+    def from_pandas(
+        cls,
+        frame: Any,
+        state_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        input_names: Sequence[str] | None = None,
+    ) -> Simulation:
+        """Read a record from a ``DataFrame`` with one column per state, output and known input.
+
+        Parameters
+        ----------
+        frame : pandas.DataFrame
+            Indexed by time (or by run and time), e.g. as :meth:`to_pandas` writes it.
+        state_names, output_names, input_names : sequence of str, optional
+            The columns of each kind (default: the names in ``frame.attrs``; no inputs when absent).
+
+        Returns
+        -------
+        Simulation
+            The noise arrays ``w`` and ``v`` are empty (no columns); ``dA`` comes from ``attrs`` (NaN
+            when it is not there).
+        """
+        t, columns, attrs = _tables.from_frame(frame, "Simulation.from_pandas")
+        chosen = {}
+        for kind, given in (("state", state_names), ("output", output_names), ("input", input_names)):
+            names = list(given if given is not None else attrs.get(f"{kind}_names", []))
+            missing = [n for n in names if n not in columns]
+            if missing or (kind != "input" and not names):
+                raise DataError(f"{kind}_names: expected columns of frame, got {names}: missing {missing}")
+            chosen[kind] = names
+        lead = next(iter(columns.values())).shape
+        x, y, u = (
+            np.stack([columns[n] for n in chosen[kind]], axis=-1) if chosen[kind] else np.zeros((*lead, 0))
+            for kind in ("state", "output", "input")
+        )
+        n = x.shape[-1]
+        d_a = np.asarray(attrs.get("dA", np.full((*lead[:-1], n, n), np.nan)), dtype=float)
+        empty = np.zeros((*lead, 0))
+        return cls(
+            t, x, y, u[0] if u.ndim == 3 else u, empty, empty, d_a, chosen["state"], chosen["output"], chosen["input"]
+        )
+
+    def _columns(self) -> list[tuple[str, FloatArray]]:
+        """Named (T,) or (M, T) columns: states, outputs, then known inputs (broadcast over runs)."""
+        u = np.broadcast_to(self.u, (*self.x.shape[:-1], self.u.shape[-1]))
+        columns: list[tuple[str, FloatArray]] = []
+        for names, values in ((self.state_names, self.x), (self.output_names, self.y), (self.input_names, u)):
+            columns += [(name, values[..., i]) for i, name in enumerate(names)]
+        return columns
+
+    def _attrs(self) -> dict[str, Any]:
+        names = {f"{kind}_names": list(getattr(self, f"{kind}_names")) for kind in ("state", "output", "input")}
+        return {"dA": self.dA.tolist(), **names}
 
     def __repr__(self) -> str:
         """Runs, samples, time span and the dimensions of x, y and u."""
@@ -222,6 +323,7 @@ def simulate(
                 + np.einsum("rij,rj->ri", gamma_w, w[:, k * fine + j])
             )
     y = x @ system.C.T + v @ system.F.T
+    names = (system.state_names, system.output_names, system.input_names)
     if runs is None:
-        return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0])
-    return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a)
+        return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0], *names)
+    return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a, *names)

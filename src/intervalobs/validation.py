@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoundsError, DataError, DimensionError
 
-__all__ = ["as_box", "as_matrix", "as_signal", "as_time", "as_vector", "check_no_kwargs"]
+__all__ = ["as_box", "as_matrix", "as_names", "as_signal", "as_time", "as_vector", "check_no_kwargs", "labelled_parts"]
 
 FloatArray = NDArray[np.float64]
 
@@ -136,6 +136,9 @@ def as_box(
 def as_time(name: str, value: ArrayLike) -> FloatArray:
     """Convert a time vector: 1-D, finite, strictly increasing, at least one sample.
 
+    Datetimes and durations (NumPy ``datetime64``/``timedelta64``, a pandas ``DatetimeIndex`` or
+    ``TimedeltaIndex``) become seconds, datetimes counted from the first sample.
+
     Parameters
     ----------
     name : str
@@ -154,7 +157,7 @@ def as_time(name: str, value: ArrayLike) -> FloatArray:
     DataError
         When a time is not finite or the times do not increase strictly.
     """
-    arr = _as_float(name, value)
+    arr = _as_float(name, _seconds(value))
     if arr.ndim != 1 or arr.size == 0:
         raise DimensionError(f"{name}: expected a non-empty 1-D time vector, got shape {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
@@ -164,21 +167,35 @@ def as_time(name: str, value: ArrayLike) -> FloatArray:
     return arr
 
 
-def as_signal(name: str, value: ArrayLike, steps: int, width: int) -> FloatArray:
+def as_signal(
+    name: str,
+    value: ArrayLike,
+    steps: int,
+    width: int,
+    t: FloatArray | None = None,
+    names: Sequence[str] | None = None,
+) -> FloatArray:
     """Convert a time-first signal of shape (T, width) or (M, T, width) and check it is finite.
 
-    A 1-D array is read as (T,) when ``width == 1``.
+    A 1-D array is read as (T,) when ``width == 1``. A pandas ``Series``/``DataFrame`` or an xarray
+    ``DataArray`` is accepted too (see :func:`labelled_parts`): its channels are taken by name when
+    they are labelled with strings (every name of ``names`` must be there; other columns are
+    ignored), in order otherwise, and its time index, when it has one, must be ``t``.
 
     Parameters
     ----------
     name : str
         Argument name used in error messages.
-    value : array_like
+    value : array_like, pandas.Series, pandas.DataFrame or xarray.DataArray
         The user's signal.
     steps : int
         Expected number of samples ``T``.
     width : int
         Expected number of channels.
+    t : numpy.ndarray, shape (T,), optional
+        The record's times, checked against a labelled signal's time index.
+    names : sequence of str, optional
+        The channels' names in the model (e.g. ``LTISystem.output_names``).
 
     Returns
     -------
@@ -187,8 +204,12 @@ def as_signal(name: str, value: ArrayLike, steps: int, width: int) -> FloatArray
     Raises
     ------
     DataError
-        When the shape is wrong or a value is NaN or inf.
+        When the shape is wrong, a value is NaN or inf, a named channel is missing or the time index
+        differs from ``t``.
     """
+    parts = labelled_parts(value)
+    if parts is not None:
+        value = _select_channels(name, *parts, width=width, t=t, names=names)
     arr = _as_float(name, value)
     if arr.ndim == 1 and width == 1:
         arr = arr.reshape(-1, 1)
@@ -198,6 +219,126 @@ def as_signal(name: str, value: ArrayLike, steps: int, width: int) -> FloatArray
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise DataError(f"{name}: expected finite values, got NaN or inf at index {tuple(int(i) for i in bad)}")
     return arr
+
+
+def as_names(name: str, value: Sequence[str] | None, size: int, prefix: str) -> tuple[str, ...]:
+    """Names of ``size`` channels: the given ones, or ``prefix1 … prefixN`` when None.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : sequence of str or None
+        The user's names: distinct, non-empty strings, one per channel.
+    size : int
+        Number of channels.
+    prefix : str
+        Stem of the default names (``"x"`` gives ``x1, x2, …``).
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    DimensionError
+        When the number of names is not ``size``, a name is not a non-empty string or a name repeats.
+    """
+    if value is None:
+        return tuple(f"{prefix}{i + 1}" for i in range(size))
+    if isinstance(value, str) or not all(isinstance(v, str) and v for v in value):
+        raise DimensionError(f"{name}: expected a sequence of {size} non-empty strings, got {value!r}")
+    names = tuple(value)
+    if len(names) != size:
+        raise DimensionError(f"{name}: expected {size} names, got {len(names)}: {list(names)}")
+    repeated = sorted({v for v in names if names.count(v) > 1})
+    if repeated:
+        raise DimensionError(f"{name}: expected distinct names, got {repeated[0]!r} more than once")
+    return names
+
+
+def labelled_parts(value: Any) -> tuple[Any, FloatArray | None, list[str] | None] | None:
+    """Split a pandas ``Series``/``DataFrame`` or an xarray ``DataArray`` into values, times and channel names.
+
+    Neither library is imported: the objects are recognised by their attributes. A pandas
+    ``RangeIndex`` (the default of a frame built from a bare array) and an xarray time dimension
+    without a coordinate carry no time. The time dimension of a ``DataArray`` is the one named
+    ``t`` or ``time``, else the one before the last (the only one for 1-D data); it is moved there.
+
+    Parameters
+    ----------
+    value : object
+        Anything; only pandas and xarray objects are split.
+
+    Returns
+    -------
+    tuple or None
+        ``(values, times in seconds or None, channel names or None)``, or None for anything else.
+    """
+    if hasattr(value, "dims") and hasattr(value, "coords") and hasattr(value, "transpose"):
+        dims = list(value.dims)
+        if not dims:
+            return None
+        time_dim = next((d for d in dims if d in ("t", "time")), dims[-2] if len(dims) > 1 else dims[0])
+        if len(dims) > 1 and dims.index(time_dim) != len(dims) - 2:
+            others = [d for d in dims if d != time_dim]
+            value = value.transpose(*others[:-1], time_dim, others[-1])
+            dims = list(value.dims)
+        times = _seconds(value.coords[time_dim].values) if time_dim in value.coords else None
+        channels = None
+        if len(dims) > 1 and dims[-1] in value.coords:
+            channels = value.coords[dims[-1]].values.tolist()
+        return value.values, times, channels
+    if hasattr(value, "index") and hasattr(value, "to_numpy"):
+        index = value.index
+        times = None if type(index).__name__ == "RangeIndex" else _seconds(index)
+        columns = list(value.columns) if hasattr(value, "columns") else None
+        return value.to_numpy(), times, columns
+    return None
+
+
+def _select_channels(
+    name: str,
+    values: Any,
+    times: FloatArray | None,
+    channels: list[Any] | None,
+    *,
+    width: int,
+    t: FloatArray | None,
+    names: Sequence[str] | None,
+) -> Any:
+    """The channels of a labelled signal in the model's order, after checking its time index against ``t``."""
+    if times is not None and t is not None:
+        if times.size != t.size:
+            raise DataError(f"{name}: expected {t.size} samples (those of t), got a time index of {times.size}")
+        scale = max(float(np.max(np.abs(t))), float(np.max(np.diff(t))) if t.size > 1 else 1.0, 1e-300)
+        off = np.abs(times - t) > 1e-9 * scale
+        if off.any():
+            k = int(np.argmax(off))
+            raise DataError(
+                f"{name}: expected its time index to be t, got {times[k]:g} at sample {k} where t = {t[k]:g}"
+            )
+    if channels is None or names is None or not any(isinstance(c, str) for c in channels):
+        return values  # unlabelled channels (or no model names): taken in order, as for an array
+    missing = [n for n in names if n not in channels]
+    if missing:
+        raise DataError(
+            f"{name}: expected columns named {list(names)} (the model's names), got {channels}: missing {missing}"
+        )
+    return np.take(np.asarray(values), [channels.index(n) for n in names], axis=-1)
+
+
+def _seconds(value: Any) -> Any:
+    """Datetimes as seconds since the first one, durations as seconds; anything else unchanged."""
+    if getattr(value, "tz", None) is not None:
+        value = value.tz_convert(None)
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    if kind not in ("M", "m"):
+        return value
+    arr = np.asarray(value)
+    if kind == "M":
+        arr = arr - arr[0]
+    return arr / np.timedelta64(1, "s")
 
 
 def check_no_kwargs(function: str, kwargs: dict[str, Any], allowed: Sequence[str] = ()) -> None:

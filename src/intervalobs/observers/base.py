@@ -42,6 +42,20 @@ def _one_blas_thread(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
     return limited
 
 
+def _named(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
+    """Label the estimate of ``run`` with the state names of the observer's model (when it has them)."""
+
+    @functools.wraps(run)
+    def named(self: Observer, *args: Any, **kwargs: Any) -> Estimate:
+        estimate = run(self, *args, **kwargs)
+        names = self._channel_names("state")
+        if names is not None and len(names) == estimate.lower.shape[-1]:
+            estimate.state_names = names
+        return estimate
+
+    return named
+
+
 SPACING_TOLERANCE = 1e-9
 """Relative deviation of a record's sample spacing from ``h`` that :meth:`Observer._check_spacing` accepts."""
 
@@ -83,10 +97,11 @@ class Observer(ABC):
     """Attributes that :meth:`__repr__` shows after ``n, p, m, h``: the method's own facts (gain, window, …)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
-        """Every ``run`` written by a subclass runs its hot loop on one BLAS thread (see ``_one_blas_thread``)."""
+        """Every ``run`` written by a subclass runs its hot loop on one BLAS thread (see ``_one_blas_thread``)
+        and labels its estimate with the model's state names."""
         super().__init_subclass__(**kwargs)
         if "run" in cls.__dict__:
-            cls.run = _one_blas_thread(cls.__dict__["run"])  # type: ignore[method-assign]
+            cls.run = _named(_one_blas_thread(cls.__dict__["run"]))  # type: ignore[method-assign]
 
     """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
 
@@ -130,11 +145,13 @@ class Observer(ABC):
         Parameters
         ----------
         t : array_like, shape (T,)
-            Sample times.
+            Sample times (datetimes count as seconds from the first one).
         y : array_like, shape (T, p) or (M, T, p)
-            Measurements; a leading axis holds Monte Carlo runs.
+            Measurements; a leading axis holds Monte Carlo runs. A pandas ``DataFrame`` or an xarray
+            ``DataArray`` is matched to the model's output names and its time index must be ``t``
+            (see :func:`intervalobs.validation.as_signal`).
         u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs; required when the system has inputs (m > 0).
+            Known inputs; required when the system has inputs (m > 0). Labelled like ``y``.
 
         Returns
         -------
@@ -181,13 +198,19 @@ class Observer(ABC):
         times = as_time("t", t)
         if self.h is not None:
             self._check_spacing(times, self.h)
-        ys = as_signal("y", y, times.size, self.p)
-        return times, ys, self._record_input(u, ys)
+        ys = as_signal("y", y, times.size, self.p, t=times, names=self._channel_names("output"))
+        return times, ys, self._record_input(u, ys, times)
 
-    def _record_input(self, u: ArrayLike | None, ys: FloatArray) -> FloatArray:
+    def _channel_names(self, kind: str) -> tuple[str, ...] | None:
+        """The model's ``state``/``output``/``input`` names, or None when its model has none."""
+        names = getattr(getattr(self, "system", None), f"{kind}_names", None)
+        return None if names is None else tuple(names)
+
+    def _record_input(self, u: ArrayLike | None, ys: FloatArray, times: FloatArray | None = None) -> FloatArray:
         """The known input of a record, validated and broadcast to the leading axes of ``ys``.
 
-        As in :meth:`_input`, a missing ``u`` is zero only when the system has no inputs.
+        As in :meth:`_input`, a missing ``u`` is zero only when the system has no inputs; a labelled
+        ``u`` is matched to the model's input names and its time index checked against ``times``.
         """
         if u is None:
             if self.m > 0:
@@ -196,7 +219,7 @@ class Observer(ABC):
                     f"{self.m}) (the system has m = {self.m}; pass zeros for u = 0), got None"
                 )
             return np.zeros((*ys.shape[:-1], 0))
-        us = as_signal("u", u, ys.shape[-2], self.m)
+        us = as_signal("u", u, ys.shape[-2], self.m, t=times, names=self._channel_names("input"))
         if us.ndim < ys.ndim:
             us = np.broadcast_to(us, (*ys.shape[:-1], self.m))
         return us

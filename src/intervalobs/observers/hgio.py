@@ -578,7 +578,7 @@ class HighGainIntervalObserver(Observer):
         if ys.ndim not in (2, 3) or ys.shape[-2:] != (steps, self.p):
             raise DataError(f"y: expected shape ({steps}, {self.p}) or (runs, {steps}, {self.p}), got {ys.shape}")
         self._check_y(ys)
-        us = self._record_input(u, ys)
+        us = self._record_input(u, ys, times)
         lead = ys.shape[:-2]
         lo0, hi0 = self.bounds.x0
         state = self._initial(

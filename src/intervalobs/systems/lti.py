@@ -13,13 +13,14 @@ with :math:`\underline{\Delta A} \le \Delta A \le \overline{\Delta A}` constant 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import BoundsError, DimensionError
-from ..validation import as_matrix
+from ..validation import as_matrix, as_names
 
 __all__ = ["LTISystem"]
 
@@ -47,6 +48,10 @@ class LTISystem:
     dA : tuple of array_like, optional
         ``(lower, upper)`` elementwise bounds of the unknown constant ``ΔA``, each (n, n); must
         contain zero (``A`` is the nominal matrix).
+    state_names, output_names, input_names : sequence of str, optional
+        Names of the states, outputs and known inputs (default ``x1 …``, ``y1 …``, ``u1 …``): they
+        label plots and exported tables, and a labelled record (a pandas ``DataFrame``, an xarray
+        ``DataArray``) is matched to the outputs and inputs by them.
 
     Attributes
     ----------
@@ -54,6 +59,8 @@ class LTISystem:
         Numbers of states, known inputs, outputs, process-noise and measurement-noise channels.
     continuous : bool
         True when ``dt`` is None.
+    state_names, output_names, input_names : tuple of str
+        The names (given or default).
     """
 
     def __init__(
@@ -65,6 +72,9 @@ class LTISystem:
         F: ArrayLike | None = None,
         dt: float | None = None,
         dA: tuple[ArrayLike, ArrayLike] | None = None,
+        state_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        input_names: Sequence[str] | None = None,
     ) -> None:
         self.A = as_matrix("A", A)
         n = self.A.shape[0]
@@ -86,6 +96,9 @@ class LTISystem:
             if np.any(lo > 0) or np.any(hi < 0):
                 raise BoundsError("dA: expected bounds that contain 0 (A is the nominal matrix)")
             self.dA = (lo, hi)
+        self.state_names = as_names("state_names", state_names, n, "x")
+        self.output_names = as_names("output_names", output_names, self.C.shape[0], "y")
+        self.input_names = as_names("input_names", input_names, self.B.shape[1], "u")
 
     @property
     def n(self) -> int:
@@ -142,20 +155,23 @@ class LTISystem:
 
     @classmethod
     def from_control(cls, sys: Any, **kwargs: Any) -> LTISystem:
-        """Build from a python-control ``StateSpace`` (its A, B, C; D must be zero).
+        """Build from a python-control ``StateSpace`` (its A, B, C and signal labels; D must be zero).
+
+        The names of states, outputs and inputs are python-control's labels (``sys.state_labels``, …:
+        ``x[0]``, … unless the model was built with ``states=``, ``outputs=``, ``inputs=``).
 
         Parameters
         ----------
         sys : control.StateSpace
             The model; ``sys.dt`` of 0 or None means continuous time.
         **kwargs
-            ``E``, ``F``, ``dA`` as in the constructor.
+            ``E``, ``F``, ``dA`` and names (``state_names``, …, replacing the labels) as in the constructor.
 
         Returns
         -------
         LTISystem
         """
-        unknown = set(kwargs) - {"E", "F", "dA"}
+        unknown = set(kwargs) - {"E", "F", "dA", "state_names", "output_names", "input_names"}
         if unknown:
             raise TypeError(f"LTISystem.from_control: unexpected keyword argument {sorted(unknown)[0]!r}")
         for attr in ("A", "B", "C", "D"):
@@ -167,6 +183,8 @@ class LTISystem:
         if sys.dt is True:
             raise BoundsError("sys.dt: expected a numeric sampling period for a discrete-time system, got True")
         B = np.asarray(sys.B, dtype=float)
+        for kind in ("state", "output", "input"):
+            kwargs.setdefault(f"{kind}_names", getattr(sys, f"{kind}_labels", None))
         return cls(sys.A, sys.C, B=B if B.size else None, dt=dt, **kwargs)
 
     def __repr__(self) -> str:
