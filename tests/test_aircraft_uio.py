@@ -9,6 +9,7 @@ import pytest
 
 from intervalobs.examples import aircraft as ac
 from intervalobs.reproduce import registry
+from paper_notes import misquoted
 
 
 def test_truth_is_the_exact_solution() -> None:
@@ -53,6 +54,7 @@ def test_reproduction_contract(tmp_path) -> None:
     assert known["all_enclosed"] and len(known["cases"]) == 4
     assert {c["command"] for c in known["cases"]} == {"held", "continuous"}
     assert known["max_state_width_ratio"] < 1.2 and known["max_input_width_ratio"] < 1.2
+    assert misquoted("aircraft-uio", on_disk)[0] == []  # what docs/paper-notes.md says is this summary
     assert max(c["max_abs_g_dot"] for c in known["cases"]) <= ac.OUTPUT_ACCEL
     with np.load(tmp_path / "trajectories.npz") as data:
         assert {"t", "x", "x_lower", "x_upper", "d", "d_lower", "d_upper"} <= set(data.files)

@@ -5,6 +5,7 @@ import sys
 import pytest
 
 from intervalobs.cli import main
+from paper_notes import QUOTES, misquoted
 
 
 def test_list_names_every_example(capsys):
@@ -112,3 +113,5 @@ def test_check_finds_what_falls_short(spring_mass_results, tmp_path, capsys, cha
 @pytest.mark.slow
 def test_reproduce_all(tmp_path):
     assert main(["reproduce", "all", "--out", str(tmp_path)]) == 0
+    for name in QUOTES:  # docs/paper-notes.md quotes these summaries
+        assert misquoted(name, json.loads((tmp_path / name / "summary.json").read_text()))[0] == []

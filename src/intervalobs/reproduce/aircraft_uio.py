@@ -54,6 +54,46 @@ def _observer(
     )
 
 
+def design_facts(observer: UnknownInputIntervalObserver) -> dict[str, Any]:
+    """The design part of ``summary["design"]`` that needs no simulation (docs/paper-notes.md quotes it).
+
+    Parameters
+    ----------
+    observer : UnknownInputIntervalObserver
+        The designed observer.
+
+    Returns
+    -------
+    dict
+        Decoupling, coordinates, poles, the limit widths ρ_x, ρ_ξ and the paper's formula for them.
+    """
+    dec, co = observer.decoupling, observer.coords
+    paper_rho_x, paper_rho_xi = observer.paper_rho()
+    return {
+        "E": dec.E,
+        "P": dec.P,
+        "W": dec.W,
+        "PD_residual": dec.decoupling_residual,
+        "rank_CD": dec.rank_CD,
+        "rank_D": dec.rank_D,
+        "observability_margin_PA_C": dec.observability_margin,
+        "K": co.K,
+        "T": co.T,
+        "L": co.L,
+        "poles": co.poles.real,
+        "eig_N": np.sort(np.linalg.eigvals(co.N).real),
+        "metzler_check": co.metzler_check,
+        "metzler_form_M": co.M,
+        "max_abs_TNTinv_minus_M": co.form_residual,
+        "cond_T": co.cond_T,
+        "pole_candidates_score": co.tried,
+        "rho_x": observer.rho_x,
+        "rho_xi": observer.rho_xi,
+        "paper_formula_rho_x": paper_rho_x,
+        "paper_formula_rho_xi": paper_rho_xi,
+    }
+
+
 def _paper_checks(observer: UnknownInputIntervalObserver) -> dict[str, Any]:
     """Compare the printed E, P with ours; check the printed K, T against Hypothesis 6."""
     e_paper = np.array(ac.PAPER["E"], dtype=float)
@@ -183,33 +223,11 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         d_lower=est0.input_lower,
         d_upper=est0.input_upper,
     )
-    dec, co = observer.decoupling, observer.coords
     width_final = est.width()[:, -1, :].max(axis=0)
     assert est.input_lower is not None and est.input_upper is not None
     input_final = (est.input_upper - est.input_lower)[:, -1, :].max(axis=0)
-    paper_rho_x, paper_rho_xi = observer.paper_rho()
     summary["design"] = {
-        "E": dec.E,
-        "P": dec.P,
-        "W": dec.W,
-        "PD_residual": dec.decoupling_residual,
-        "rank_CD": dec.rank_CD,
-        "rank_D": dec.rank_D,
-        "observability_margin_PA_C": dec.observability_margin,
-        "K": co.K,
-        "T": co.T,
-        "L": co.L,
-        "poles": co.poles.real,
-        "eig_N": np.sort(np.linalg.eigvals(co.N).real),
-        "metzler_check": co.metzler_check,
-        "metzler_form_M": co.M,
-        "max_abs_TNTinv_minus_M": co.form_residual,
-        "cond_T": co.cond_T,
-        "pole_candidates_score": co.tried,
-        "rho_x": observer.rho_x,
-        "rho_xi": observer.rho_xi,
-        "paper_formula_rho_x": paper_rho_x,
-        "paper_formula_rho_xi": paper_rho_xi,
+        **design_facts(observer),
         "final_width_over_rho_x": width_final / observer.rho_x,
         "final_input_width_over_rho_xi": input_final / observer.rho_xi,
         "initial_width": 2.0,

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..design.high_gain import euler_radius_factor, theta_design
-from ..design.regions import HalfPlane, HorizontalStrip, modal_decomposition, place_in_disks
+from ..design.high_gain import ThetaDesign, euler_radius_factor, theta_design
+from ..design.regions import HalfPlane, HorizontalStrip, ModalDecomposition, modal_decomposition, place_in_disks
 from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
 from ..observers.hgio import HighGainIntervalObserver
@@ -75,6 +75,90 @@ def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
     return (theta ** np.arange(1, n + 1) * K)[:, None]
 
 
+def paper_designs() -> tuple[HighGainIntervalObserver, ModalDecomposition, ThetaDesign]:
+    """The paper-faithful constructive observer and Theorem 4.4 read with the printed L₁ and v₁.
+
+    Returns
+    -------
+    constructive : HighGainIntervalObserver
+        Algorithm 1 in the paper's disks (least-norm gain), Theorems 4.2/4.5 as printed.
+    printed_modal : ModalDecomposition
+        Decomposition of ``A - L₁C`` for the printed L₁.
+    printed : ThetaDesign
+        Theorem 4.4 for the printed L₁, its paper reading with the printed v₁ (``paper_v1``).
+    """
+    system, bounds = example.system(), example.bounds()
+    d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
+    delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
+    constructive = HighGainIntervalObserver.design(
+        system,
+        bounds,
+        example.DISKS,
+        example.STEP,
+        alpha_d=example.ALPHA_D,
+        alpha_n=example.ALPHA_N,
+        input_rate=example.INPUT_RATE,
+        **PAPER_OBSERVER,
+    )
+    printed_l1 = np.array(example.PAPER["L1"])[:, None]
+    printed_modal = modal_decomposition(system.A, system.C, printed_l1, order=[d.center for d in example.DISKS])
+    printed = theta_design(
+        printed_modal,
+        printed_l1,
+        system.C,
+        d_radius,
+        delta,
+        example.ALPHA_D,
+        example.ALPHA_N,
+        paper_v1=np.array(example.PAPER["v1"]),
+    )
+    return constructive, printed_modal, printed
+
+
+def paper_design_facts(
+    constructive: HighGainIntervalObserver, printed_modal: ModalDecomposition, printed: ThetaDesign
+) -> dict[str, Any]:
+    """The keys of ``summary["design"]`` about the paper's designs that need no simulation.
+
+    docs/paper-notes.md quotes them (checked by the test suite).
+
+    Parameters
+    ----------
+    constructive : HighGainIntervalObserver
+        The paper-faithful constructive observer (:func:`paper_designs`).
+    printed_modal : ModalDecomposition
+        Decomposition of ``A - L₁C`` for the printed L₁.
+    printed : ThetaDesign
+        Theorem 4.4 for the printed L₁ and v₁.
+
+    Returns
+    -------
+    dict
+        Gain, eigenvalues, disk margins, v₁, Theorem 4.4 in both readings for our and the printed L₁.
+    """
+    placement, ours = constructive.placement, constructive.theta_design
+    assert placement is not None and ours is not None
+    p1 = placement.modal.p1
+    return {
+        "L1": placement.L.ravel(),
+        "p1": p1,
+        "omega1": placement.modal.omega1,
+        "eigenvalues": placement.eigenvalues,
+        "disk_margins": placement.margins,
+        "v1": placement.modal.v1,
+        "v1_condition": placement.modal.condition,
+        "radius_matrix_abscissa": placement.radius_abscissa,
+        "alpha": ours.alpha_sound,
+        "theta": ours.theta_sound,
+        "alpha_theta_reading": "sound: (42) solved in real numbers at t = 1 s (paper readings under theorem44_*); "
+        "the observer does not use theta (it cancels)",
+        "lambda_min_M2": ours.lambda_min_M2,
+        "theorem44_ours": _theta_dict(ours),
+        "theorem44_with_printed_L1_v1": _theta_dict(printed),
+        "printed_L1_eigenvalues": printed_modal.eigenvalues,
+    }
+
+
 def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     """Design both observers, simulate with bang-bang disturbances, write the contract files.
 
@@ -93,34 +177,12 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         The summary.
     """
     system, bounds = example.system(), example.bounds()
-    order = [d.center for d in example.DISKS]
     d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
     delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
     start = time.perf_counter()
-    constructive = HighGainIntervalObserver.design(
-        system,
-        bounds,
-        example.DISKS,
-        example.STEP,
-        alpha_d=example.ALPHA_D,
-        alpha_n=example.ALPHA_N,
-        input_rate=example.INPUT_RATE,
-        **PAPER_OBSERVER,
-    )
+    constructive, printed_modal, printed = paper_designs()
     assert constructive.placement is not None and constructive.theta_design is not None
     placement, ours = constructive.placement, constructive.theta_design
-    printed_l1 = np.array(example.PAPER["L1"])[:, None]
-    printed_modal = modal_decomposition(system.A, system.C, printed_l1, order=order)
-    printed = theta_design(
-        printed_modal,
-        printed_l1,
-        system.C,
-        d_radius,
-        delta,
-        example.ALPHA_D,
-        example.ALPHA_N,
-        paper_v1=np.array(example.PAPER["v1"]),
-    )
     l_arbitrary = high_gain_gain(THETA_ARBITRARY, K_ARBITRARY)
     arbitrary = HighGainIntervalObserver(
         system,
@@ -317,22 +379,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "reference": {**HULL_REFERENCE, "width_design_over_hull": width_w / hull},
         "constructive_label": "paper-faithful constructive design: the paper's disks, least-norm Algorithm 1 "
         "(L1 = 0 here), Theorems 4.2/4.5 with the box predictor, no re-wrap; the keys below without a prefix",
-        "L1": placement.L.ravel(),
-        "p1": p1,
-        "omega1": placement.modal.omega1,
-        "eigenvalues": placement.eigenvalues,
-        "disk_margins": placement.margins,
-        "v1": placement.modal.v1,
-        "v1_condition": placement.modal.condition,
-        "radius_matrix_abscissa": placement.radius_abscissa,
-        "alpha": ours.alpha_sound,
-        "theta": ours.theta_sound,
-        "alpha_theta_reading": "sound: (42) solved in real numbers at t = 1 s (paper readings under theorem44_*); "
-        "the observer does not use theta (it cancels)",
-        "lambda_min_M2": ours.lambda_min_M2,
-        "theorem44_ours": _theta_dict(ours),
-        "theorem44_with_printed_L1_v1": _theta_dict(printed),
-        "printed_L1_eigenvalues": printed_modal.eigenvalues,
+        **paper_design_facts(constructive, printed_modal, printed),
         "theta_used_by_observer": "none: theta cancels in exact arithmetic; the observer works in zeta = e^{theta t} z",
         "euler_radius_factor": {
             f"theta={th:g}": [euler_radius_factor(float(p), th, example.STEP) for p in sorted(set(np.round(p1, 6)))]
