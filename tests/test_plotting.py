@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
@@ -109,3 +111,13 @@ def test_single_run_estimate_refuses_a_batch_truth_without_run(record) -> None:
     np.testing.assert_array_equal(fig.axes[0].lines[2].get_ydata(), truth.x[0, :, 0])
     with pytest.raises(DimensionError, match="run: expected None"):
         single.plot(run=0)
+
+
+def test_the_library_never_switches_the_backend_or_shows() -> None:
+    """Figures are for the caller to show or save: no module of the package picks a backend or blocks."""
+    import intervalobs
+
+    root = Path(intervalobs.__file__).parent
+    calls = ("matplotlib.use(", "switch_backend(", "plt.show(")
+    found = [f"{p.relative_to(root)}: {c}" for p in root.rglob("*.py") for c in calls if c in p.read_text()]
+    assert found == []

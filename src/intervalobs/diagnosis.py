@@ -373,9 +373,6 @@ def run_campaign(
 
 
 def _heatmaps(result: CampaignResult, out: Path, name: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     for s_name, mat in result.psi.items():

@@ -356,9 +356,6 @@ def _known_inputs(t: np.ndarray, seed: int, free: Estimate) -> tuple[dict[str, A
 
 
 def _known_input_figure(out_dir: Path, est: Estimate, rec: ac.AircraftRecord, free: Estimate) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure
@@ -395,9 +392,6 @@ def _figures(
     observer: UnknownInputIntervalObserver,
     hosm_estimates: dict[str, Estimate],
 ) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure

@@ -108,9 +108,6 @@ def _bound_ratio(model: ManipulatorModel) -> dict[str, float]:
 
 
 def _figures(out_dir: Path, t: FloatArray, sig_lo: FloatArray, sig_hi: FloatArray, x: FloatArray, est: Any) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from ..plotting import plot_estimate, save_figure
@@ -133,7 +130,7 @@ def _figures(out_dir: Path, t: FloatArray, sig_lo: FloatArray, sig_hi: FloatArra
         fig.tight_layout()
         fig.savefig(out_dir / f"scenario{s + 1}_isolation.png", dpi=100)
         plt.close(fig)
-    fig = plot_estimate(est, truth=x, labels=["q1 (rad)", "q2 (rad)", "q̇1 (rad/s)", "q̇2 (rad/s)"])
+    fig = plot_estimate(est, truth=x, labels=["q1 (rad)", "q2 (rad)", "q̇1 (rad/s)", "q̇2 (rad/s)"], time_unit="s")
     save_figure(fig, out_dir / "scenario1_state_bounds.png")
     plt.close(fig)
 

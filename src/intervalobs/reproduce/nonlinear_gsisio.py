@@ -474,9 +474,6 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
 def _figures(
     out_dir: Path, t: FloatArray, x: FloatArray, d_rows: FloatArray, est: Estimate, full: dict[str, Any]
 ) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure
@@ -553,9 +550,6 @@ EXAMPLE = Example(NAME, SEED_FILE, "seed 003 GSISIO nonlinear example: paper's d
 
 
 def _two_hidden_figure(out_dir: Path, data: dict[str, Any]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from ..plotting import save_figure

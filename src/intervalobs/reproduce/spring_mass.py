@@ -120,7 +120,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         labels = ["$q_1$", "$q_2$", r"$\dot q_1$", r"$\dot q_2$"]
-        save_figure(plot_estimate(estimate, sim.x, labels), out_dir / "states.png")
+        save_figure(plot_estimate(estimate, sim.x, labels, time_unit="s"), out_dir / "states.png")
         widths = {"tube (recommended)": estimate.width(), "framer": framer_estimate.width()}
         save_figure(plot_widths(t, widths), out_dir / "widths.png")
     return summary
