@@ -31,7 +31,14 @@ from scipy.signal import place_poles
 from ..errors import DesignError
 from ..systems.sampling import SampledModel
 
-__all__ = ["FramerDesign", "coordinate_candidates", "design_framer", "framer_matrices", "is_detectable"]
+__all__ = [
+    "FramerDesign",
+    "coordinate_candidates",
+    "design_framer",
+    "framer_matrices",
+    "is_detectable",
+    "real_modal_basis",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -121,7 +128,19 @@ def is_detectable(model: SampledModel, C: FloatArray) -> bool:
     return True
 
 
-def _real_modal_basis(a: FloatArray) -> FloatArray | None:
+def real_modal_basis(a: FloatArray) -> FloatArray | None:
+    """``T = V⁻¹`` for the real modal basis ``V`` of ``a`` (real parts and imaginary parts of its eigenvectors).
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (n, n)
+        Matrix to block-diagonalise: ``T a T⁻¹`` is block diagonal with 1×1 and 2×2 blocks.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        ``T``, or None when ``cond(V) > 1e8`` (a defective or nearly defective ``a``).
+    """
     vals, vecs = np.linalg.eig(a)
     columns: list[FloatArray] = []
     used = np.zeros(vals.size, dtype=bool)
@@ -169,7 +188,7 @@ def coordinate_candidates(
     """
     n = model.Phi.shape[0]
     found: dict[str, FloatArray] = {"identity": np.eye(n)}
-    modal = _real_modal_basis(model.Phi)
+    modal = real_modal_basis(model.Phi)
     if modal is not None:
         found["modal"] = modal
     rates = np.abs(np.log(np.abs(np.linalg.eigvals(model.Phi)) + 1e-300)) / model.h

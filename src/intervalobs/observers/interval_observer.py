@@ -44,7 +44,7 @@ class IntervalObserver(Observer):
     L : array_like, shape (n, p)
         Gain of the sampled model.
     T : array_like, shape (n, n), optional
-        Coordinate change ``z = T x`` of the framer (default identity; not used by the tube).
+        Coordinate change ``z = T x`` in which the radius is propagated (default identity).
     h : float, optional
         Sampling period; required for a continuous-time system (measurements arrive every ``h``).
     method : {"tube", "framer"}
@@ -67,12 +67,15 @@ class IntervalObserver(Observer):
 
     They differ in the radius.
 
-    ``method="tube"`` (default, :math:`T = I`): the exact error tube of :mod:`intervalobs.design.tube`,
+    ``method="tube"`` (default): the exact error tube of :mod:`intervalobs.design.tube` (in coordinates
+    :math:`T`: :meth:`design` picks :math:`T = I`, or the real modal basis of :math:`\Phi - LC` for a slow
+    error mode),
 
     .. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
-              \ell = \min(k+1, J),\quad d_k = r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|\hat x_k| + \rho_k),
+              \ell = \min(k+1, J),\quad d_k = |T|\big(r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
 
-    which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain.
+    which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain and
+    coordinates.
 
     ``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
     of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
@@ -106,8 +109,6 @@ class IntervalObserver(Observer):
             raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if method not in METHODS:
             raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
-        if method == "tube" and T is not None:
-            raise DimensionError("T: a coordinate change is only used by method='framer', got T with method='tube'")
         self.system = system
         self.method = method
         self.bounds = bounds.resolve(system)
@@ -154,7 +155,7 @@ class IntervalObserver(Observer):
                     f"got spectral radius {np.max(np.abs(np.linalg.eigvals(self.M))):.6g}"
                 )
             self.horizon = horizon
-            self.spectral_radius, _ = tube_stability(self.model, self.M, self._radius_input, horizon)
+            self.spectral_radius, _ = tube_stability(self.model, self.M, self._radius_input, horizon, self.T)
             if not self.spectral_radius < 1:
                 raise DesignError(
                     f"L: expected a bounded error tube, got ρ(|M^J| + GδΦ) = {self.spectral_radius:.6g} >= 1; "
@@ -226,7 +227,7 @@ class IntervalObserver(Observer):
                 "IntervalObserver.design: no candidate gain gives a bounded error tube; "
                 "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
             )
-        observer = cls(system, full, tube.L, None, h, method="tube")
+        observer = cls(system, full, tube.L, tube.T, h, method="tube")
         observer.design_result = tube
         return observer
 

@@ -24,14 +24,27 @@ Notation: :math:`Y(s) = [e^{As},\ \Gamma_B(s),\ \Gamma_E(s)]` are the first :mat
 * :math:`|e^{A s}E| \le e^{|A|\delta}\,|e^{A s_i}E|` for :math:`s \in [s_i, s_i + \delta]`, which gives a
   left Riemann sum of :math:`\int_0^h|e^{As}E|\,ds` with the factor :math:`e^{|A|\delta}`.
 
-**2. A majorant that keeps the decay** (the complex Schur form; Van Loan 1977 bounds
-:math:`\|e^{At}\|` the same way in norm). Let :math:`A = Q(T + F)Q^H` with :math:`Q` unitary,
-:math:`T` upper triangular and :math:`F` the backward error of the computed form, :math:`|F_{ij}| \le
-\|F\|_2 \le \varepsilon` (:math:`\varepsilon` is the measured residual plus a rounding allowance). Let
-:math:`M` be the *Metzler majorant* :math:`M_{ii} = \operatorname{Re}T_{ii} + \varepsilon`,
+**2. A majorant that keeps the decay** (Van Loan 1977 bounds :math:`\|e^{At}\|` the same way in norm).
+Let :math:`A \approx VTW` with :math:`T` upper triangular and :math:`W` the computed inverse of
+:math:`V`; two such forms are used, and every bound below is the elementwise minimum of the two:
+the complex Schur form (:math:`V` unitary, always well conditioned) and the eigenbasis
+(:math:`T = \Lambda` diagonal, when :math:`\operatorname{cond}(V) \le 10^8`). The eigenbasis keeps
+every mode apart: its perturbation radius :math:`|V^{-1}|D|V|` has, on the diagonal, exactly the
+largest first-order shift :math:`|w_i^H|D|v_i|` of each eigenvalue, while the Schur form feeds the
+fast modes' :math:`\Delta A` into the slow ones through its non-normal part. With the measured
+residuals :math:`R = AV - VT` and :math:`E = I - WV`, :math:`\|E\|_2 < 1/2` (each plus an allowance
+:math:`2(n+2)\epsilon_{\mathrm{mach}}` times the norm of the moduli of its products),
+
+.. math:: A = V(T + F)V^{-1},\quad F = (I - E)^{-1}WR,\quad
+          |F_{ij}| \le \varepsilon = \frac{\|W\|_2\|R\|_2}{1 - \|E\|_2},\quad
+          |V^{-1}| \le |W| + \eta,\ \ \eta = \frac{\|E\|_2\|W\|_2}{1 - \|E\|_2}
+
+(:math:`V^{-1} = (I - E)^{-1}W`, and :math:`(I - E)^{-1}WAV - T = (I - E)^{-1}(WAV - (I - E)T) =
+(I - E)^{-1}(WR + (WV - I + E)T)`; every entry is at most the spectral norm). Let :math:`M` be the
+*Metzler majorant* :math:`M_{ii} = \operatorname{Re}T_{ii} + \varepsilon`,
 :math:`M_{ij} = |T_{ij}| + \varepsilon`. Then for all :math:`t \ge 0`
 
-.. math:: |e^{(T + F)t}| \le e^{Mt}, \qquad |e^{At}| \le |Q|\,e^{Mt}\,|Q^H|.
+.. math:: |e^{(T + F)t}| \le e^{Mt}, \qquad |e^{At}| \le |V|\,e^{Mt}\,(|W| + \eta).
 
 *Proof.* Write :math:`T + F = \Lambda + N` with :math:`\Lambda` its diagonal. Variation of constants
 gives :math:`e^{(\Lambda + N)t} = e^{\Lambda t} + \int_0^t e^{\Lambda(t-s)}Ne^{(\Lambda+N)s}ds`, and its
@@ -41,10 +54,10 @@ e^{\operatorname{Re}\Lambda\,\tau}` and :math:`N` by :math:`|N|` majorises every
 series is the Dyson series of :math:`e^{(\operatorname{Re}\Lambda + |N|)t} \le e^{Mt}` (the exponential of
 a Metzler matrix is nonnegative and nondecreasing in every entry). :math:`\square` Since :math:`M` is
 (up to :math:`\varepsilon`) triangular with diagonal :math:`\operatorname{Re}\lambda_i(A)`, the majorant
-decays exactly as :math:`A` does; it only loses the mixing factor :math:`|Q|\,|Q^H|` and the
+decays exactly as :math:`A` does; it only loses the mixing factor :math:`|V|\,|V^{-1}|` and the
 cancellations of the non-normal part. With :math:`M^+ = M + \operatorname{diag}(\max(-M_{ii}, 0))
 \ge 0`, monotonicity again gives :math:`\sup_{0 \le \sigma \le \delta}|e^{A\sigma}v| \le
-|Q|\,X(\delta)\,|Q^Hv|` for any vector or matrix :math:`v`, for any :math:`X(\delta) \ge
+|V|\,X(\delta)\,|V^{-1}v|` for any vector or matrix :math:`v`, for any :math:`X(\delta) \ge
 \sup_{\sigma \le \delta}e^{M\sigma}`; three are used, elementwise minimum: :math:`e^{M^+\delta}` (it grows
 only polynomially when :math:`\operatorname{Re}\lambda \le 0`, :math:`M^+` being nilpotent up to
 :math:`\varepsilon`), and, with :math:`M = \Lambda + N` (:math:`\Lambda` diagonal),
@@ -62,7 +75,7 @@ non-normal coupling :math:`N_{ij}` feeds (:math:`N_{ij}/|\lambda_j|` instead of 
 (:math:`\delta = b - a`) with constant :math:`L` then :math:`g(s) \le \min(g(a) + L(s-a),\ g(b) + L(b-s))`
 and :math:`\int_a^b g \le \tfrac{\delta}{2}(g(a) + g(b)) + \tfrac{L\delta^2}{4}`. For
 :math:`g = |e^{As}E|` on :math:`[s_j, s_j + \delta_j]`, :math:`|g'| \le |Ae^{As}E| \le
-|Q|\,e^{M^+\delta_j}\,|Q^HAe^{As_j}E| = L_j` by section 2: the error term carries the decay that is
+|V|\,e^{M^+\delta_j}\,|V^{-1}Ae^{As_j}E| = L_j` by section 2: the error term carries the decay that is
 actually present at :math:`s_j` (the factor :math:`e^{\lambda s_j}` of each mode), not
 :math:`e^{|A|\delta}`. The nodes are geometric towards both ends of :math:`[0, h]` (eight per octave,
 down to :math:`\|A\|_\infty s \le 1/16`), so every time scale of a stiff :math:`A` is resolved with a
@@ -82,25 +95,27 @@ also holds for a signed Lipschitz integrand (:math:`|\int_a^b f - \tfrac{\delta}
 L\delta^2/4`), with Lipschitz constants from section 2 (both factors at once: :math:`|(fg)'| \le
 |f'|\sup|g| + \sup|f|\,|g'|`); summed with the weights :math:`D_{jl}` these error terms are
 :math:`\sum_j \tfrac{\delta_j^2}{4}(L_P D\sup|Y| + \sup|P|\,D\,L_Y)`. The remainder :math:`R_2` is the
-sum of the Dyson terms of order :math:`\ge 2`; in Schur coordinates the perturbation is
-:math:`Q^H\Delta A\,Q`, bounded by :math:`D' = |Q^H|\,D\,|Q|`, and majorising as in section 2,
+sum of the Dyson terms of order :math:`\ge 2`; in the coordinates of :math:`T` the perturbation is
+:math:`V^{-1}\Delta A\,V`, bounded by :math:`D' = (|W| + \eta)\,D\,|V|`, and majorising as in section 2,
 
-.. math:: |R_2^{\Phi}| \le |Q|\,\rho_2(h)\,|Q^H|, \qquad
+.. math:: |R_2^{\Phi}| \le |V|\,\rho_2(h)\,|V^{-1}|, \qquad
           \rho_2(t) = \int_0^t\!\!\int_0^{s_1} e^{M(t-s_1)}D'e^{M(s_1-s_2)}D'e^{(M+D')s_2}\,ds_2\,ds_1,
 
 the (1,3) block of :math:`\exp([[M, D', 0], [0, M, D'], [0, 0, M+D']]\,t)` (Van Loan's block-triangular
 exponential; all blocks are nonnegative, so nothing cancels). The input columns are
-:math:`\int_0^h(\cdot)\,ds\,[B, E]`, so their remainder is :math:`|Q|\int_0^h\rho_2\,|Q^H|\,|[B, E]|`
+:math:`\int_0^h(\cdot)\,ds\,[B, E]`, so their remainder is :math:`|V|\int_0^h\rho_2\,|V^{-1}|\,|[B, E]|`
 (one more block row). The noise sees :math:`\int_0^h|e^{(A+\Delta A)s} - e^{As}|\,ds \le
-|Q|\int_0^h(e^{(M+D')s} - e^{Ms})\,ds\,|Q^H|` (the Dyson majorant of all orders :math:`\ge 1`,
+|V|\int_0^h(e^{(M+D')s} - e^{Ms})\,ds\,|V^{-1}|` (the Dyson majorant of all orders :math:`\ge 1`,
 again a block exponential).
 
-*Weakness.* The remainder majorant uses :math:`e^{(M + D')t}` with the mixed radius :math:`D'`; when
-a dense basis couples large :math:`\Delta A` entries of the fast modes into the slow ones,
-:math:`M + D'` can be unstable and :math:`R_2` grows with :math:`h` (on random 3-10 state systems with
-eigenvalues over five decades and :math:`D = 10^{-3}|A|`, :math:`\delta\Phi` is within 1.5x of the
-vertex bound at :math:`h\max|\lambda| = 1` but 3-100x at :math:`h\max|\lambda| = 100`); the
-minimum with the cheap bound keeps it sound, never tight there.
+*Scope.* The remainder is small next to the first-order term while :math:`M + D'` keeps a margin of
+stability, i.e. while no vertex of the :math:`\Delta A` box moves an eigenvalue by a sizeable
+fraction of itself (to first order :math:`|w_i^H|D|v_i| \ll |\operatorname{Re}\lambda_i|`); on random
+3-10 state systems with eigenvalues over five decades and the largest such shift 10 % of
+:math:`|\lambda_i|`, :math:`\delta\Phi` is within 1.5x of the vertex lower bound for every
+:math:`h` from :math:`10^{-3}` to 10 (``tests/test_sampling.py``). A box that lets some vertex
+become unstable makes :math:`M + D'` unstable and :math:`R_2` grow like :math:`e^{\rho(M + D')h}`;
+the minimum with the cheap bound keeps it sound, not tight.
 
 **5. The noise box.** The noise enters through :math:`\int_0^h e^{(A+\Delta A)s}E\,w(t_{k+1} - s)\,ds`;
 with :math:`w = w_c + \operatorname{diag}(w_r)\epsilon(s)`, :math:`|\epsilon| \le 1`, its centre is
@@ -115,13 +130,16 @@ and squaring of an interval Taylor enclosure; Althoff, Stursberg & Buss 2007 and
 :math:`e^{[A]t} \subset \sum_{k \le p}[A]^kt^k/k! + E(t)` with :math:`E` from :math:`e^{\|A\|t}`) bound
 their remainder by :math:`\|A\|`; scaled down to :math:`\|A\|h/2^s < 1` they are accurate, but
 squaring an interval matrix :math:`s \approx \log_2\|A\|h` times widens it by the dependency effect
-at every squaring, and the steps' noise integral still needs a quadrature. The Schur majorant keeps
-the eigenvalues on the diagonal, so its bounds decay with :math:`A` for any :math:`h`.
+at every squaring (in a basis where :math:`e^{Ah/2^s}` has mixed signs every product
+:math:`|\Phi|\,\delta` loses the cancellations of the true first-order term), and the steps' noise
+integral still needs a quadrature. The majorants keep the eigenvalues on the diagonal, so their
+bounds decay with :math:`A` for any :math:`h`, and the first-order term is computed exactly (up to
+the quadrature error) in the original coordinates, so the basis only enters the second order.
 
 **Floating point.** As everywhere in the library, the point matrices (``expm`` of the block matrix
 and at the nodes) are taken as computed and the rounding is absorbed by the relative margin
-``ROUNDING_MARGIN`` applied to every radius here and to the observers' outputs; the Schur residual
-is measured, not assumed.
+``ROUNDING_MARGIN`` applied to every radius here and to the observers' outputs; the residuals of
+the Schur form and of the eigenbasis are measured, not assumed.
 
 **References.**
 
@@ -157,6 +175,7 @@ _CHEAP_QUADRATURE_INTERVALS = 16
 _NODES_PER_OCTAVE = 8
 _FINEST_NORM_STEP = 1.0 / 16.0
 _EPS = float(np.finfo(float).eps)
+_MAX_EIGENBASIS_CONDITION = 1e8
 
 
 @dataclass(frozen=True)
@@ -196,14 +215,16 @@ class SampledModel:
 
 
 @dataclass(frozen=True)
-class _SchurMajorant:
-    """``|e^{At}| <= |Q| e^{Mt} |Q^H|`` (module docstring, section 2)."""
+class _Majorant:
+    """``|e^{At}| <= |V| e^{Mt} |V^{-1}|`` from ``A = V(T + F)V^{-1}`` (module docstring, section 2)."""
 
-    q: ComplexArray
+    v: ComplexArray
+    w: ComplexArray  # computed inverse of ``v``
+    pad: float  # ``|V^{-1} - W| <= pad`` entrywise
     m: FloatArray
 
     def sup_growth(self, delta: float) -> FloatArray:
-        """``|Q| X(δ)``, ``X(δ) >= sup_{σ ≤ δ} e^{Mσ}``: ``sup_{σ ≤ δ} |e^{Aσ} v| <= sup_growth(δ) @ |Q^H v|``."""
+        """``|V| X(δ)``, ``X(δ) >= sup_{σ ≤ δ} e^{Mσ}``: ``sup_{σ ≤ δ} |e^{Aσ} v| <= sup_growth(δ) @ rotate(v)``."""
         diag = np.diag(self.m)
         bound = expm((self.m + np.diag(np.maximum(-diag, 0.0))) * delta)
         off = self.m - np.diag(diag)
@@ -215,29 +236,49 @@ class _SchurMajorant:
                 inverse = np.linalg.inv(eye - loop)
                 candidate = inverse * growth[None, :] if left else growth[:, None] * inverse
                 bound = np.minimum(bound, np.maximum(candidate, 0.0))
-        return np.asarray(np.abs(self.q) @ bound)
+        return np.asarray(np.abs(self.v) @ bound)
 
-    def rotate(self, v: FloatArray) -> FloatArray:
-        """``|Q^H v|`` for a real matrix ``v``."""
-        return np.asarray(np.abs(self.q.conj().T @ v))
+    def rotate(self, x: FloatArray) -> FloatArray:
+        """A bound of ``|V^{-1} x|`` for a real matrix ``x``."""
+        return np.asarray(np.abs(self.w @ x) + self.pad * np.abs(x).sum(axis=0))
 
-    def back(self, v: FloatArray) -> FloatArray:
-        """``|Q| v |Q^H|`` for a nonnegative matrix ``v`` in Schur coordinates."""
-        abs_q = np.abs(self.q)
-        return np.asarray(abs_q @ v @ abs_q.T)
+    def right(self) -> FloatArray:
+        """A bound of ``|V^{-1}|``."""
+        return np.asarray(np.abs(self.w) + self.pad)
+
+    def back(self, x: FloatArray) -> FloatArray:
+        """``|V| x |V^{-1}|`` (bounded) for a nonnegative matrix ``x`` in the coordinates of ``T``."""
+        return np.asarray(np.abs(self.v) @ x @ self.right())
 
 
-def _schur_majorant(a: FloatArray) -> _SchurMajorant:
-    t, q = schur(a.astype(complex), output="complex")
+def _majorant(a: FloatArray, v: ComplexArray, t: ComplexArray) -> _Majorant | None:
+    """The majorant of ``A ≈ V T V^{-1}`` (``T`` upper triangular), or None when ``V`` is too ill-conditioned."""
     n = a.shape[0]
-    residual = np.linalg.norm(a - q @ t @ q.conj().T, 2) + np.linalg.norm(
-        q.conj().T @ q - np.eye(n), 2
-    ) * np.linalg.norm(a, 2)
-    # Allowance for the rounding of the residual itself (n-term sums of |Q||T||Q^H| products).
-    eps = 2.0 * residual + 4 * n * _EPS * float(np.linalg.norm(np.abs(q) @ np.abs(t) @ np.abs(q).T, 2))
+    w = np.asarray(np.linalg.inv(v), dtype=complex)
+    if not np.all(np.isfinite(w)):
+        return None
+    abs_v, abs_w = np.abs(v), np.abs(w)
+    gamma = 2 * (n + 2) * _EPS  # rounding of the two residual products (n-term sums), with slack
+    residual = np.linalg.norm(a @ v - v @ t, 2) + gamma * np.linalg.norm(np.abs(a) @ abs_v + abs_v @ np.abs(t), 2)
+    defect = np.linalg.norm(np.eye(n) - w @ v, 2) + gamma * np.linalg.norm(abs_w @ abs_v, 2)
+    if not defect < 0.5:
+        return None
+    norm_w = float(np.linalg.norm(w, 2))
+    eps = norm_w * residual / (1 - defect)  # ||V^{-1}AV - T||_2 = ||(I - E)^{-1} W R||_2
+    pad = defect * norm_w / (1 - defect)  # ||V^{-1} - W||_2 = ||(I - E)^{-1} E W||_2
     m = np.abs(t) + eps
     np.fill_diagonal(m, np.real(np.diag(t)) + eps)
-    return _SchurMajorant(q, m)
+    return _Majorant(v, w, pad, m)
+
+
+def _majorants(a: FloatArray) -> list[_Majorant]:
+    """The majorants of the complex Schur form and, when it is well conditioned, of the eigenbasis."""
+    t, q = schur(a.astype(complex), output="complex")
+    found = [_majorant(a, q, t)]
+    lam, vec = np.linalg.eig(a)
+    if np.all(np.isfinite(vec)) and np.linalg.cond(vec) < _MAX_EIGENBASIS_CONDITION:
+        found.append(_majorant(a, vec.astype(complex), np.diag(lam).astype(complex)))
+    return [major for major in found if major is not None]
 
 
 def _nodes(h: float, norm: float) -> FloatArray:
@@ -274,44 +315,35 @@ class _DecayBounds:
     spread_integral: FloatArray | None
 
 
-def _decay_bounds(a: FloatArray, x1: FloatArray, n_noise: int, d: FloatArray | None, h: float) -> _DecayBounds:
-    """Quadrature and Schur-majorant bounds; ``x1 = [A, B, E]`` (E its last ``n_noise`` columns)."""
-    n, size = a.shape[0], x1.shape[1]
-    majorant = _schur_majorant(a)
-    nodes = _nodes(h, float(np.abs(a).sum(axis=1).max()))
-    aug = np.zeros((size, size))
-    aug[:n] = x1
-    y = np.stack([expm(aug * s)[:n] for s in nodes])  # (N+1, n, size): [e^{As}, Γ_B(s), Γ_E(s)]
-    steps = np.diff(nodes)
+def _majorant_terms(
+    major: _Majorant,
+    a: FloatArray,
+    x1: FloatArray,
+    e: FloatArray,
+    y: FloatArray,
+    steps: FloatArray,
+    d: FloatArray | None,
+    h: float,
+) -> list[FloatArray]:
+    """The parts of sections 3-4 that rest on a majorant: quadrature error terms and Dyson remainders."""
+    n = a.shape[0]
     # sup_growth is nondecreasing in δ: one factor per power-of-two class of steps.
     classes = np.ceil(np.log2(steps / steps.max())).astype(int)
-    growth = {c: majorant.sup_growth(float(steps.max() * 2.0**c)) for c in np.unique(classes)}
+    growth = {c: major.sup_growth(float(steps.max() * 2.0**c)) for c in np.unique(classes)}
     grow = np.stack([growth[c] for c in classes])  # (N, n, n)
-    e = x1[:, size - n_noise :]
-    f = y[:, :, :n] @ e  # e^{As_j} E
-    lip_noise = grow @ np.stack([majorant.rotate(a @ fj) for fj in f[:-1]])
-    g = np.abs(f)
-    noise_integral = (0.5 * steps[:, None, None] * (g[:-1] + g[1:]) + 0.25 * steps[:, None, None] ** 2 * lip_noise).sum(
-        axis=0
-    )
-    if d is None:
-        return _DecayBounds(noise_integral, None, None, None)
-    # First-order ΔA term: ∫ |e^{A(h-s)}| D |Y(s)| ds on the symmetric nodes (mirror index N - j).
     p = y[:, :, :n]
+    lip_noise = grow @ np.stack([major.rotate(a @ pj @ e) for pj in p[:-1]])
+    quad = 0.25 * steps[:, None, None] ** 2
+    terms = [(quad * lip_noise).sum(axis=0)]
+    if d is None:
+        return terms
     mirror = p[::-1]  # e^{A(h - s_j)}
-    lip_y = grow @ np.stack([majorant.rotate(pj @ x1) for pj in p[:-1]])
-    lip_p = grow @ np.stack([majorant.rotate(a @ pm) for pm in mirror[1:]])
+    lip_y = grow @ np.stack([major.rotate(pj @ x1) for pj in p[:-1]])
+    lip_p = grow @ np.stack([major.rotate(a @ pm) for pm in mirror[1:]])
     sup_y = np.abs(y[:-1]) + steps[:, None, None] * lip_y
     sup_p = np.abs(mirror[1:]) + steps[:, None, None] * lip_p
-    # Trapezoid sums of the signed sensitivities ∫ e^{A(h-s)}_{ij} Y(s)_{lk} ds, then Σ_jl D_jl |·|.
-    weights = np.zeros(len(nodes))
-    weights[:-1] += 0.5 * steps
-    weights[1:] += 0.5 * steps
-    sensitivity = np.einsum("t,tij,tlk->ijlk", weights, mirror, y)
-    lip = lip_p @ d @ sup_y + sup_p @ d @ lip_y
-    first = np.einsum("jl,ijlk->ik", d, np.abs(sensitivity)) + (0.25 * steps[:, None, None] ** 2 * lip).sum(axis=0)
-    abs_q = np.abs(majorant.q)
-    m, dq = majorant.m, abs_q.T @ d @ abs_q  # |Q^H| D |Q| bounds |Q^H ΔA Q|
+    terms.append((quad * (lip_p @ d @ sup_y + sup_p @ d @ lip_y)).sum(axis=0))
+    m, dq = major.m, major.right() @ d @ np.abs(major.v)  # bounds |V^{-1} ΔA V|
     eye = np.eye(n)
     rho2: list[list[FloatArray | None]] = [
         [m, dq, None, None],
@@ -321,9 +353,34 @@ def _decay_bounds(a: FloatArray, x1: FloatArray, n_noise: int, d: FloatArray | N
     ]
     _, _, remainder, remainder_integral = _block_exp_row(rho2, h)
     spread = _block_exp_row([[m, dq, None], [None, m + dq, eye], [None, None, None]], h)[2]
-    d_phi = first[:, :n] + majorant.back(remainder)
-    d_inputs = first[:, n:] + majorant.back(remainder_integral) @ np.abs(x1[:, n:])
-    return _DecayBounds(noise_integral, d_phi, d_inputs, majorant.back(spread))
+    terms += [major.back(remainder), major.back(remainder_integral) @ np.abs(x1[:, n:]), major.back(spread)]
+    return terms
+
+
+def _decay_bounds(a: FloatArray, x1: FloatArray, n_noise: int, d: FloatArray | None, h: float) -> _DecayBounds:
+    """Quadrature and majorant bounds; ``x1 = [A, B, E]`` (E its last ``n_noise`` columns)."""
+    n, size = a.shape[0], x1.shape[1]
+    nodes = _nodes(h, float(np.abs(a).sum(axis=1).max()))
+    aug = np.zeros((size, size))
+    aug[:n] = x1
+    y = np.stack([expm(aug * s)[:n] for s in nodes])  # (N+1, n, size): [e^{As}, Γ_B(s), Γ_E(s)]
+    steps = np.diff(nodes)
+    # Every part below is a sound bound with either majorant: keep the smaller, part by part.
+    e = x1[:, size - n_noise :]
+    parts = [_majorant_terms(major, a, x1, e, y, steps, d, h) for major in _majorants(a)]
+    best = [np.minimum.reduce([terms[i] for terms in parts]) for i in range(len(parts[0]))]
+    g = np.abs(y[:, :, :n] @ e)  # |e^{As_j} E|
+    noise_integral = (0.5 * steps[:, None, None] * (g[:-1] + g[1:])).sum(axis=0) + best[0]
+    if d is None:
+        return _DecayBounds(noise_integral, None, None, None)
+    # First-order ΔA term: Σ_jl D_jl |∫ e^{A(h-s)}_{ij} Y(s)_{lk} ds| by trapezoid sums on the symmetric
+    # nodes (mirror index N - j), plus the error term.
+    weights = np.zeros(len(nodes))
+    weights[:-1] += 0.5 * steps
+    weights[1:] += 0.5 * steps
+    sensitivity = np.einsum("t,tij,tlk->ijlk", weights, y[::-1, :, :n], y)
+    first = np.einsum("jl,ijlk->ik", d, np.abs(sensitivity)) + best[1]
+    return _DecayBounds(noise_integral, first[:, :n] + best[2], first[:, n:] + best[3], best[4])
 
 
 def _finite_or_inf(x: FloatArray) -> FloatArray:
