@@ -138,8 +138,8 @@ the quadrature error) in the original coordinates, so the basis only enters the 
 
 **Floating point.** As everywhere in the library, the point matrices (``expm`` of the block matrix
 and at the nodes) are taken as computed and the rounding is absorbed by the relative margin
-``ROUNDING_MARGIN`` applied to every radius here and to the observers' outputs; the residuals of
-the Schur form and of the eigenbasis are measured, not assumed.
+``ROUNDING_MARGIN`` applied to every radius here (:func:`~intervalobs.interval.inflate`) and to the
+observers' outputs; the residuals of the Schur form and of the eigenbasis are measured, not assumed.
 
 **References.**
 
@@ -162,7 +162,7 @@ from numpy.typing import NDArray
 from scipy.linalg import expm, schur
 
 from ..errors import AssumptionError, BoundsError
-from ..interval import ROUNDING_MARGIN
+from ..interval import inflate
 from .bounds import Bounds
 from .lti import LTISystem
 
@@ -502,8 +502,9 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         _check_finite("dPhi", d_phi, step, a_mid)
         _check_finite("dGamma", d_gamma, step, a_mid)
         _check_finite("noise_radius", radius, step, a_mid)
-    # Round the radii upward; the rounding of the point matrices is absorbed by the observers' output margin.
-    d_phi = d_phi * (1 + ROUNDING_MARGIN)
-    d_gamma = d_gamma * (1 + ROUNDING_MARGIN)
-    radius = radius * (1 + ROUNDING_MARGIN) + ROUNDING_MARGIN * np.abs(center)
+    # Round the radii upward (exact zeros stay zero: a point model stays a point model); the rounding of
+    # the point matrices is absorbed by the observers' output margin.
+    d_phi = inflate(-d_phi, d_phi, floor=0.0)[1]
+    d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
+    radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
     return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step)
