@@ -285,7 +285,7 @@ class Estimate:
             "state_names": list(self.state_names),
             "input_names": list(self.input_names),
         }
-        return _tables.to_frame(self.t, self._columns(), attrs, "Estimate.to_pandas")
+        return _tables.to_frame(self.t, self.columns(), attrs, "Estimate.to_pandas")
 
     def to_xarray(self) -> Any:
         """The bounds as an xarray ``Dataset`` (needs the ``data`` extra).
@@ -352,8 +352,14 @@ class Estimate:
             extra.update(input_lower=stack(inputs, "lower"), input_upper=stack(inputs, "upper"), input_names=inputs)
         return cls(t, stack(states, "lower"), stack(states, "upper"), meta=attrs, state_names=states, **extra)
 
-    def _columns(self) -> list[tuple[str, FloatArray]]:
-        """Named (T,) or (M, T) columns of the bounds, in the order of :meth:`to_pandas`."""
+    def columns(self) -> list[tuple[str, FloatArray]]:
+        """The bounds as named columns: ``NAME_lower``, ``NAME_upper``, ``NAME_width`` of each state, then input.
+
+        Returns
+        -------
+        list of (str, numpy.ndarray)
+            Column name and values, shape (T,) or (M, T); the columns of :meth:`to_pandas`.
+        """
         columns: list[tuple[str, FloatArray]] = []
         blocks = [(self.state_names, self.lower, self.upper)]
         if self.input_lower is not None and self.input_upper is not None:
