@@ -25,6 +25,33 @@ def test_empty_bounds_are_refused():
         Estimate(np.arange(2.0), np.ones((2, 1)), np.zeros((2, 1)))
 
 
+@pytest.mark.parametrize("name", ["lower", "upper", "input_lower", "input_upper"])
+def test_nan_bounds_are_refused_naming_which(name: str) -> None:
+    arrays = {"lower": np.zeros((3, 2)), "upper": np.ones((3, 2)), "input_lower": -np.ones((3, 1))}
+    arrays["input_upper"] = np.ones((3, 1))
+    arrays[name][1, 0] = np.nan
+    with pytest.raises(BoundsError, match=rf"^Estimate: {name}: expected numbers .*got NaN at t = 1 \(row 1\)$"):
+        Estimate(np.arange(3.0), **arrays)
+
+
+def test_empty_input_bounds_are_refused() -> None:
+    with pytest.raises(BoundsError, match=r"^Estimate: expected input_lower <= input_upper, .* at t = 2 \(row 2\)$"):
+        Estimate(np.arange(3.0), np.zeros((3, 1)), np.ones((3, 1)), np.array([[0.0], [0.0], [2.0]]), np.ones((3, 1)))
+
+
+def test_infinite_bounds_mean_no_bound_and_enclose() -> None:
+    """[-inf, inf] is "no bound yet": an Estimate accepts it and it encloses every finite value."""
+    t = np.arange(3.0)
+    lower = np.array([[-np.inf], [0.0], [0.0]])
+    upper = np.array([[np.inf], [1.0], [1.0]])
+    est = Estimate(t, lower, upper, lower.copy(), upper.copy())
+    truth = np.array([[1e300], [0.5], [1.0]])
+    report = est.enclosure(truth)
+    assert report.fraction == 1.0 and report.max_violation == 0.0 and report.first_violation_time is None
+    # the input fraction counts the informative rows: from the first finite input bound on
+    assert est.input_enclosure(np.array([[7.0], [2.0], [0.5]])).fraction == 0.5
+
+
 def test_plot_returns_a_figure():
     est = Estimate(np.arange(3.0), np.zeros((3, 2)), np.ones((3, 2)))
     fig = est.plot(truth=np.full((3, 2), 0.5))

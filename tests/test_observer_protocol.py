@@ -179,3 +179,45 @@ def test_repr_is_short_and_names_dimensions_and_method_facts(observer: Observer)
     for name in observer.summary_fields:
         if getattr(observer, name, None) is not None:
             assert f"{name}=" in text
+
+
+def _null_space_gsisio() -> Observer:
+    from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
+
+    return NullSpaceGSISIO.design(gsisio_example.paper_system(), gsisio_example.X0_BOX)
+
+
+# HullEstimator and the HGIO still run their own loops (not yet on the base loop).
+RUN_LOOP = {
+    **{name: make for name, make in OBSERVERS.items() if name not in ("hull", "hgio")},
+    "null-space-gsisio": _null_space_gsisio,
+}
+
+
+@pytest.mark.parametrize("name", sorted(RUN_LOOP), ids=sorted(RUN_LOOP))
+def test_run_equals_init_and_steps_as_its_rows_say(name: str) -> None:
+    """``run`` gives the numbers of ``init`` then ``step`` at every sample, rows as ``meta["rows"]`` states.
+
+    ``"predicted"``: row 0 is the prior, row k + 1 the state after ``step`` with ``y_k``; ``"filtered"``:
+    row k is the state after ``step`` with ``y_k``. Input rows without a bound are ``[-inf, inf]``.
+    """
+    observer = RUN_LOOP[name]()
+    rng = np.random.default_rng(11)
+    runs, steps = 2, 5
+    h = float(getattr(observer, "h", None) or 1.0)
+    t = np.arange(steps) * h
+    y = 0.01 * rng.uniform(-1, 1, (runs, steps, observer.p))
+    u = 0.1 * rng.uniform(-1, 1, (runs, steps, observer.m)) if observer.m else None
+    est = observer.run(t, y, u)
+    assert est.meta["rows"] == observer.rows in ("predicted", "filtered")
+    for i in range(runs):
+        state = observer.init()
+        rows = [] if observer.rows == "filtered" else [state]
+        for k in range(steps - len(rows)):
+            state = observer.step(state, y[i, k], None if u is None else u[i, k])
+            rows.append(state)
+        np.testing.assert_allclose(est.lower[i], [s.lower for s in rows], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(est.upper[i], [s.upper for s in rows], rtol=1e-12, atol=1e-12)
+        if est.input_lower is not None and est.input_upper is not None:
+            np.testing.assert_allclose(est.input_lower[i], [s.input_lower for s in rows], rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(est.input_upper[i], [s.input_upper for s in rows], rtol=1e-12, atol=1e-12)

@@ -68,7 +68,8 @@ def enclosure_report(
 ) -> EnclosureReport:
     """Compare bounds with the truth after ``transient``; time is the axis before the last.
 
-    Samples whose bounds are not finite count as not enclosed (an undefined bound guarantees nothing).
+    An infinite bound encloses every finite value (``[-inf, inf]``: no bound yet, which is sound); a
+    sample whose comparison is undefined (NaN in the bounds or the truth) counts as not enclosed.
 
     Parameters
     ----------
@@ -94,7 +95,7 @@ def enclosure_report(
     if x.size == 0:
         return EnclosureReport(1.0, 0.0, None)
     amount = np.maximum(lo - x, x - hi)
-    amount = np.where(np.isfinite(amount), amount, np.inf)
+    amount = np.where(np.isnan(amount), np.inf, amount)
     outside = amount / (1.0 + np.abs(x)) > ENCLOSURE_TOL
     time_axis_bad = np.any(outside, axis=tuple(i for i in range(outside.ndim) if i != outside.ndim - 2))
     first = float(tt[after][np.argmax(time_axis_bad)]) if time_axis_bad.any() else None
@@ -112,14 +113,19 @@ class Estimate:
     lower, upper : array_like, shape (T, n) or (M, T, n)
         State bounds; a leading axis holds Monte Carlo runs.
     input_lower, input_upper : array_like, optional
-        Unknown-input bounds, shape (T, q) or (M, T, q); NaN where no bound is available yet
-        (e.g. a delayed estimate).
+        Unknown-input bounds, shape (T, q) or (M, T, q); ``-inf``/``inf`` where no bound is available
+        yet (e.g. a delayed estimate).
     meta : dict
         Method name, gains, transient time (key ``"transient_s"``) and other design facts.
     state_names : sequence of str, optional
         Names of the states (default ``x1 …``; an observer's ``run`` gives its model's names).
     input_names : sequence of str, optional
         Names of the unknown inputs (default ``d1 …``).
+
+    Raises
+    ------
+    BoundsError
+        A bound is NaN (not an interval: ``-inf``/``inf`` say "no bound"), or lower > upper somewhere.
     """
 
     t: FloatArray
@@ -142,8 +148,7 @@ class Estimate:
             )
         if self.lower.shape[-2] != self.t.size:
             raise DimensionError(f"Estimate: expected {self.t.size} time steps in lower, got {self.lower.shape[-2]}")
-        if np.any(self.lower > self.upper):
-            raise BoundsError("Estimate: lower > upper somewhere: the bounds are empty")
+        _check_bounds("lower", "upper", self.t, self.lower, self.upper)
         if (self.input_lower is None) != (self.input_upper is None):
             raise DimensionError("Estimate: give both input_lower and input_upper or neither")
         if self.input_lower is not None and self.input_upper is not None:
@@ -154,6 +159,7 @@ class Estimate:
                     f"Estimate: input bounds must have shape {self.lower.shape[:-1]} + (q,), "
                     f"got {self.input_lower.shape} and {self.input_upper.shape}"
                 )
+            _check_bounds("input_lower", "input_upper", self.t, self.input_lower, self.input_upper)
         self.state_names = as_names("state_names", self.state_names or None, self.lower.shape[-1], "x")
         q = 0 if self.input_lower is None else self.input_lower.shape[-1]
         self.input_names = as_names("input_names", self.input_names or None, q, "d")
@@ -192,7 +198,7 @@ class Estimate:
         return enclosure_report(self.t, self.lower, x, self.upper, self.transient if transient is None else transient)
 
     def input_enclosure(self, d: ArrayLike, transient: float | None = None) -> EnclosureReport:
-        """Check that the unknown-input bounds contain the true input ``d``; NaN bounds are skipped.
+        """Check that the unknown-input bounds contain the true input ``d``; rows without a bound are skipped.
 
         Parameters
         ----------
@@ -200,7 +206,8 @@ class Estimate:
             True unknown input.
         transient : float, optional
             Ignore samples before this time (default: the method's own transient, or the first time
-            at which every input bound is finite if that is later).
+            at which every input bound is finite if that is later: an infinite bound encloses
+            trivially, so the fraction measures the informative rows).
 
         Returns
         -------
@@ -420,3 +427,27 @@ class Estimate:
             ax=ax,
             time_unit=time_unit,
         )
+
+
+def _check_bounds(lower_name: str, upper_name: str, t: FloatArray, lower: FloatArray, upper: FloatArray) -> None:
+    """Refuse NaN bounds (not an interval) and empty ones (lower > upper), naming the first offending sample."""
+    for name, values in ((lower_name, lower), (upper_name, upper)):
+        if np.isnan(values).any():
+            k = int(np.argwhere(np.isnan(values))[0][-2])
+            raise BoundsError(
+                f"Estimate: {name}: expected numbers (-inf/inf for no bound), got NaN at t = {t[k]:g} (row {k})"
+            )
+    if np.any(lower > upper):
+        k = int(np.argwhere(lower > upper)[0][-2])
+        raise BoundsError(
+            f"Estimate: expected {lower_name} <= {upper_name}, got {lower_name} > {upper_name} "
+            f"at t = {t[k]:g} (row {k})"
+        )
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return str(value)

@@ -217,7 +217,7 @@ def difference_derivative_bounds(
     .. math:: \dot\psi(t_k) \in \frac{y_k - y_{k-1}}{h} \pm \Big(\bar{\dot\delta} + \frac{L(h + \tau)}{2}
               + \Big|\frac{y_k - y_{k-1}}{h}\Big|\frac{\tau}{h - \tau}\Big),
 
-    widened outward for the rounding of the quotient. Row 0 is NaN (no previous sample).
+    widened outward for the rounding of the quotient. Row 0 is ``[-inf, inf]`` (no previous sample: no bound).
 
     Parameters
     ----------
@@ -248,8 +248,8 @@ def difference_derivative_bounds(
     accel = as_vector("accel_bound", accel_bound, p)
     if np.any(rate < 0) or np.any(accel < 0):
         raise BoundsError("difference_derivative_bounds: expected nonnegative rate_radius and accel_bound")
-    lower = np.full(ys.shape, np.nan)
-    upper = np.full(ys.shape, np.nan)
+    lower = np.full(ys.shape, -np.inf)
+    upper = np.full(ys.shape, np.inf)
     lo, hi = difference_pair_bounds(ys[..., :-1, :], ys[..., 1:, :], h, rate, accel, step_tolerance)
     lower[..., 1:, :] = lo
     upper[..., 1:, :] = hi

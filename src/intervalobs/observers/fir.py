@@ -132,6 +132,7 @@ class FiniteMemoryObserver(Observer):
         if not np.all(np.isfinite(k)):
             raise DataError("gains: expected finite values")
         self.filtered = bool(filtered)
+        self.rows = "filtered" if self.filtered else "predicted"
         self.window = int(k.shape[2]) - self.filtered
         if self.window < 1:
             raise DataError(f"gains: a filtered bank needs at least 2 weights (N + 1), got {k.shape[2]}")
@@ -395,27 +396,13 @@ class FiniteMemoryObserver(Observer):
         internal: dict[str, Any] = {"fallback": inner, "k": 0, "ys": [], "us": [], "rows": rows}
         return ObserverState(inner.lower, inner.upper, internal=internal)
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
         """Consume ``y_k``, ``u_k``; return the box of ``x_{k+1}`` (fallback ∩ prediction ∩ bank).
 
-        Parameters
-        ----------
-        state : ObserverState
-            State at ``t_k``.
-        y : array_like, shape (p,) or (M, p)
-            Measurement at ``t_k``.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input at ``t_k``.
-
-        Returns
-        -------
-        ObserverState
-            When ``filtered``, ``internal["filtered_lower"/"filtered_upper"]`` hold the box of ``x_k``
-            given ``y_k`` too (row ``k`` of :meth:`run`); the state's box is then the prediction.
+        When ``filtered``, the bank's box of ``x_k`` given ``y_k`` (row ``k`` of the filtered form) is
+        ``internal["filtered_lower"/"filtered_upper"]`` of the result, and the state's box is the prediction.
         """
-        yk, uk = self._sample(y, u)
-        if uk.shape[-1:] != (self.m,) or not np.all(np.isfinite(uk)):
-            raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
+        yk, uk = y, u
         old = state.internal
         keep = self.window + 1
         ys, us, rows = (old["ys"] + [yk])[-keep:], (old["us"] + [uk])[-keep:], old["rows"]
@@ -425,7 +412,7 @@ class FiniteMemoryObserver(Observer):
             lower, upper = self._measured(ys, us[:-1], rows, lower, upper)
             rows = [*rows, (lower, upper)][-self.window :]
             internal.update(filtered_lower=lower, filtered_upper=upper)
-        inner = self.fallback.step(old["fallback"], yk, uk)
+        inner = self.fallback._step(old["fallback"], yk, uk)
         p_lo, p_hi = self._predict(lower, upper, uk)
         lower, upper = np.maximum(inner.lower, p_lo), np.minimum(inner.upper, p_hi)
         if not self.filtered:  # row k + 1 uses y_{k+1-N} … y_k
@@ -475,7 +462,7 @@ class FiniteMemoryObserver(Observer):
             )
             lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
             upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
-        return Estimate(times, lower, upper, meta=self.meta())
+        return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.

@@ -28,7 +28,7 @@ read as :math:`\mathrm{rk}(I - K_1 - L_1) = \mathrm{rk}(I - K_1 + L_1) = n`. Two
 
 Rows of :meth:`GSISIO.run`: ``lower[k]``, ``upper[k]`` bound :math:`x_k` given :math:`y_0 \dots y_{k-1}`
 (the base protocol); ``input_lower[k]``, ``input_upper[k]`` bound :math:`d_{k-1}` (one step delayed,
-available together with :math:`x_k`; row 0 is NaN).
+available together with :math:`x_k`; row 0 is :math:`[-\infty, \infty]`).
 
 The sound variant for rank-deficient H is :class:`~intervalobs.observers.null_space_gsisio.NullSpaceGSISIO`.
 """
@@ -44,8 +44,7 @@ from ..design.abstraction import AffineAbstraction, abstraction_sigma, affine_ab
 from ..design.composed_range import ComposedRange
 from ..design.gsisio import GSISIODesign, gsisio_design
 from ..design.mixed_monotone import decomposition_bounds, jacobian_bounds
-from ..errors import AssumptionError, DimensionError
-from ..estimate import Estimate
+from ..errors import AssumptionError
 from ..interval import inflate, matvec_bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_box, as_vector, check_no_kwargs
@@ -218,7 +217,7 @@ class GSISIO(Observer):
 
     # ---- protocol ----------------------------------------------------------------------------------
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
-        """State at k = 0: the initial box, no input bound yet.
+        """State at k = 0: the initial box, no input bound yet (``[-inf, inf]``).
 
         Parameters
         ----------
@@ -232,30 +231,13 @@ class GSISIO(Observer):
         lo = self.x0[0] if x0_lower is None else as_vector("x0_lower", x0_lower, self.n)
         hi = self.x0[1] if x0_upper is None else as_vector("x0_upper", x0_upper, self.n)
         lo, hi = as_box("x0", (lo, hi), self.n)
-        nan = np.full(self.system.q, np.nan)
-        return ObserverState(lo.copy(), hi.copy(), nan, nan.copy(), {"k": 0})
+        unbounded = np.full(self.system.q, np.inf)
+        return ObserverState(lo.copy(), hi.copy(), -unbounded, unbounded, {"k": 0})
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume :math:`y_k, u_k`; return the box of :math:`x_{k+1}` and of :math:`d_k` (eqs. (4)–(7)).
-
-        Parameters
-        ----------
-        state : ObserverState
-            The current state.
-        y : array_like, shape (p,) or (M, p)
-            Measurement :math:`y_k`.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input :math:`u_k`.
-
-        Returns
-        -------
-        ObserverState
-        """
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
+        """Consume :math:`y_k, u_k`; return the box of :math:`x_{k+1}` and of :math:`d_k` (eqs. (4)–(7))."""
         lo, hi = np.asarray(state.lower, float), np.asarray(state.upper, float)
-        yk = np.asarray(y, dtype=float)
-        if yk.shape[-1] != self.p:
-            raise DimensionError(f"y: expected {self.p} components, got shape {yk.shape}")
-        uk = self._input(u, yk.shape[:-1])
+        yk, uk = y, u
         d, sysm = self.design_result, self.system
         (f_lo, f_hi), (g_lo, g_hi) = self._fg_bounds(lo, hi)
         bu, du = uk @ sysm.B.T, uk @ sysm.D.T
@@ -276,41 +258,15 @@ class GSISIO(Observer):
             d_lo, d_hi = _input_hull(np.vstack([sysm.G, sysm.H]), h_lo, h_hi, d_lo, d_hi)
         return ObserverState(x_lo, x_hi, d_lo, d_hi, {"k": int(state.internal.get("k", 0)) + 1})
 
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a record: row k bounds :math:`x_k` (from :math:`y_{0..k-1}`) and :math:`d_{k-1}`.
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Sample times.
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements.
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
+    def meta(self) -> dict[str, Any]:
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.
 
         Returns
         -------
-        Estimate
+        dict
+            ``method`` and ``input_delay_steps`` (1: input row ``k`` bounds :math:`d_{k-1}`).
         """
-        times, ys, us = self._signals(t, y, u)
-        lead = ys.shape[:-2]
-        T = times.size
-        lower = np.empty((*lead, T, self.n))
-        upper = np.empty_like(lower)
-        dl = np.full((*lead, T, self.system.q), np.nan)
-        du = np.full_like(dl, np.nan)
-        state = self.init()
-        state = ObserverState(
-            np.broadcast_to(state.lower, (*lead, self.n)).copy(), np.broadcast_to(state.upper, (*lead, self.n)).copy()
-        )
-        lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
-        for k in range(T - 1):
-            state = self.step(state, ys[..., k, :], us[..., k, :])
-            lower[..., k + 1, :], upper[..., k + 1, :] = state.lower, state.upper
-            assert state.input_lower is not None and state.input_upper is not None
-            dl[..., k + 1, :], du[..., k + 1, :] = state.input_lower, state.input_upper
-        meta = {"method": "GSISIO (seed 003, Theorem 1)", "transient_s": float(times[0]), "input_delay_steps": 1}
-        return Estimate(times, lower, upper, dl, du, meta)
+        return {"method": "GSISIO (seed 003, Theorem 1)", "input_delay_steps": 1}
 
     def current_input_bounds(
         self, x_lower: ArrayLike, x_upper: ArrayLike, y: ArrayLike, u: ArrayLike | None = None

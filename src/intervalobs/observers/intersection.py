@@ -28,7 +28,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import coordinate_candidates
 from ..errors import DataError, DesignError, DimensionError
-from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -224,24 +223,12 @@ class IntersectionObserver(Observer):
         lower, upper = self._intersect(states)
         return ObserverState(lower, upper, internal={"members": states})
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
         """Contract with ``y_k``, restart the framers from the intersection, step every member.
 
-        Parameters
-        ----------
-        state : ObserverState
-            State at ``t_k``.
-        y : array_like, shape (p,) or (M, p)
-            Measurement at ``t_k``.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input over ``[t_k, t_{k+1})``.
-
-        Returns
-        -------
-        ObserverState
-            With ``internal["filtered_lower"/"filtered_upper"]``: the box of ``x_k`` given ``y_0 … y_k``.
+        ``internal["filtered_lower"/"filtered_upper"]`` of the result: the box of ``x_k`` given ``y_0 … y_k``.
         """
-        yk, uk = self._sample(y, u)
+        yk, uk = y, u
         lead = np.broadcast_shapes(state.lower.shape[:-1], yk.shape[:-1], uk.shape[:-1])  # runs of a batched y or u
         lo, hi = np.broadcast_to(state.lower, (*lead, self.n)), np.broadcast_to(state.upper, (*lead, self.n))
         if self.contract:
@@ -250,54 +237,9 @@ class IntersectionObserver(Observer):
         for obs, member, restart in zip(self.members, state.internal["members"], self._restart):
             if restart:
                 member = self._restarted(obs, member, lo, hi)  # type: ignore[arg-type]
-            new_states.append(obs.step(member, yk, uk))
+            new_states.append(obs._step(member, yk, uk))
         lower, upper = self._intersect(new_states)
         return ObserverState(lower, upper, internal={"members": new_states, "filtered_lower": lo, "filtered_upper": hi})
-
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record (a Python loop over time, vectorised over runs).
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Sample times.
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements.
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
-
-        Returns
-        -------
-        Estimate
-        """
-        times, ys, us = self._signals(t, y, u)
-        state = self.init()
-        lead = ys.shape[:-2]
-        if lead:
-            state = ObserverState(
-                np.broadcast_to(state.lower, (*lead, self.n)).copy(),
-                np.broadcast_to(state.upper, (*lead, self.n)).copy(),
-                internal={
-                    "members": [
-                        ObserverState(
-                            np.broadcast_to(s.lower, (*lead, self.n)),
-                            np.broadcast_to(s.upper, (*lead, self.n)),
-                            internal={
-                                k: (np.broadcast_to(v, (*lead, *np.shape(v))) if isinstance(v, np.ndarray) else v)
-                                for k, v in s.internal.items()
-                            },
-                        )
-                        for s in state.internal["members"]
-                    ]
-                },
-            )
-        lower = np.empty((*ys.shape[:-1], self.n))
-        upper = np.empty_like(lower)
-        for k in range(times.size):
-            lower[..., k, :], upper[..., k, :] = state.lower, state.upper
-            if k + 1 < times.size:
-                state = self.step(state, ys[..., k, :], us[..., k, :])
-        return Estimate(times, lower, upper, meta=self.meta())
 
     # -- internals -------------------------------------------------------------------------------
     @staticmethod

@@ -29,7 +29,6 @@ __all__ = ["METHODS", "IntervalObserver"]
 FloatArray = NDArray[np.float64]
 
 METHODS = ("tube", "framer")
-"""Radius propagation methods of :class:`IntervalObserver`."""
 
 
 class IntervalObserver(Observer):
@@ -114,6 +113,7 @@ class IntervalObserver(Observer):
         self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.model: SampledModel = sampled_model(system, self.bounds, h)
+        self._uncertain = self.model.uncertain  # data-dependent radii (interval ΔA): read once per step
         self.h = self.model.h if system.continuous else float(system.dt or 1.0)
         self.L = as_matrix("L", L, (self.n, self.p))
         self.T = np.eye(self.n) if T is None else as_matrix("T", T, (self.n, self.n))
@@ -256,29 +256,18 @@ class IntervalObserver(Observer):
         # In coordinates T ≠ I the z-box maps back wider than the prior: report their intersection.
         return ObserverState(np.maximum(lower, lo), np.minimum(upper, hi), internal=internal)
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Propagate the box from ``t_k`` to ``t_{k+1}`` with ``y_k`` and ``u_k``.
-
-        Parameters
-        ----------
-        state : ObserverState
-            State at ``t_k``.
-        y : array_like, shape (p,) or (M, p)
-            Measurement at ``t_k``.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input over ``[t_k, t_{k+1})``.
-
-        Returns
-        -------
-        ObserverState
-        """
-        yk, uk = self._sample(y, u)
-        internal = self._advance(state.internal, yk, uk)
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
+        """Propagate the box from ``t_k`` to ``t_{k+1}`` with ``y_k`` and ``u_k`` (held over the step)."""
+        internal = self._advance(state.internal, y, u)
         lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
         return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record.
+        """Bounds over a whole record; a point model's recursion is evaluated without a Python loop.
+
+        With interval ``ΔA`` the radii depend on the data and the base loop of :meth:`step` runs;
+        a point model's centres go through the compiled linear recursion and its radii, which do not
+        depend on the data, are computed once (the same numbers as :meth:`step`, measurably faster).
 
         Parameters
         ----------
@@ -294,25 +283,15 @@ class IntervalObserver(Observer):
         Estimate
         """
         times, ys, us = self._signals(t, y, u)
-        state = self.init()
         if self.model.uncertain:
-            z_c = np.empty((*ys.shape[:-1], self.n))
-            z_r = np.empty_like(z_c)
-            internal = {
-                key: np.broadcast_to(value, (*ys.shape[:-2], *np.shape(value))) if key != "k" else value
-                for key, value in state.internal.items()
-            }
-            for k in range(times.size):
-                z_c[..., k, :], z_r[..., k, :] = internal["z_center"], internal["z_radius"]
-                if k + 1 < times.size:
-                    internal = self._advance(internal, ys[..., k, :], us[..., k, :])
-        else:
-            drive = ys[..., :-1, :] @ self._TL.T + us[..., :-1, :] @ self._TGamma.T + self._offset
-            z_c = self._center_recursion(state.internal["z_center"], drive)
-            z_r = np.broadcast_to(self._default_radius(times.size), z_c.shape)
+            return self._loop(times, ys, us)[0]
+        state = self.init()
+        drive = ys[..., :-1, :] @ self._TL.T + us[..., :-1, :] @ self._TGamma.T + self._offset
+        z_c = self._center_recursion(state.internal["z_center"], drive)
+        z_r = np.broadcast_to(self._default_radius(times.size), z_c.shape)
         lower, upper = self._x_box(z_c, z_r)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
-        return Estimate(times, lower, upper, meta=self.meta())
+        return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
     # -- internals -------------------------------------------------------------------------------
     def _default_radius(self, steps: int) -> FloatArray:
@@ -348,7 +327,7 @@ class IntervalObserver(Observer):
     def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
         """Radius of the box of everything unknown that enters one step (in z-coordinates)."""
         radius = self._radius_input
-        if self.model.uncertain:
+        if self._uncertain:
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
             radius = radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T
         return np.asarray(radius)

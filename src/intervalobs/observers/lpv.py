@@ -302,6 +302,7 @@ class LPVIntervalObserver(Observer):
     h: float
 
     method = "lpv-interval-observer"
+    rows = "filtered"
 
     def __init__(
         self,
@@ -558,16 +559,22 @@ class LPVIntervalObserver(Observer):
             ``eps_upper`` (at :math:`t_k`).
         """
         ys = np.asarray(y, dtype=float)
-        single = ys.ndim == 1
-        y2 = np.atleast_2d(ys)
-        if y2.shape[-1] != self.p or not np.all(np.isfinite(y2)):
+        if ys.shape[-1:] != (self.p,) or ys.ndim > 2 or not np.all(np.isfinite(ys)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {ys.shape}")
-        u2 = self._input(u, y2.shape[:-1])
+        us = self._input(u, ys.shape[:-1])
         th = None if theta is None else np.atleast_2d(np.asarray(theta, dtype=float))
-        th = self._check_theta(th, (y2.shape[0],))
+        th = self._check_theta(th, (np.atleast_2d(ys).shape[0],))
+        return self._step(state, ys, us, th if th is None or ys.ndim == 2 else th[0])
+
+    def _step(
+        self, state: ObserverState, y: FloatArray, u: FloatArray, theta: FloatArray | None = None
+    ) -> ObserverState:
+        """:meth:`step` on a validated sample (``theta`` of the sample's leading shape, or None)."""
+        single = y.ndim == 1
         zl = np.atleast_2d(state.internal["z_lower"])
         zu = np.atleast_2d(state.internal["z_upper"])
-        x_lo, x_hi, e_lo, e_hi, zl, zu = self.advance(zl, zu, y2, np.asarray(u2, dtype=float), th)
+        th = None if theta is None else np.atleast_2d(theta)
+        x_lo, x_hi, e_lo, e_hi, zl, zu = self.advance(zl, zu, np.atleast_2d(y), np.atleast_2d(u), th)
         if single:
             x_lo, x_hi, e_lo, e_hi, zl, zu = (a[0] for a in (x_lo, x_hi, e_lo, e_hi, zl, zu))
         return ObserverState(
@@ -606,22 +613,21 @@ class LPVIntervalObserver(Observer):
         eps_lower, eps_upper : numpy.ndarray, shape like ``estimate.lower``
         """
         times, ys, us = self._signals(t, y, u)
-        squeeze = ys.ndim == 2
-        y3 = ys[None] if squeeze else ys
-        u3 = np.broadcast_to(us[None] if us.ndim == 2 else us, (*y3.shape[:-1], self.m))
-        th3 = self._check_theta(theta, y3.shape[:-1])
+        th = self._check_theta(theta, ys.shape[:-1])
         state = self.init(x0_lower, x0_upper)
-        zl = np.broadcast_to(np.atleast_2d(state.internal["z_lower"]), (y3.shape[0], self.n)).copy()
-        zu = np.broadcast_to(np.atleast_2d(state.internal["z_upper"]), (y3.shape[0], self.n)).copy()
-        shape = (y3.shape[0], times.size, self.n)
-        lo, hi, el, eh = (np.empty(shape) for _ in range(4))
-        for k in range(times.size):
-            th_k = None if th3 is None else th3[:, k]
-            lo[:, k], hi[:, k], el[:, k], eh[:, k], zl, zu = self.advance(zl, zu, y3[:, k], u3[:, k], th_k)
-        if squeeze:
-            lo, hi, el, eh = lo[0], hi[0], el[0], eh[0]
-        meta: dict[str, Any] = {"method": self.method, "h": self.h, "transient_s": float(times[0])}
-        return Estimate(times, lo, hi, meta=meta), el, eh
+        signals = {} if th is None else {"theta": th}
+        estimate, eps = self._loop(times, ys, us, state, signals, collect=("eps_lower", "eps_upper"))
+        return estimate, eps["eps_lower"], eps["eps_upper"]
+
+    def meta(self) -> dict[str, Any]:
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.
+
+        Returns
+        -------
+        dict
+            ``method`` and ``h``.
+        """
+        return {"method": self.method, "h": self.h}
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, theta: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record; ``y`` is (T, p) or (M, T, p); row k is the box of :math:`x(t_k)`.

@@ -39,7 +39,7 @@ rank-deficient H, with any number
 Rows of :meth:`NullSpaceGSISIO.run`: ``lower[k]``, ``upper[k]`` bound :math:`x_k` given
 :math:`y_0 \dots y_k` (the current output is needed: without it :math:`x_k` is unbounded along
 :math:`GV_2`); ``step(state, y_k, u_k)`` consumes :math:`y_k` and returns the state *at* k.
-``input_lower[k]`` bounds :math:`d_{k-1}` (row 0 NaN).
+``input_lower[k]`` bounds :math:`d_{k-1}` (row 0 :math:`[-\infty, \infty]`).
 """
 
 from __future__ import annotations
@@ -53,7 +53,6 @@ from numpy.typing import ArrayLike, NDArray
 from ..design.composed_range import ComposedRange, _mat_bounds, _sandwich
 from ..design.mixed_monotone import jacobian_bounds, width_matrix
 from ..errors import AssumptionError, DimensionError
-from ..estimate import Estimate
 from ..inclusion import evaluate_matrix
 from ..interval import inflate, matvec_bounds
 from ..systems.nonlinear import NonlinearSystem
@@ -242,6 +241,7 @@ class NullSpaceGSISIO(Observer):
     """
 
     summary_fields = ("hidden", "newton_steps")
+    rows = "filtered"
 
     def __init__(
         self,
@@ -620,38 +620,22 @@ class NullSpaceGSISIO(Observer):
         hi = self.x0[1] if x0_upper is None else as_vector("x0_upper", x0_upper, self.n)
         lo, hi = as_box("x0", (lo, hi), self.n)
         zlo, zhi = inflate(*matvec_bounds(self.Z, lo, hi))
-        nan = np.full(self.system.q, np.nan)
-        return ObserverState(lo.copy(), hi.copy(), nan, nan.copy(), {"z_lower": zlo, "z_upper": zhi, "started": False})
+        unbounded = np.full(self.system.q, np.inf)
+        internal = {"z_lower": zlo, "z_upper": zhi, "started": False}
+        return ObserverState(lo.copy(), hi.copy(), -unbounded, unbounded, internal)
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume :math:`y_k, u_k` and return the state *at* k: box of :math:`x_k` and of :math:`d_{k-1}`.
-
-        Parameters
-        ----------
-        state : ObserverState
-            The current state.
-        y : array_like, shape (p,) or (M, p)
-            Measurement :math:`y_k`.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input :math:`u_k`.
-
-        Returns
-        -------
-        ObserverState
-        """
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
+        """Consume :math:`y_k, u_k` and return the state *at* k: box of :math:`x_k` and of :math:`d_{k-1}`."""
         sysm = self.system
-        yk = np.asarray(y, dtype=float)
-        if yk.shape[-1] != self.p:
-            raise DimensionError(f"y: expected {self.p} components, got shape {yk.shape}")
-        uk = self._input(u, yk.shape[:-1])
+        yk, uk = y, u
         zlo = np.asarray(state.internal["z_lower"], float)
         zhi = np.asarray(state.internal["z_upper"], float)
         lead = yk.shape[:-1]
         zlo, zhi = np.broadcast_to(zlo, (*lead, self.n)), np.broadcast_to(zhi, (*lead, self.n))
         started = bool(state.internal.get("started", False))
         na = self.n_a
-        d_lo = np.full((*lead, sysm.q), np.nan)
-        d_hi = np.full_like(d_lo, np.nan)
+        d_lo = np.full((*lead, sysm.q), -np.inf)  # no bound of d_{-1}
+        d_hi = np.full_like(d_lo, np.inf)
         if started:
             y_prev = np.asarray(state.internal["y"], float)
             u_prev = np.asarray(state.internal["u"], float)
@@ -747,39 +731,12 @@ class NullSpaceGSISIO(Observer):
         V = np.concatenate([self.V1, self.V2], axis=1)
         return inflate(*matvec_bounds(V, np.concatenate(parts_lo, -1), np.concatenate(parts_hi, -1)))
 
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a record: row k bounds :math:`x_k` given :math:`y_{0..k}`, and :math:`d_{k-1}`.
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Sample times.
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements.
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
+    def meta(self) -> dict[str, Any]:
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.
 
         Returns
         -------
-        Estimate
+        dict
+            ``method`` and ``input_delay_steps`` (1: input row ``k`` bounds :math:`d_{k-1}`).
         """
-        times, ys, us = self._signals(t, y, u)
-        lead = ys.shape[:-2]
-        T = times.size
-        lower = np.empty((*lead, T, self.n))
-        upper = np.empty_like(lower)
-        dl = np.full((*lead, T, self.system.q), np.nan)
-        du = np.full_like(dl, np.nan)
-        state = self.init()
-        for k in range(T):
-            state = self.step(state, ys[..., k, :], us[..., k, :])
-            lower[..., k, :], upper[..., k, :] = state.lower, state.upper
-            assert state.input_lower is not None and state.input_upper is not None
-            dl[..., k, :], du[..., k, :] = state.input_lower, state.input_upper
-        meta = {
-            "method": "NullSpaceGSISIO (seed 003 made sound: current d-free output)",
-            "transient_s": float(times[0]),
-            "input_delay_steps": 1,
-            "rows": "x_k given y_0..y_k; d_{k-1}",
-        }
-        return Estimate(times, lower, upper, dl, du, meta)
+        return {"method": "NullSpaceGSISIO (seed 003 made sound: current d-free output)", "input_delay_steps": 1}

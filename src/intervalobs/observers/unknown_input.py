@@ -745,11 +745,12 @@ class UnknownInputIntervalObserver(Observer):
                 np.broadcast_to(state.upper, w_lo.shape).copy(),
             )
             hosm_q = self.hosm.init(yk) if self.hosm is not None else None
-            d_lo = np.full(yk.shape, np.nan)
-            d_hi = np.full(yk.shape, np.nan)
             if self.derivative == "hosm" and hosm_q is not None:
                 d_lo, d_hi = hosm_q[..., 1] - self.beta, hosm_q[..., 1] + self.beta
-            xi_lo, xi_hi = self._input_box(w_lo, w_hi, yk, d_lo, d_hi)
+                xi_lo, xi_hi = self._input_box(w_lo, w_hi, yk, d_lo, d_hi)
+            else:  # no derivative bound before a second sample: no input bound yet
+                xi_lo = np.full((*w_lo.shape[:-1], self.decoupling.M0.shape[0]), -np.inf)
+                xi_hi = -xi_lo
             internal = {
                 "started": True,
                 "w_lo": w_lo,
@@ -823,8 +824,8 @@ class UnknownInputIntervalObserver(Observer):
         Returns
         -------
         Estimate
-            State bounds, unknown-input bounds (NaN where none is available: the first sample with the
-            difference enclosure) and ``meta`` with ``transient_s``.
+            State bounds, unknown-input bounds (``[-inf, inf]`` where none is available: the first
+            sample with the difference enclosure) and ``meta`` with ``transient_s``.
         """
         times, ys, _ = self._signals(t, y, u[0] if isinstance(u, tuple) else u)
         u_lo, u_hi = self._input_signal(u, ys.shape[:-1], times.size)
@@ -871,13 +872,12 @@ class UnknownInputIntervalObserver(Observer):
                 if q1.shape != ys.shape:
                     raise DataError(f"hosm_q1: expected shape {ys.shape}, got {q1.shape}")
             d_lo, d_hi = q1 - self.beta, q1 + self.beta
-        else:
-            d_lo = np.full(ys.shape, np.nan)
-            d_hi = np.full(ys.shape, np.nan)
-            d_lo[..., 1:, :], d_hi[..., 1:, :] = self._derivative_pair(
-                ys[..., :-1, :], ys[..., 1:, :], u_lo[..., :-1, :], u_hi[..., :-1, :]
-            )
-        xi_lo, xi_hi = self._input_box(w_lo_p, w_hi_p, ys, d_lo, d_hi)
+            xi_lo, xi_hi = self._input_box(w_lo_p, w_hi_p, ys, d_lo, d_hi)
+        else:  # the difference enclosure needs a previous sample: row 0 has no input bound
+            d_lo, d_hi = self._derivative_pair(ys[..., :-1, :], ys[..., 1:, :], u_lo[..., :-1, :], u_hi[..., :-1, :])
+            later = self._input_box(w_lo_p[..., 1:, :], w_hi_p[..., 1:, :], ys[..., 1:, :], d_lo, d_hi)
+            xi_lo = np.concatenate([np.full_like(later[0][..., :1, :], -np.inf), later[0]], axis=-2)
+            xi_hi = np.concatenate([np.full_like(later[1][..., :1, :], np.inf), later[1]], axis=-2)
         meta = {
             "method": "unknown-input interval observer (seed 000)",
             "derivative": self.derivative,

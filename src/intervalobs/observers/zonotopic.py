@@ -37,7 +37,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError, DesignError
-from ..estimate import Estimate
 from ..interval import inflate
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -203,54 +202,17 @@ class ZonotopicObserver(Observer):
         generators = np.diag(0.5 * (hi - lo))
         return ObserverState(lo.copy(), hi.copy(), internal={"center": center, "generators": generators})
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
         """Propagate the zonotope from ``k`` to ``k+1`` with ``y_k`` and ``u_k`` ((7a)–(7b)).
 
-        Parameters
-        ----------
-        state : ObserverState
-            State at ``k`` (``internal['center']`` (..., n), ``internal['generators']`` (..., n, r)).
-        y : array_like, shape (p,) or (M, p)
-        u : array_like, shape (m,) or (M, m), optional
-
-        Returns
-        -------
-        ObserverState
+        ``internal`` holds ``center`` (..., n) and ``generators`` (..., n, r).
         """
-        yk, uk = self._sample(y, u)
         c, g = state.internal["center"], state.internal["generators"]
-        lead = np.broadcast_shapes(c.shape[:-1], yk.shape[:-1], uk.shape[:-1])  # runs of a batched y or u
+        lead = np.broadcast_shapes(c.shape[:-1], y.shape[:-1], u.shape[:-1])  # runs of a batched y or u
         c, g = np.broadcast_to(c, (*lead, self.n)), np.broadcast_to(g, (*lead, *g.shape[-2:]))
-        c, g = self._advance(c, g, yk, uk)
+        c, g = self._advance(c, g, y, u)
         lower, upper = self._hull(c, g)
         return ObserverState(lower, upper, internal={"center": c, "generators": g})
-
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record (the interval hull of each zonotope).
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements; a leading axis holds Monte Carlo runs (vectorised).
-        u : array_like, shape (T, m) or (M, T, m), optional
-
-        Returns
-        -------
-        Estimate
-        """
-        times, ys, us = self._signals(t, y, u)
-        state = self.init()
-        lead = ys.shape[:-2]
-        c = np.broadcast_to(state.internal["center"], (*lead, self.n))
-        g = np.broadcast_to(state.internal["generators"], (*lead, self.n, self.n))
-        lower = np.empty((*lead, times.size, self.n))
-        upper = np.empty_like(lower)
-        lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
-        for k in range(times.size - 1):
-            c, g = self._advance(c, g, ys[..., k, :], us[..., k, :])
-            lower[..., k + 1, :], upper[..., k + 1, :] = self._hull(c, g)
-        return Estimate(times, lower, upper, meta=self.meta())
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.

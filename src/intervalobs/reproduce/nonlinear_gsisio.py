@@ -425,7 +425,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "newton_steps": observer.newton_steps,
             "width_certificate": certificate.as_dict(),
             "mean_state_width_norm": float(width_x.mean()),
-            "mean_input_width_norm": float(np.nanmean(width_d)),
+            "mean_input_width_norm": float(width_d[1:].mean()),  # row 0 bounds no input (d_{-1})
             "monte_carlo_runs": MONTE_CARLO_RUNS,
             "monte_carlo_steps": LONG_HORIZON,
             "monte_carlo_input_scales": scale.ravel(),
@@ -434,7 +434,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "monte_carlo_mean_state_width_norm": float(long_width.mean()),
             "monte_carlo_state_width_norm_max_after_10_steps": float(long_width[..., 10:].max()),
             "monte_carlo_mean_input_width_norm": float(
-                np.nanmean(np.linalg.norm(mc_est.input_upper - mc_est.input_lower, axis=-1))  # type: ignore[operator]
+                np.linalg.norm(mc_est.input_upper - mc_est.input_lower, axis=-1)[..., 1:].mean()  # type: ignore[operator]
             ),
         },
         "choices": {

@@ -279,7 +279,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
 def _observer_facts(observers: dict[str, Observer]) -> dict[str, dict[str, Any]]:
     facts: dict[str, dict[str, Any]] = {}
     for name, obs in observers.items():
-        info = obs.meta()  # type: ignore[attr-defined]
+        info = obs.meta()
         facts[name] = {
             "method": info["method"],
             "L": np.ravel(info["L"]).tolist(),
