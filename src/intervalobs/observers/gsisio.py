@@ -47,7 +47,7 @@ from ..design.mixed_monotone import decomposition_bounds, jacobian_bounds
 from ..errors import AssumptionError
 from ..interval import inflate, matvec_bounds
 from ..systems.nonlinear import NonlinearSystem
-from ..validation import as_box, as_vector, check_no_kwargs
+from ..validation import as_box, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["GSISIO"]
@@ -228,9 +228,7 @@ class GSISIO(Observer):
         -------
         ObserverState
         """
-        lo = self.x0[0] if x0_lower is None else as_vector("x0_lower", x0_lower, self.n)
-        hi = self.x0[1] if x0_upper is None else as_vector("x0_upper", x0_upper, self.n)
-        lo, hi = as_box("x0", (lo, hi), self.n)
+        lo, hi = self._prior_box(self.x0, x0_lower, x0_upper)
         unbounded = np.full(self.system.q, np.inf)
         return ObserverState(lo.copy(), hi.copy(), -unbounded, unbounded, {"k": 0})
 
