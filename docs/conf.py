@@ -96,8 +96,12 @@ def _directive(module: ModuleType, name: str) -> str | None:
         if inspect.isclass(obj):
             return f".. autoclass:: {module.__name__}.{name}\n   :members:\n"
         return f".. autofunction:: {module.__name__}.{name}\n"
-    if hasattr(module, "__path__") or ("", name) not in _attribute_docs(module):
+    docs = _attribute_docs(module)
+    if hasattr(module, "__path__") or ("", name) not in docs:
         return None  # data re-exported by a package, or without its own docstring (autodoc would show its type's)
+    if callable(obj):  # a type alias such as tuple[...]: numpydoc would try to read a call signature
+        body = "\n".join(f"   {line}" if line else "" for line in docs[("", name)])
+        return f".. py:data:: {module.__name__}.{name}\n\n{body}\n"
     return f".. autodata:: {module.__name__}.{name}\n   :no-value:\n"
 
 
