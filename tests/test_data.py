@@ -179,3 +179,27 @@ def test_csv_record_through_pandas_is_enclosed(tmp_path, setup):
         assert report.fraction == 1.0 and report.max_violation == 0.0
         widths = estimate.to_pandas()["velocity_width"]
         assert widths.iloc[-1] < widths.iloc[100] < widths.iloc[0]
+
+
+def test_a_python_control_response_is_a_truth(setup):
+    """python-control's time-last responses (one trace or several) are compared time-first, by state label."""
+    control = pytest.importorskip("control")
+    system, bounds, _, _ = setup
+    labelled = control.ss(system.A, system.B, system.C, 0, states=["velocity", "position"])  # other order
+    assert LTISystem.from_control(labelled).state_names == ("velocity", "position")
+    plant = control.ss(system.A, system.B, system.C, 0, states=list(system.state_names))
+    sampled = control.c2d(plant, H)  # zero-order hold, as the observers assume
+    observer = IntervalObserver.design(LTISystem.from_control(plant), bounds, h=H)
+    t = np.arange(0.0, 2.0, H)
+    resp = control.forced_response(sampled, T=t, U=np.cos(3 * t), X0=[0.9, -0.7])
+    estimate = observer.run(resp.time, resp.outputs.T, resp.inputs.T)
+    assert resp.states.shape == (2, t.size) and estimate.enclosure(resp).max_violation == 0.0
+    assert estimate.enclosure(resp) == estimate.enclosure(resp.states.T)
+    frame = pd.DataFrame(resp.states.T[:, ::-1], index=t, columns=["velocity", "position"])  # reordered by name
+    assert estimate.enclosure(frame).max_violation == 0.0
+    assert estimate.enclosure(frame.to_numpy()).max_violation > 0.0  # the same columns taken in order miss
+    late = control.forced_response(sampled, T=t + H, U=np.cos(3 * t), X0=[0.9, -0.7])
+    with pytest.raises(DataError, match=r"x: expected its time index to be t, got 0\.01 at sample 0 where t = 0"):
+        estimate.enclosure(late)
+    fig = estimate.plot(truth=resp)
+    np.testing.assert_array_equal(fig.axes[1].lines[-1].get_ydata(), resp.states[1])

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _tables
 from .errors import BoundsError, DataError, DimensionError
-from .validation import as_names
+from .validation import as_names, as_truth
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .simulate import Simulation
 
 __all__ = ["ENCLOSURE_TOL", "EnclosureReport", "Estimate", "enclosure_report"]
 
@@ -181,13 +180,15 @@ class Estimate:
         """Time after which the method claims enclosure (``meta['transient_s']``, default the first time)."""
         return float(self.meta.get("transient_s", self.t[0]))
 
-    def enclosure(self, x: ArrayLike, transient: float | None = None) -> EnclosureReport:
+    def enclosure(self, x: Any, transient: float | None = None) -> EnclosureReport:
         """Check that the state bounds contain the true state ``x`` (same shape as ``lower``).
 
         Parameters
         ----------
-        x : array_like, shape (T, n) or (M, T, n)
-            True state.
+        x : array_like, shape (T, n) or (M, T, n), Simulation or control.TimeResponseData
+            True state: an array, a :class:`~intervalobs.simulate.Simulation`, a python-control
+            response (its ``states``, time-last, are turned time-first), or a pandas/xarray table of
+            the states (see :func:`intervalobs.validation.as_truth`; their times must be ``t``).
         transient : float, optional
             Ignore samples before this time (default: the method's own transient).
 
@@ -195,7 +196,10 @@ class Estimate:
         -------
         EnclosureReport
         """
-        return enclosure_report(self.t, self.lower, x, self.upper, self.transient if transient is None else transient)
+        truth = as_truth("x", x, self.t, self.state_names)
+        return enclosure_report(
+            self.t, self.lower, truth, self.upper, self.transient if transient is None else transient
+        )
 
     def input_enclosure(self, d: ArrayLike, transient: float | None = None) -> EnclosureReport:
         """Check that the unknown-input bounds contain the true input ``d``; rows without a bound are skipped.
@@ -383,7 +387,7 @@ class Estimate:
 
     def plot(
         self,
-        truth: ArrayLike | Simulation | None = None,
+        truth: Any = None,
         labels: Sequence[str] | None = None,
         *,
         inputs: bool = False,
@@ -396,8 +400,8 @@ class Estimate:
 
         Parameters
         ----------
-        truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
-            True state (of a :class:`~intervalobs.simulate.Simulation`, its ``x``), drawn as a line.
+        truth : array_like, shape (T, n) or (M, T, n), Simulation or control.TimeResponseData, optional
+            True state (as for :meth:`enclosure`), drawn as a line.
         labels : sequence of str, optional
             Panel labels (default: the state and input names).
         inputs : bool

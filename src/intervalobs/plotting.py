@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -16,7 +16,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .estimate import Estimate
-    from .simulate import Simulation
 
 FloatArray = NDArray[np.float64]
 
@@ -25,7 +24,7 @@ __all__ = ["plot_estimate", "plot_widths", "save_figure"]
 
 def plot_estimate(
     estimate: Estimate,
-    truth: ArrayLike | Simulation | None = None,
+    truth: Any = None,
     labels: Sequence[str] | None = None,
     inputs: bool = False,
     input_truth: ArrayLike | None = None,
@@ -43,8 +42,9 @@ def plot_estimate(
     ----------
     estimate : Estimate
         Single-run (bounds (T, n)) or Monte Carlo (bounds (M, T, n)) estimate.
-    truth : array_like, shape (T, n) or (M, T, n), or Simulation, optional
-        True state; of a :class:`~intervalobs.simulate.Simulation`, its ``x`` is used.
+    truth : array_like, shape (T, n) or (M, T, n), Simulation or control.TimeResponseData, optional
+        True state; of a :class:`~intervalobs.simulate.Simulation`, its ``x``, of a python-control
+        response, its ``states`` made time-first (see :func:`intervalobs.validation.as_truth`).
     labels : sequence of str, optional
         Panel labels, states first, then unknown inputs (default: the estimate's state and input names).
     inputs : bool
@@ -72,11 +72,13 @@ def plot_estimate(
     """
     from matplotlib.figure import SubFigure
 
-    from .simulate import Simulation
+    from .validation import as_truth
 
     times = estimate.t
-    state_truth = truth.x if isinstance(truth, Simulation) else truth
-    blocks = [("truth", estimate.lower, estimate.upper, state_truth, estimate.state_names)]
+    state_truth = None if truth is None else as_truth("truth", truth, times, estimate.state_names)
+    blocks: list[tuple[str, FloatArray, FloatArray, ArrayLike | None, Sequence[str]]] = [
+        ("truth", estimate.lower, estimate.upper, state_truth, estimate.state_names)
+    ]
     if inputs and estimate.input_lower is not None and estimate.input_upper is not None:
         blocks.append(("input_truth", estimate.input_lower, estimate.input_upper, input_truth, estimate.input_names))
     panels = [_panel_data(*block, run, times.size) for block in blocks]

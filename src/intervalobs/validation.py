@@ -15,7 +15,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoundsError, DataError, DimensionError
 
-__all__ = ["as_box", "as_matrix", "as_names", "as_signal", "as_time", "as_vector", "check_no_kwargs", "labelled_parts"]
+__all__ = [
+    "as_box",
+    "as_matrix",
+    "as_names",
+    "as_signal",
+    "as_time",
+    "as_truth",
+    "as_vector",
+    "check_no_kwargs",
+    "labelled_parts",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -209,7 +219,7 @@ def as_signal(
     """
     parts = labelled_parts(value)
     if parts is not None:
-        value = _select_channels(name, *parts, width=width, t=t, names=names)
+        value = _select_channels(name, *parts, t=t, names=names)
     arr = _as_float(name, value)
     if arr.ndim == 1 and width == 1:
         arr = arr.reshape(-1, 1)
@@ -219,6 +229,52 @@ def as_signal(
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise DataError(f"{name}: expected finite values, got NaN or inf at index {tuple(int(i) for i in bad)}")
     return arr
+
+
+def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> FloatArray:
+    """The true state of a record, time-first, from an array, a simulation or a python-control response.
+
+    Accepted: an array of shape (T, n) or (M, T, n); an :class:`~intervalobs.simulate.Simulation`
+    (its ``x``); a python-control ``TimeResponseData`` (its ``states``, which python-control stores
+    time-last, (n, T) or (n, M, T): moved to time-first here); a pandas ``DataFrame`` or an xarray
+    ``DataArray``. The last three carry times, which must be ``t``, and state labels, which select
+    the states by ``names`` when they are all there (in order otherwise).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : array_like, Simulation, control.TimeResponseData, pandas.DataFrame or xarray.DataArray
+        The truth.
+    t : numpy.ndarray, shape (T,)
+        The times of the bounds it is compared with.
+    names : sequence of str
+        The state names of those bounds.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, n) or (M, T, n)
+
+    Raises
+    ------
+    DataError
+        When the truth's times are not ``t``.
+    """
+    parts: tuple[Any, Any, Any] | None
+    if hasattr(value, "states") and hasattr(value, "time"):  # python-control's TimeResponseData
+        if value.states is None:
+            raise DataError(f"{name}: expected a response with states (return_x=True), got none")
+        parts = (np.moveaxis(np.asarray(value.states, dtype=float), 0, -1), _seconds(value.time), value.state_labels)
+    elif hasattr(value, "x") and hasattr(value, "t") and hasattr(value, "state_names"):  # a Simulation
+        parts = (value.x, value.t, list(value.state_names))
+    else:
+        parts = labelled_parts(value)
+    if parts is None:
+        return _as_float(name, value)
+    values, times, channels = parts
+    if channels is not None and not all(c in channels for c in names):
+        channels = None  # labels that are not the state names: positional
+    return _as_float(name, _select_channels(name, values, times, channels, t=t, names=names))
 
 
 def as_names(name: str, value: Sequence[str] | None, size: int, prefix: str) -> tuple[str, ...]:
@@ -303,7 +359,6 @@ def _select_channels(
     times: FloatArray | None,
     channels: list[Any] | None,
     *,
-    width: int,
     t: FloatArray | None,
     names: Sequence[str] | None,
 ) -> Any:
