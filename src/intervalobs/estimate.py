@@ -29,7 +29,7 @@ ENCLOSURE_TOL = 1e-8
 """Relative tolerance ``(lower - x) / (1 + |x|)`` under which a sample counts as enclosed.
 
 It only decides the *fraction*; ``max_violation`` reports the raw amount, tolerance-free. The same
-rule is used by ``shared/tools/check_reproduction.py``.
+rule is used by ``intervalobs check`` (:func:`intervalobs.reproduce.contract.check_reproduction`).
 """
 
 

@@ -29,7 +29,7 @@ class Example:
     name : str
         CLI name, e.g. ``"aircraft-uio"``.
     seed_file : str
-        The source paper's file in ``shared/seeds`` (or ``"-"`` for our own examples).
+        Identifier of the source paper (``"-"`` for our own examples).
     description : str
         One line for ``intervalobs list``.
     run : callable
@@ -95,7 +95,7 @@ def base_summary(
     example : str
         Example name (CLI name).
     seed_file : str
-        The source paper's file in ``shared/seeds`` (``"-"`` for our own examples).
+        Identifier of the source paper (``"-"`` for our own examples).
     observer : str
         Name of the observer whose bounds are reported.
     t : array_like, shape (T,)

@@ -51,7 +51,7 @@ WIDTH_REGIONS = (HalfPlane(0.5), HorizontalStrip(5.0))
 HULL_REFERENCE = {
     "width_mean": [0.048, 3.97, 2.75],
     "lower_bound_width_mean": [0.20, 1.27, 1.14],
-    "how": "measured 2026-12-01 (shared/seeds/README.md, seed 004 notes; issue 18) on this example, t >= 5 s: "
+    "how": "measured 2026-12-01 on this example, t >= 5 s: "
     "HullEstimator, the moving-window LP hull with e^{-|x|} in [0, 1] treated as bounded noise, window 200 "
     "samples; lower bound for any sound estimator under worst-case noise. Quoted, not recomputed here.",
 }
