@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DesignError, DimensionError
 from ..validation import as_matrix, as_vector
+from .lmi import solve_lmi, verify_definite
 from .regions import ModalDecomposition, radius_matrix
 
 __all__ = ["ThetaDesign", "euler_radius_factor", "mat_matrix", "theta_design"]
@@ -115,18 +116,11 @@ def _lambda_min_m2(m1: FloatArray) -> float:
     lmi = m1.T @ q + q @ m1 + 2 * d
     constraints = [q >> np.eye(size), d << -np.eye(size), 0.5 * (lmi + lmi.T) << -1e-7 * np.eye(size)]
     problem = cp.Problem(cp.Minimize(cp.trace(q) - cp.trace(d)), constraints)
-    status = "not solved"
-    for solver in ("CLARABEL", "SCS"):
-        try:
-            problem.solve(solver=solver)
-        except cp.error.SolverError:
-            continue
-        status = str(problem.status)
-        if status in ("optimal", "optimal_inaccurate"):
-            break
-    if q.value is None or d.value is None:
-        raise DesignError(f"Theorem 4.4 LMI (32): solver status {status}")
-    m2 = np.asarray(d.value) @ np.linalg.inv(np.asarray(q.value))
+    relax = "M1 is badly scaled for the solvers: pass lambda_min explicitly"
+    solve_lmi(problem, "(32) (Theorem 4.4)", relax)
+    qv, dv = np.asarray(q.value), np.asarray(d.value)
+    verify_definite("(32): M1ᵀQ + QM1 + 2D", m1.T @ qv + qv @ m1 + 2 * dv, -1, relax)
+    m2 = dv @ np.linalg.inv(qv)
     return float(np.min(np.linalg.eigvals(m2).real))
 
 

@@ -33,7 +33,6 @@ is evaluated on a frequency grid, and for monotone designs :math:`A_0 - LC \ge 0
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -44,6 +43,7 @@ from scipy.optimize import linprog
 
 from ..errors import AssumptionError, DesignError, DimensionError
 from ..validation import as_matrix
+from .lmi import solve_lmi, verify_definite
 
 __all__ = [
     "GainDesign",
@@ -61,6 +61,8 @@ _LMI_MARGIN = 1e-7
 
 _VERIFY_TOL = 1e-6
 """Relative tolerance of the a-posteriori checks."""
+
+_RELAX = "relax the constraints (e.g. drop monotone=True) or rescale the noise matrices"
 
 
 @dataclass(frozen=True)
@@ -254,14 +256,13 @@ def hinf_gain(
         constraints.append(p_var @ a - m_var @ c >= 0)
     problem = cp.Problem(cp.Minimize(gamma), constraints)
     name = "(19)" if not monotone else f"(54)-(55)/(65), {p_structure} P"
-    status = _solve(problem, solver, name)
+    status = solve_lmi(problem, name, _RELAX, solver=solver).label
     pv = np.asarray(p_var.value, dtype=float)
     mv = np.asarray(m_var.value, dtype=float)
     g = float(np.asarray(gamma.value))
     check = _hinf_lmi_value(pv, mv, g, a, c, ew, ev, et)
-    worst = float(np.linalg.eigvalsh(0.5 * (check + check.T)).max())
-    if worst >= _VERIFY_TOL * max(1.0, g) or np.linalg.eigvalsh(0.5 * (pv + pv.T)).min() <= 0:
-        raise DesignError(f"{name}: the solver returned {status} but the LMI check fails (max eig {worst:.2e})")
+    worst = verify_definite(name, check, -1, _RELAX, tol=_VERIFY_TOL * max(1.0, g))
+    verify_definite(f"{name}: P", pv, 1, _RELAX)
     gain = np.linalg.solve(pv, mv)
     extra: dict[str, Any] = {"lmi_max_eig": worst, "E_theta": et.tolist()}
     if diagonal:
@@ -339,7 +340,7 @@ def zonotope_size_gain(
     ]
     objective = cp.sum(gam) + cp.sum(ups) + cp.sum(om)
     problem = cp.Problem(cp.Minimize(objective), constraints)
-    status = _solve(problem, solver, "(26)")
+    status = solve_lmi(problem, "(26)", _RELAX, solver=solver).label
     wv = np.asarray(w.value, dtype=float)
     gain = np.linalg.solve(wv, np.asarray(y.value, dtype=float))
     # verification: the Schur complement of (26a) with the recovered gain
@@ -347,9 +348,7 @@ def zonotope_size_gain(
     rm = np.hstack([closed, ew, -gain @ ev, et])
     d = np.diag(np.concatenate([np.asarray(gam.value), np.asarray(ups.value), np.asarray(om.value)]))
     lhs = np.block([[rho * wv, np.zeros((n, d.shape[0]))], [np.zeros((d.shape[0], n)), d]]) - rm.T @ wv @ rm
-    least = float(np.linalg.eigvalsh(0.5 * (lhs + lhs.T)).min())
-    if least <= -_VERIFY_TOL * max(1.0, float(np.abs(lhs).max())):
-        raise DesignError(f"(26): the solver returned {status} but the LMI check fails (min eig {least:.2e})")
+    least = verify_definite("(26) with L = W⁻¹Y", lhs, 1, _RELAX, tol=_VERIFY_TOL * max(1.0, float(np.abs(lhs).max())))
     extra = {"rho": rho, "epsilon": float(objective.value), "lmi_min_eig": least, "E_theta": et.tolist()}
     return _verified(a, c, ew, ev, et, gain, f"(26), rho={rho:g}", None, status, extra)
 
@@ -406,26 +405,6 @@ def _hinf_lmi_value(
     upper = np.vstack([top, second, rest])
     lower_part = np.triu(upper, 1)
     return np.triu(upper) + lower_part.T
-
-
-def _solve(problem: cp.Problem, solver: str, name: str) -> str:
-    tried = [solver] + (["SCS"] if solver != "SCS" else [])
-    last = "not solved"
-    for s in tried:
-        try:
-            with warnings.catch_warnings():  # an inaccurate status is judged by our own verification
-                warnings.simplefilter("ignore", UserWarning)
-                problem.solve(solver=s)
-        except cp.error.SolverError:
-            last = f"{s}: solver error"
-            continue
-        last = f"{s}: {problem.status}"
-        if problem.status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-            return last
-    raise DesignError(
-        f"LMI {name} infeasible or unsolved ({last}); relax the constraints (e.g. drop monotone=True) "
-        "or rescale the noise matrices"
-    )
 
 
 def _monotone_projection(a: FloatArray, c: FloatArray, gain: FloatArray) -> FloatArray | None:

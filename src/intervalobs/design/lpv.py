@@ -40,12 +40,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..interval import ROUNDING_MARGIN, neg, pos
 from ..validation import as_box, as_matrix
+from .lmi import solve_lmi
 
 __all__ = [
     "BoundednessCertificate",
@@ -784,10 +786,8 @@ def boundedness_lmi(
     Raises
     ------
     DesignError
-        If no candidate gives a solver status of optimal (or optimal_inaccurate).
+        If no candidate has a verified solution (:func:`~intervalobs.design.lmi.solve_lmi`).
     """
-    import cvxpy as cp
-
     fl = as_matrix("f_lower", f_lower)
     n = fl.shape[0]
     fu = as_matrix("f_upper", f_upper, (n, n))
@@ -808,7 +808,8 @@ def boundedness_lmi(
     n2 = 2 * n
     q = q_scale * np.eye(n2)
     best: tuple[float, Any] | None = None
-    statuses = []
+    failures = []
+    relax = "increase lambda or tighten the ΔA_R bounds"
     for eps1 in eps1_candidates:
         p_var = cp.Variable((n2, n2), symmetric=True)
         gamma = cp.Variable(nonneg=True)
@@ -819,23 +820,19 @@ def boundedness_lmi(
             cons.append(0.5 * (blk + blk.T) << t * np.eye(n2))
         prob = cp.Problem(cp.Minimize(t), cons)
         try:
-            prob.solve(solver=cp.CLARABEL)
-        except cp.SolverError:
-            prob.solve(solver=cp.SCS)
-        statuses.append(str(prob.status))
-        if prob.status not in ("optimal", "optimal_inaccurate") or p_var.value is None:
+            solution = solve_lmi(prob, f"(43)/(74) with eps1 = {eps1:g}", relax)
+        except DesignError as exc:
+            failures.append(str(exc))
             continue
-        pv = 0.5 * (p_var.value + p_var.value.T)
+        pv = np.asarray(p_var.value, dtype=float)
+        pv = 0.5 * (pv + pv.T)
         # make the (2,2) block exactly ≤ 0 (the solver meets it only to its tolerance)
         gv = max(float(np.asarray(gamma.value)), float(np.linalg.eigvalsh(pv)[-1]) / eps1 * (1 + 1e-12))
         margin = float(np.max(_block_max_eig(pv, q, gv, eps1 + eps2, g, eta)))
         if best is None or margin < best[0]:
-            best = (margin, (pv, gv, eps1, str(prob.status)))
+            best = (margin, (pv, gv, eps1, solution.status))
     if best is None:
-        raise DesignError(
-            f"boundedness LMI (43)/(74): no solution for eps1 in {list(eps1_candidates)} "
-            f"(statuses {statuses}); increase lambda or tighten the ΔA_R bounds"
-        )
+        raise DesignError(f"boundedness LMI (43)/(74): no solution for any eps1 ({' | '.join(failures)})")
     margin, (pv, gv, eps1, status) = best
     second = float(np.max(np.linalg.eigvalsh(pv / eps1 - gv * np.eye(n2))))
     return BoundednessCertificate(

@@ -35,12 +35,14 @@ import itertools
 from dataclasses import dataclass
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, DesignError, DimensionError
 from ..systems.lpv import LPVSystem
 from ..validation import as_matrix
+from .lmi import solve_lmi
 from .lpv import (
     BoundednessCertificate,
     _active_switchable,
@@ -306,8 +308,6 @@ def design_lpv_observer(
         Naming the failed condition: (17), (18), the LMI (63)/(109), or its verification (Metzler,
         Hurwitz, the blocks of (63)/(74)) on the fine grid.
     """
-    import cvxpy as cp
-
     n, p = system.n, system.p
     ct_inv = _partition(system)
     if not (np.isfinite(decay) and decay > 0):
@@ -350,7 +350,9 @@ def design_lpv_observer(
     eps1_candidates = sorted({max(eta_max, 0.05) * f for f in (0.5, 1.0, 2.0)})
     off = ~np.eye(n, p, dtype=bool)
     best: tuple[float, Any] | None = None
-    statuses = []
+    failures = []
+    lmi_name = "(109)" if uio else "(63)"
+    relax = f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
     for eps1 in eps1_candidates:
         pl, pu = cp.Variable(n), cp.Variable(n)
         wl, wu = cp.Variable((n, p)), cp.Variable((n, p))
@@ -375,11 +377,9 @@ def design_lpv_observer(
                 cons.append(0.5 * (blk + blk.T) << t * np.eye(n))
         prob = cp.Problem(cp.Minimize(t), cons)
         try:
-            prob.solve(solver=cp.CLARABEL)
-        except cp.SolverError:
-            prob.solve(solver=cp.SCS)
-        statuses.append(str(prob.status))
-        if prob.status not in ("optimal", "optimal_inaccurate") or pl.value is None:
+            solution = solve_lmi(prob, f"{lmi_name} with eps1 = {eps1:g}", relax)
+        except DesignError as exc:
+            failures.append(str(exc))
             continue
         pld, pud = np.maximum(np.asarray(pl.value), 1e-3), np.maximum(np.asarray(pu.value), 1e-3)
         fl_left = np.asarray(wl.value) / pld[:, None]
@@ -394,13 +394,10 @@ def design_lpv_observer(
         gv = max(float(np.asarray(gam.value)), float(pmat.max()) / eps1 * (1 + 1e-12))
         margin = _lmi_margin(pmat, q_scale, gv, eps1 + eps2, fl_left, fu_left, a_r, dl, du, masks)
         if best is None or margin < best[0]:
-            best = (margin, (pmat, gv, eps1, str(prob.status), fl_left, fu_left))
+            best = (margin, (pmat, gv, eps1, solution.status, fl_left, fu_left))
     if best is None or best[0] >= 0:
-        detail = f"best (1,1)-block eigenvalue {best[0]:+.3g}" if best is not None else f"statuses {statuses}"
-        raise DesignError(
-            f"LMI {'(109)' if uio else '(63)'}: no certificate on the {coarse.shape[0]}-point grid ({detail}); "
-            f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
-        )
+        detail = f"best (1,1)-block eigenvalue {best[0]:+.3g}" if best is not None else " | ".join(failures)
+        raise DesignError(f"LMI {lmi_name}: no certificate on the {coarse.shape[0]}-point grid ({detail}); {relax}")
     margin, (pmat, gv, eps1, status, fl_left, fu_left) = best
     n2 = 2 * n
     cert = BoundednessCertificate(

@@ -40,6 +40,7 @@ from scipy.signal import place_poles
 
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..validation import as_matrix
+from .lmi import solve_lmi
 
 __all__ = [
     "Disk",
@@ -532,23 +533,14 @@ def _mode_gain(lam: complex, b: ComplexArray, disk: Disk, real: bool, objective:
     else:
         cost = cp.norm(cp.hstack([y_re - disk.center.real * x, y_im - disk.center.imag * x]))
     problem = cp.Problem(cp.Minimize(cost), constraints)
-    status = "not solved"
-    for solver in ("CLARABEL", "SCS"):
-        try:
-            problem.solve(solver=solver)
-        except cp.error.SolverError:
-            continue
-        status = str(problem.status)
-        if status in ("optimal", "optimal_inaccurate"):
-            break
-    if status not in ("optimal", "optimal_inaccurate") or x.value is None:
-        raise DesignError(
-            f"Theorem 4.1 LMI (15) for the disk centre {disk.center} radius {disk.radius}: solver status {status}; "
-            "enlarge the disk or move it (the mode may be unobservable)"
-        )
-    xv = float(x.value)
+    solution = solve_lmi(
+        problem,
+        f"(15) (Theorem 4.1) for the disk centre {disk.center} radius {disk.radius}",
+        "enlarge the disk or move it (the mode may be unobservable)",
+    )
+    xv = float(np.asarray(x.value, dtype=float))
     ell = (np.asarray(s_re.value, dtype=float) + 1j * (0.0 if real else np.asarray(s_im.value, dtype=float))) / xv  # type: ignore[union-attr]
-    return np.asarray(ell, dtype=complex).reshape(p), status
+    return np.asarray(ell, dtype=complex).reshape(p), solution.status
 
 
 def place_in_disks(
