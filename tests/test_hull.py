@@ -273,32 +273,6 @@ print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1],
     np.testing.assert_allclose(np.array(result["lower"]), here.lower, rtol=0, atol=1e-12)
 
 
-def test_duality_bound_refuses_free_columns_it_cannot_bound() -> None:
-    from types import SimpleNamespace
-
-    from scipy import sparse
-
-    from intervalobs.observers.hull import _dual_bounds
-
-    def lp(col_hi: float) -> SimpleNamespace:
-        matrix_t = sparse.csr_matrix(np.array([[1.0], [0.1]]))  # one row: x0 + 0.1 x1 ∈ [0, 0]
-        return SimpleNamespace(
-            row_lo=np.zeros(1),
-            row_hi=np.zeros(1),
-            matrix_t=matrix_t,
-            abs_matrix_t=abs(matrix_t),
-            col_lo=np.array([-1.0, -col_hi]),
-            col_hi=np.array([1.0, col_hi]),
-            col_nnz=1,
-        )
-
-    costs, duals = np.array([[1.0, 0.1]]), np.array([[1.0]])  # reduced costs exactly zero
-    bounded = _dual_bounds(lp(5.0), costs, duals)[0]
-    assert -1e-12 < bounded <= 0.0  # min of x0 + 0.1 x1 on the row is exactly 0
-    # With x1 free, a rounding error of its reduced cost times an infinite bound is not a number.
-    assert _dual_bounds(lp(np.inf), costs, duals)[0] == -np.inf
-
-
 def test_parallel_workers_give_the_same_certified_box() -> None:
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .estimate import Estimate
-from .observers.hull import HullEstimator, HullLowerBound, _delta_samples
+from .observers.hull import HullEstimator, HullLowerBound, delta_samples
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .systems.bounds import Bounds
 from .systems.lti import LTISystem
@@ -86,7 +86,7 @@ def tightness_reference(
     if system.dA is None:
         return HullEstimator(system, bounds, horizon=horizon, h=h).run(t, y, u)
     size = np.asarray(t).size
-    shared = [_delta_samples(system, samples, seed)]
+    shared = [delta_samples(system, samples, seed)]
     if truth is not None:
         shared.insert(0, np.asarray(truth[0], dtype=float).reshape(1, system.n, system.n))
     pool = np.broadcast_to(np.concatenate(shared)[None], (size, sum(c.shape[0] for c in shared), system.n, system.n))

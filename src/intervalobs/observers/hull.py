@@ -19,17 +19,10 @@ with a shorter window the prior is the estimator's own box :math:`H` steps back 
 and every state of the window is also bounded by its earlier box (redundant for the full history,
 so exactness is kept, and a useful tightening otherwise).
 
-**Soundness of an LP bound.** A simplex optimum is only accurate to the solver's tolerances (1e-7),
-which is not a guarantee. Every bound is instead taken from weak duality (Neumaier & Shcherbina 2004,
-"Safe bounds in linear and mixed-integer programming"): for *any* row multipliers :math:`\lambda`,
-with :math:`r = c - A^\top\lambda`,
-
-.. math:: c^\top x \ge \sum_i \min(\lambda_i \underline b_i, \lambda_i \overline b_i)
-                      + \sum_j \min(r_j \underline x_j, r_j \overline x_j)
-
-for every feasible :math:`x` (all variables have finite bounds here). The solver's duals are used as
-:math:`\lambda`; the bound is valid whatever their accuracy, and the rounding of its own evaluation is
-bounded and subtracted. The box is finally intersected with the interval propagation of the previous
+**Soundness of an LP bound.** A simplex optimum is only accurate to the solver's tolerances, which
+is not a guarantee: every bound is taken from weak duality with the solver's duals as multipliers and
+the rounding of its own evaluation subtracted (:mod:`intervalobs.design.certified_lp`), so it is valid
+whatever their accuracy. The box is finally intersected with the interval propagation of the previous
 box (sound without any LP) and inflated by ``ROUNDING_MARGIN`` like every observer's output.
 
 **Continuous time** uses the sound sampled model of :mod:`intervalobs.systems.sampling`: the hull
@@ -54,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.linalg import expm
 
+from ..design.certified_lp import dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
@@ -66,47 +60,6 @@ from .base import Observer, ObserverState
 __all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
 
 FloatArray = NDArray[np.float64]
-
-_EPS = float(np.finfo(float).eps)
-_INNER_SHRINK = 1e-6
-"""Relative inward margin of inner (lower-bound) hulls: covers the solver's primal tolerance (1e-7)."""
-
-
-def _new_highs() -> Any:
-    """A silent HiGHS instance (the public wrapper prints a banner on construction)."""
-    try:
-        from highspy._core import _Highs as highs_class
-    except ImportError:  # pragma: no cover - older highspy
-        from highspy import Highs as highs_class
-    solver = highs_class()
-    solver.setOptionValue("output_flag", False)
-    solver.setOptionValue("presolve", "off")
-    solver.setOptionValue("solver", "simplex")
-    # One thread: the default (0) makes every run() count the physical cores from sysfs twice (≈ 35 µs,
-    # a third of the run time of a warm-started window LP). See _solve for the fallback.
-    solver.setOptionValue("threads", 1)
-    # Tighter than the defaults (1e-7): the certified bounds are then within ~1e-9 of the optimum.
-    solver.setOptionValue("primal_feasibility_tolerance", 1e-9)
-    solver.setOptionValue("dual_feasibility_tolerance", 1e-9)
-    return solver
-
-
-def _solve(solver: Any) -> None:
-    """``solver.run()``, falling back to HiGHS's default thread count if one thread is refused.
-
-    HiGHS keeps one task scheduler per process: when another user of highspy has started it with more
-    threads, a run with ``threads = 1`` returns an error, and the default (0: use that scheduler) works.
-    An error can also come from a restored basis (an alien one that HiGHS completed badly): the run is
-    first repeated from scratch, and only an error that persists is taken for the thread refusal.
-    """
-    from highspy import _core
-
-    error = _core.HighsStatus.kError
-    if solver.run() == error and solver.getOptionValue("threads")[1] == 1:
-        solver.clearSolver()
-        if solver.run() == error:
-            solver.setOptionValue("threads", 0)
-            solver.run()
 
 
 def _single_support(matrix: FloatArray) -> bool:
@@ -156,7 +109,7 @@ def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _L
     return _LinearModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi)
 
 
-def _inner_model(
+def inner_model(
     system: LTISystem, full: ResolvedBounds, h: float | None, delta_a: FloatArray, substeps: int = 1
 ) -> _LinearModel:
     """A model whose consistent set lies *inside* the true one: ``A + ΔA`` fixed, noise held per sub-step.
@@ -259,22 +212,12 @@ class _WindowLP:
         self.matrix_t = matrix.T.tocsr()
         self.abs_matrix_t = abs(self.matrix_t)
         self.col_nnz = int(np.max(np.diff(matrix.indptr))) if matrix.nnz else 0
-        self.solver = _new_highs()
+        self.solver = new_highs()
         self.inf = float(self.solver.getInfinity())
+        free_cols, free_rows = np.full(self.ncol, self.inf), np.full(self.nrow, self.inf)
+        self.solver.passModel(highs_model(matrix, -free_cols, free_cols, -free_rows, free_rows, self.inf))
         from highspy import _core
 
-        lp = _core.HighsLp()
-        lp.num_col_, lp.num_row_ = self.ncol, self.nrow
-        lp.col_cost_ = np.zeros(self.ncol)
-        lp.col_lower_ = np.full(self.ncol, -self.inf)
-        lp.col_upper_ = np.full(self.ncol, self.inf)
-        lp.row_lower_ = np.full(self.nrow, -self.inf)
-        lp.row_upper_ = np.full(self.nrow, self.inf)
-        lp.a_matrix_.format_ = _core.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = matrix.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = matrix.indices.astype(np.int32)
-        lp.a_matrix_.value_ = matrix.data.astype(float)
-        self.solver.passModel(lp)
         self._status_optimal = _core.HighsModelStatus.kOptimal
         self._cols = np.arange(self.ncol, dtype=np.int32)
         self._rows = np.arange(self.nrow, dtype=np.int32)
@@ -307,7 +250,7 @@ class _WindowLP:
         basis = self._bases.get((key, sign))
         if basis is not None:
             self.solver.setBasis(basis)
-        _solve(self.solver)
+        run_highs(self.solver)
         self.solves += 1
         self.iterations += int(self.solver.getInfo().simplex_iteration_count)
         ok = self.solver.getModelStatus() == self._status_optimal
@@ -321,7 +264,9 @@ class _WindowLP:
         _, _, dual = self._minimise(col, sign, key)
         if dual.size != self.nrow or not np.all(np.isfinite(dual)):
             return -np.inf
-        return _dual_bound(self, col, sign, dual)
+        cost = np.zeros((1, self.ncol))
+        cost[0, col] = sign
+        return float(dual_bounds(self, cost, dual[None, :])[0])
 
     def primal_min(self, col: int, sign: float, key: int) -> tuple[bool, FloatArray]:
         """The solver's best point (for inner hulls) and whether it is feasible (to 1e-7).
@@ -335,39 +280,6 @@ class _WindowLP:
             ok = info.primal_solution_status == 2 and info.max_primal_infeasibility <= 1e-7
             ok = ok and x.size == self.ncol and bool(np.all(np.isfinite(x)))
         return ok, x
-
-
-def _dual_bound(lp: Any, col: int, sign: float, dual: FloatArray) -> float:
-    """Weak-duality bound of ``min sign * x[col]`` (see :func:`_dual_bounds`)."""
-    cost = np.zeros((1, lp.ncol))
-    cost[0, col] = sign
-    return float(_dual_bounds(lp, cost, dual[None, :])[0])
-
-
-def _dual_bounds(lp: Any, costs: FloatArray, duals: FloatArray) -> FloatArray:
-    """Weak-duality bounds of ``min costs[r]·x`` for the multipliers ``duals[r]``, rounding subtracted.
-
-    A multiplier on an infinite side of its row is dropped (any multipliers give a valid bound). The
-    sums include zero terms, which only enlarges the term counts of the rounding bound.
-    """
-    row_bound = np.where(duals > 0, lp.row_lo, lp.row_hi)
-    used = np.isfinite(row_bound) & (duals != 0)
-    y = np.where(used, duals, 0.0)
-    row_terms = np.multiply(y, row_bound, out=np.zeros(y.shape), where=used)
-    reduced = costs - (lp.matrix_t @ y.T).T
-    col_bound = np.where(reduced > 0, lp.col_lo, lp.col_hi)
-    active = reduced != 0
-    reduced_error = (lp.col_nnz + 2) * _EPS * (np.abs(costs) + (lp.abs_matrix_t @ np.abs(y).T).T)
-    magnitude = np.maximum(np.abs(lp.col_lo), np.abs(lp.col_hi))
-    infinite = ~np.isfinite(magnitude)
-    # An infinite column is harmless only if its reduced cost is zero even after rounding.
-    unbounded = np.any(active & ~np.isfinite(col_bound), axis=1) | np.any((reduced_error > 0) & infinite, axis=1)
-    col_terms = np.multiply(reduced, col_bound, out=np.zeros(reduced.shape), where=active & ~unbounded[:, None])
-    magnitude[infinite] = 0.0
-    terms = row_terms.shape[1] + col_terms.shape[1] + 2
-    error = reduced_error @ magnitude + terms * _EPS * (np.abs(row_terms).sum(axis=1) + np.abs(col_terms).sum(axis=1))
-    value = row_terms.sum(axis=1) + col_terms.sum(axis=1) - 2.0 * error
-    return np.where(unbounded, -np.inf, value)
 
 
 _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
@@ -443,22 +355,12 @@ class _CondensedLP:
         self.col_nnz = self.nrow  # dense products: every row counts in the rounding of a reduced cost
         self.e_max = np.abs(noise_map) @ np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
         # One HiGHS instance per worker; objective r is always solved by instance r % workers.
-        self.solvers = [_new_highs() for _ in range(workers)]
+        self.solvers = [new_highs() for _ in range(workers)]
         self.solver = self.solvers[0]
         self._pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 else None
         self.inf = float(self.solver.getInfinity())
-        sparse_matrix = sparse.csc_matrix(matrix)
-        lp = _core.HighsLp()
-        lp.num_col_, lp.num_row_ = self.ncol, self.nrow
-        lp.col_cost_ = np.zeros(self.ncol)
-        lp.col_lower_ = np.full(self.ncol, -1.0)
-        lp.col_upper_ = np.full(self.ncol, 1.0)
-        lp.row_lower_ = np.full(self.nrow, -self.inf)
-        lp.row_upper_ = np.full(self.nrow, self.inf)
-        lp.a_matrix_.format_ = _core.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = sparse_matrix.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = sparse_matrix.indices.astype(np.int32)
-        lp.a_matrix_.value_ = sparse_matrix.data.astype(float)
+        free_rows, unit = np.full(self.nrow, self.inf), np.ones(self.ncol)
+        lp = highs_model(sparse.csc_matrix(matrix), -unit, unit, -free_rows, free_rows, self.inf)
         for solver in self.solvers:
             # Devex pricing: after each restored basis, steepest-edge weights would be recomputed (3-7 % slower).
             solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
@@ -525,7 +427,7 @@ class _CondensedLP:
         """Rigorous lower bounds of ``(x_k)_i - (q_L)_i`` and of ``(q_L)_i - (x_k)_i`` for every ``i``.
 
         Solves the ``2n`` LPs of the window (each warm-started from its kept basis), then evaluates
-        every weak-duality bound at once (:func:`_dual_bounds`).
+        every weak-duality bound at once (:func:`~intervalobs.design.certified_lp.dual_bounds`).
 
         Parameters
         ----------
@@ -563,7 +465,7 @@ class _CondensedLP:
             if self.dual_log is not None and self.full:
                 self.dual_log.append((r // 2, float(signs[r]), dual.copy()))
         self._keep_bases(key, values, basics)
-        bounds = np.where(usable, _dual_bounds(self, costs, duals), -np.inf)
+        bounds = np.where(usable, dual_bounds(self, costs, duals), -np.inf)
         return bounds[0::2], bounds[1::2]
 
     def _solve_one(self, solver: Any, cost: FloatArray, start: Any) -> _Solved:
@@ -571,10 +473,10 @@ class _CondensedLP:
         solver.changeColsCost(self.ncol, self._cols, cost)
         if start is not None:
             solver.setBasis(start)
-        _solve(solver)
+        run_highs(solver)
         if start is not None and solver.getModelStatus() != self._optimal:
             solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
-            _solve(solver)
+            run_highs(solver)
         iterations = int(solver.getInfoValue("simplex_iteration_count")[1])
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
@@ -1097,7 +999,7 @@ class HullLowerBound:
         return self.upper - self.lower
 
 
-def _delta_samples(system: LTISystem, count: int, seed: int) -> FloatArray:
+def delta_samples(system: LTISystem, count: int, seed: int) -> FloatArray:
     """``ΔA = 0`` (nominal), then random vertices of the ``ΔA`` box."""
     n = system.n
     if system.dA is None:
@@ -1182,7 +1084,7 @@ def hull_lower_bound(
     us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
     full = bounds.resolve(system)
     if np.ndim(samples) == 0:
-        deltas = _delta_samples(system, int(samples), seed)  # type: ignore[arg-type]
+        deltas = delta_samples(system, int(samples), seed)  # type: ignore[arg-type]
     else:
         deltas = np.asarray(samples, dtype=float).reshape(-1, system.n, system.n)
     anchors: list[FloatArray | None] = [None] * deltas.shape[0]
@@ -1202,7 +1104,7 @@ def hull_lower_bound(
     x0 = full.x0
     for s, delta in enumerate(deltas):
         anchor = anchors[s]
-        inner = _inner_model(system, full, h, delta, substeps)
+        inner = inner_model(system, full, h, delta, substeps)
         window = _Window(inner, size, points=2 * n + (anchor is not None))
         lp = window.lp
         points: list[FloatArray] = []
@@ -1243,11 +1145,7 @@ def hull_lower_bound(
     seen = np.any(np.isfinite(lowers), axis=0)
     lower[seen] = np.nanmin(lowers[:, seen], axis=0)
     upper[seen] = np.nanmax(uppers[:, seen], axis=0)
-    shrink = _INNER_SHRINK * (1.0 + np.maximum(np.abs(lower), np.abs(upper)))
-    lower, upper = lower + shrink, upper - shrink
-    middle = 0.5 * (lower + upper)
-    crossed = lower > upper
-    lower, upper = np.where(crossed, middle, lower), np.where(crossed, middle, upper)
+    lower, upper = shrink_inward(lower, upper)
     return HullLowerBound(
         times, lower, upper, deltas, alive, meta={"horizon": "full" if horizon is None else size, "filtered": filtered}
     )

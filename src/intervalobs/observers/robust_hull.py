@@ -41,7 +41,7 @@ and the remainder radius :math:`\rho_j = K\,|x_j - \hat x_j|_{\max} + R_x|x_j|_{
 Every state of the true system, with the true :math:`\Delta A`, noise and remainder, is feasible (the
 boxes of :math:`x_j` are the estimator's own, sound by induction), so every bound of the LP is a sound
 bound. Bounds are **certified by weak duality** with the rounding of their evaluation subtracted
-(:func:`~intervalobs.observers.hull._dual_bounds`, as the hull); the condensed matrix and the drive are
+(:func:`~intervalobs.design.certified_lp.dual_bounds`, as the hull); the condensed matrix and the drive are
 padded for their own rounding like the hull's condensed LP.
 
 **Identification.** The same LP bounds each entry of :math:`\delta`; since :math:`\Delta A` is constant,
@@ -62,6 +62,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm, expm_frechet
 
+from ..design.certified_lp import DenseLP, shrink_inward
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
@@ -70,7 +71,7 @@ from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_signal, as_time, as_vector
 from .base import Observer, ObserverState
-from .hull import _INNER_SHRINK, HullLowerBound, _dual_bounds, _inner_model, _new_highs, _solve
+from .hull import HullLowerBound, inner_model
 
 __all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
 
@@ -149,64 +150,6 @@ def _delta_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _D
     return _DeltaModel(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
 
 
-class _Certified:
-    """A dense LP ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi`` solved by HiGHS; bounds by weak duality."""
-
-    def __init__(self, tolerance: float = 1e-9) -> None:
-        self.solver = _new_highs()
-        self.solver.setOptionValue("primal_feasibility_tolerance", tolerance)
-        self.solver.setOptionValue("dual_feasibility_tolerance", tolerance)
-        self.inf = float(self.solver.getInfinity())
-        self.solves = 0
-        self.iterations = 0
-
-    def load(
-        self, matrix: FloatArray, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray
-    ) -> None:
-        """Pass a new model (the basis of the previous solve is kept when the sizes agree)."""
-        from highspy import _core
-
-        self.matrix_t = np.ascontiguousarray(matrix.T)
-        self.abs_matrix_t = np.abs(self.matrix_t)
-        self.col_nnz = matrix.shape[0]
-        self.ncol, self.nrow = matrix.shape[1], matrix.shape[0]
-        self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
-        lp = _core.HighsLp()
-        lp.num_col_, lp.num_row_ = self.ncol, self.nrow
-        lp.col_cost_ = np.zeros(self.ncol)
-        lp.col_lower_, lp.col_upper_ = col_lo, col_hi
-        lp.row_lower_ = np.where(np.isfinite(row_lo), row_lo, -self.inf)
-        lp.row_upper_ = np.where(np.isfinite(row_hi), row_hi, self.inf)
-        lp.a_matrix_.format_ = _core.MatrixFormat.kRowwise
-        lp.a_matrix_.start_ = (np.arange(self.nrow + 1) * self.ncol).astype(np.int32)
-        lp.a_matrix_.index_ = np.tile(np.arange(self.ncol, dtype=np.int32), self.nrow)
-        lp.a_matrix_.value_ = matrix.ravel().astype(float)
-        self.solver.passModel(lp)
-        self._cols = np.arange(self.ncol, dtype=np.int32)
-
-    def minima(self, costs: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Certified lower bounds of ``costs[r] · z`` and the solver's optimal points (rows of ``costs``)."""
-        from highspy import _core
-
-        duals = np.zeros((costs.shape[0], self.nrow))
-        points = np.full((costs.shape[0], self.ncol), np.nan)
-        usable = np.ones(costs.shape[0], dtype=bool)
-        for r, cost in enumerate(costs):
-            self.solver.changeColsCost(self.ncol, self._cols, cost)
-            _solve(self.solver)
-            self.solves += 1
-            self.iterations += int(self.solver.getInfoValue("simplex_iteration_count")[1])
-            solution = self.solver.getSolution()
-            dual = np.asarray(solution.row_dual)
-            if dual.shape != (self.nrow,) or not np.all(np.isfinite(dual)):
-                usable[r] = False
-                continue
-            duals[r] = dual
-            if self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal:
-                points[r] = np.asarray(solution.col_value)
-        return np.where(usable, _dual_bounds(self, costs, duals), -np.inf), points
-
-
 class RobustHullEstimator(Observer):
     r"""Sound, data-dependent boxes for an LTI system with interval ``ΔA``: window LP with ``ΔA`` shared.
 
@@ -266,7 +209,7 @@ class RobustHullEstimator(Observer):
         self._rows = np.array([a for a, _ in self.model.entries], dtype=int)
         self._cols = np.array([b for _, b in self.model.entries], dtype=int)
         self._extremal: dict[int, FloatArray] = {}
-        self._lp = _Certified()
+        self._lp = DenseLP()
         self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
 
     # -- the window LP ---------------------------------------------------------------------------
@@ -530,7 +473,7 @@ def _inner_points(
     k: int,
     ys: FloatArray,
     us: FloatArray,
-    lp: _Certified,
+    lp: DenseLP,
     sens: FloatArray | None = None,
     delta_box: tuple[FloatArray, FloatArray] | None = None,
     objective: int | None = None,
@@ -665,14 +608,12 @@ def robust_hull_lower_bound(
         raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")
     lower = np.full((times.size, n), np.nan)
     upper = np.full((times.size, n), np.nan)
-    lp = _Certified()
+    lp = DenseLP()
     chosen = range(times.size) if steps is None else [int(k) for k in np.atleast_1d(steps)]
     gain = np.concatenate([-np.ones(n), np.ones(n)])  # row r < n minimises x_r, the others maximise x_{r-n}
 
     def exact(delta: FloatArray, k: int, objective: int | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
-        return _inner_points(
-            _inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective
-        )
+        return _inner_points(inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective)
 
     found = np.full((2 * n, n, n), np.nan)  # the best ΔA of each bound at the previous step: a candidate
     for k in chosen:
@@ -692,7 +633,7 @@ def robust_hull_lower_bound(
             for _ in range(search):
                 sens = np.einsum("lab,jb->jal", linear.M, path[:k])
                 here = current[rows_a, cols_b]
-                model = _inner_model(system, full, h, current, substeps)
+                model = inner_model(system, full, h, current, substeps)
                 box = (da_lo - here, da_hi - here)
                 _, _, step = _inner_points(model, full.x0, k, ys, us, lp, sens, box, objective=r)
                 if not np.all(np.isfinite(step[r])):
@@ -710,11 +651,7 @@ def robust_hull_lower_bound(
         lo, hi = -best[:n], best[n:]
         if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
             lower[k], upper[k] = lo, hi
-    shrink = _INNER_SHRINK * (1.0 + np.maximum(np.abs(lower), np.abs(upper)))
-    lower, upper = lower + shrink, upper - shrink
-    middle = 0.5 * (lower + upper)
-    crossed = lower > upper
-    lower, upper = np.where(crossed, middle, lower), np.where(crossed, middle, upper)
+    lower, upper = shrink_inward(lower, upper)
     used = cands.reshape(-1, n, n)
     alive = np.ones(used.shape[0], dtype=bool)
     meta = {"horizon": "full", "filtered": False, "search": int(search), "steps": [int(k) for k in chosen]}

@@ -1,0 +1,53 @@
+"""Certified LP bounds (design/certified_lp.py): weak duality with the rounding subtracted."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy import sparse
+
+from intervalobs.design.certified_lp import DenseLP, dual_bounds, shrink_inward
+
+
+def test_dense_lp_bounds_hold_for_any_multipliers_and_meet_the_optimum() -> None:
+    """min ±(z0 + 2 z1) on z0 + z1 ∈ [0, 1], z ∈ [-1, 1]²: optima -1 and -2, at (1, -1) and (0, 1)."""
+    lp = DenseLP()
+    lp.load(np.array([[1.0, 1.0]]), -np.ones(2), np.ones(2), np.zeros(1), np.ones(1))
+    bounds, points = lp.minima(np.array([[1.0, 2.0], [-1.0, -2.0]]))
+    np.testing.assert_allclose(bounds, [-1.0, -2.0], atol=1e-9)
+    assert np.all(bounds <= [-1.0, -2.0])  # certified: never above the true minimum
+    np.testing.assert_allclose(points, [[1.0, -1.0], [0.0, 1.0]], atol=1e-9)
+    # any multipliers give a valid (weaker) bound
+    for dual in (-3.0, 0.0, 0.5, 7.0):
+        weak = dual_bounds(lp, np.array([[1.0, 2.0]]), np.array([[dual]]))[0]
+        assert weak <= -1.0
+
+
+def test_shrink_inward_moves_inner_bounds_in_and_never_crosses() -> None:
+    lower, upper = shrink_inward(np.array([1.0, 0.0, np.nan]), np.array([3.0, 1e-7, np.nan]))
+    np.testing.assert_allclose(lower[:1], 1.0 + 4e-6, rtol=1e-12)
+    np.testing.assert_allclose(upper[:1], 3.0 - 4e-6, rtol=1e-12)
+    assert lower[1] == upper[1] == pytest.approx(5e-8)  # crossed: both at the midpoint
+    assert np.isnan(lower[2]) and np.isnan(upper[2])
+
+
+def test_duality_bound_refuses_free_columns_it_cannot_bound() -> None:
+    def lp(col_hi: float) -> SimpleNamespace:
+        matrix_t = sparse.csr_matrix(np.array([[1.0], [0.1]]))  # one row: x0 + 0.1 x1 ∈ [0, 0]
+        return SimpleNamespace(
+            row_lo=np.zeros(1),
+            row_hi=np.zeros(1),
+            matrix_t=matrix_t,
+            abs_matrix_t=abs(matrix_t),
+            col_lo=np.array([-1.0, -col_hi]),
+            col_hi=np.array([1.0, col_hi]),
+            col_nnz=1,
+        )
+
+    costs, duals = np.array([[1.0, 0.1]]), np.array([[1.0]])  # reduced costs exactly zero
+    bounded = dual_bounds(lp(5.0), costs, duals)[0]
+    assert -1e-12 < bounded <= 0.0  # min of x0 + 0.1 x1 on the row is exactly 0
+    # With x1 free, a rounding error of its reduced cost times an infinite bound is not a number.
+    assert dual_bounds(lp(np.inf), costs, duals)[0] == -np.inf
