@@ -12,12 +12,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import DesignError
 from ..interval import neg, pos
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_box
+from .lmi import solve_lmi, verify_definite
 from .mixed_monotone import JacobianDecomposition, jacobian_bounds, lipschitz_bound, paper_lipschitz_constant
 
 __all__ = ["GSISIODesign", "gsisio_design"]
@@ -217,31 +220,21 @@ def _condition_ii(T_f: FloatArray, T_g: FloatArray, L_fd: float, L_gd: float) ->
 
 
 def _condition_iii(script_l: float, n: int) -> dict[str, Any]:
-    try:
-        import cvxpy as cp
-    except ImportError:  # pragma: no cover - cvxpy is a dependency
-        return {"holds": False, "status": "cvxpy unavailable"}
     P = cp.Variable((n, n), symmetric=True)
     Gam = cp.Variable((n, n), symmetric=True)
     eye, Z = np.eye(n), np.zeros((n, n))
     big = cp.bmat([[P + Gam - eye, Z, P], [Z, script_l**2 * eye - P, Z], [P, Z, P]])
-    eps = 1e-6
-    problem = cp.Problem(cp.Minimize(0), [P >> eps * eye, Gam >> 0, 0.5 * (big + big.T) << 0])
+    problem = cp.Problem(cp.Minimize(0), [P >> 1e-6 * eye, Gam >> 0, 0.5 * (big + big.T) << 0])
+    note = "block (3,3) of the LMI is P, which must be NSD and positive definite at once: infeasible"
     try:
-        problem.solve(solver=cp.CLARABEL)
-        status = str(problem.status)
-    except cp.error.SolverError as exc:  # pragma: no cover - solver failure is reported, not raised
-        status = f"solver error: {exc}"
-    holds = status == "optimal"
-    if holds and P.value is not None and Gam.value is not None:
-        Pv = P.value
-        check = np.block([[Pv + Gam.value - eye, Z, Pv], [Z, script_l**2 * eye - Pv, Z], [Pv, Z, Pv]])
-        holds = bool(np.linalg.eigvalsh(0.5 * (check + check.T)).max() <= 1e-9 and np.linalg.eigvalsh(Pv).min() > 0)
-    return {
-        "holds": holds,
-        "status": status,
-        "note": "block (3,3) of the LMI is P, which must be NSD and positive definite at once: infeasible",
-    }
+        solve_lmi(problem, "(iii) of Theorem 1", "none: the LMI is infeasible for every system")
+        Pv = np.asarray(P.value)
+        check = np.block([[Pv + np.asarray(Gam.value) - eye, Z, Pv], [Z, script_l**2 * eye - Pv, Z], [Pv, Z, Pv]])
+        verify_definite("(iii)", check, -1, "-", tol=1e-9)
+        verify_definite("(iii): P", Pv, 1, "-")
+    except DesignError:
+        return {"holds": False, "status": str(problem.status), "note": note}
+    return {"holds": True, "status": str(problem.status), "note": note}
 
 
 def gsisio_design(system: NonlinearSystem, jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None) -> GSISIODesign:
