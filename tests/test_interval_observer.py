@@ -110,8 +110,9 @@ def test_bad_records_are_refused_with_the_argument_name():
         IntervalObserver.design(system, bounds, h=0.05, gain=1)
 
 
+@pytest.mark.parametrize("coordinates", [None, [[1.0, 0.5], [0.0, 1.0]]], ids=["identity", "T"])
 @pytest.mark.parametrize("uncertain", [False, True], ids=["point", "dA"])
-def test_tube_is_never_wider_than_the_framer_with_the_same_gain(uncertain):
+def test_tube_is_never_wider_than_the_framer_with_the_same_gain(uncertain, coordinates):
     # a damped rotation: |M|^i overestimates |M^i|, so the framer is strictly wider than the tube
     angle = 0.8
     A = 0.6 * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
@@ -119,8 +120,8 @@ def test_tube_is_never_wider_than_the_framer_with_the_same_gain(uncertain):
     system = LTISystem(A, [[1.0, 0.0]], dt=1.0, dA=dA)
     bounds = Bounds(([-1, -1], [1, 1]), w=([-0.1, -0.1], [0.1, 0.1]), v=([-0.05], [0.05]))
     gain = [[0.0], [0.0]]
-    tube = IntervalObserver(system, bounds, gain)
-    framer = IntervalObserver(system, bounds, gain, method="framer")
+    tube = IntervalObserver(system, bounds, gain, coordinates)
+    framer = IntervalObserver(system, bounds, gain, coordinates, method="framer")
     t = np.arange(200.0)
     sim = simulate(system, bounds, t, seed=3, runs=3)
     tube_est, framer_est = tube.run(t, sim.y), framer.run(t, sim.y)

@@ -9,6 +9,7 @@ import pytest
 from scipy.linalg import expm
 
 from intervalobs import AssumptionError, Bounds, BoundsError, IntervalObserver, LTISystem, sampled_model
+from intervalobs.design.tube import tube_horizon
 from intervalobs.systems.sampling import _nodes
 
 STEPS = [0.001, 0.01, 0.1, 0.5, 1.0, 10.0]
@@ -129,6 +130,16 @@ def test_random_stiff_systems_tight(n: int, seed: int) -> None:
         floor = FLOOR * np.abs(model.Phi).max()
         assert np.all(model.dPhi >= lower * (1 - 1e-6)), h
         assert np.all(model.dPhi <= 1.5 * lower + floor), (h, np.max((model.dPhi - floor) / lower))
+
+
+def test_tube_horizon_of_a_slow_mode() -> None:
+    """A mode at 1 - 1e-4 needs ~14 000 steps to contract to 1/4. Diagonal, every horizon is exact (J = 1);
+    in a dense basis no affordable horizon makes |M^J| contract (hence the design's modal coordinates)."""
+    slow = np.diag([1 - 1e-4, 0.5])
+    assert tube_horizon(slow) == 1
+    basis = np.array([[1.0, 0.9], [0.2, 1.0]])
+    assert tube_horizon(basis @ slow @ np.linalg.inv(basis)) is None
+    assert tube_horizon(np.diag([1.0, 0.5])) is None
 
 
 def simulate_truth(
