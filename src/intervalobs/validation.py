@@ -23,6 +23,7 @@ __all__ = [
     "as_time",
     "as_truth",
     "as_vector",
+    "check_finite",
     "check_no_kwargs",
     "labelled_parts",
 ]
@@ -184,6 +185,7 @@ def as_signal(
     width: int,
     t: FloatArray | None = None,
     names: Sequence[str] | None = None,
+    missing: bool = False,
 ) -> FloatArray:
     """Convert a time-first signal of shape (T, width) or (M, T, width) and check it is finite.
 
@@ -206,6 +208,8 @@ def as_signal(
         The record's times, checked against a labelled signal's time index.
     names : sequence of str, optional
         The channels' names in the model (e.g. ``LTISystem.output_names``).
+    missing : bool
+        Accept rows that are entirely NaN: no sample at that time (NaN means nothing else).
 
     Returns
     -------
@@ -225,10 +229,35 @@ def as_signal(
         arr = arr.reshape(-1, 1)
     if arr.ndim not in (2, 3) or arr.shape[-2:] != (steps, width):
         raise DataError(f"{name}: expected shape ({steps}, {width}) or (runs, {steps}, {width}), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        bad = np.argwhere(~np.isfinite(arr))[0]
-        raise DataError(f"{name}: expected finite values, got NaN or inf at index {tuple(int(i) for i in bad)}")
+    check_finite(name, arr, missing)
     return arr
+
+
+def check_finite(name: str, values: FloatArray, missing: bool = False) -> None:
+    """Refuse NaN and inf in a signal; with ``missing``, a row (last axis) entirely NaN is a missing sample.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    values : numpy.ndarray, shape (..., width)
+        The signal (one sample or a record).
+    missing : bool
+        Accept rows that are entirely NaN.
+
+    Raises
+    ------
+    DataError
+        At the first value that is inf, or NaN in a row that is not entirely NaN (or NaN at all
+        without ``missing``).
+    """
+    bad = ~np.isfinite(values)
+    if missing:
+        bad &= ~np.all(np.isnan(values), axis=-1, keepdims=True)
+    if np.any(bad):
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        allowed = " (a missing sample is a row of NaN)" if missing else ""
+        raise DataError(f"{name}: expected finite values{allowed}, got NaN or inf at index {where}")
 
 
 def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> FloatArray:

@@ -31,7 +31,7 @@ from threadpoolctl import ThreadpoolController
 
 from ..errors import DataError
 from ..estimate import Estimate
-from ..validation import as_box, as_signal, as_time
+from ..validation import as_box, as_signal, as_time, check_finite
 
 __all__ = ["Observer", "ObserverState"]
 
@@ -107,6 +107,8 @@ class Observer(ABC):
     """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
     rows: Literal["predicted", "filtered"] = "predicted"
     """What row ``k`` of :meth:`run` bounds: ``x(t_k)`` given ``y_0 … y_{k-1}`` or given ``y_0 … y_k``."""
+    missing_samples: bool = False
+    """Whether a measurement may be missing (a row of NaN in ``y``): then the observer only predicts."""
     summary_fields: tuple[str, ...] = ()
     """Attributes that :meth:`__repr__` shows after ``n, p, m, h``: the method's own facts (gain, window, …)."""
 
@@ -247,8 +249,9 @@ class Observer(ABC):
     def _sample(self, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
         """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,) or (M, m) (None only if m = 0)."""
         yk = np.asarray(y, dtype=float).reshape(-1) if np.ndim(y) == 0 else np.asarray(y, dtype=float)
-        if yk.ndim not in (1, 2) or yk.shape[-1] != self.p or not np.all(np.isfinite(yk)):
+        if yk.ndim not in (1, 2) or yk.shape[-1] != self.p:
             raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
+        check_finite("y", yk, self.missing_samples)
         return yk, self._input(u, yk.shape[:-1])
 
     def _input(self, u: ArrayLike | None, lead: tuple[int, ...]) -> FloatArray:
@@ -277,7 +280,9 @@ class Observer(ABC):
         times = as_time("t", t)
         if self.h is not None:
             self._check_spacing(times, self.h)
-        ys = as_signal("y", y, times.size, self.p, t=times, names=self._channel_names("output"))
+        ys = as_signal(
+            "y", y, times.size, self.p, t=times, names=self._channel_names("output"), missing=self.missing_samples
+        )
         return times, ys, self._record_input(u, ys, times)
 
     def _channel_names(self, kind: str) -> tuple[str, ...] | None:

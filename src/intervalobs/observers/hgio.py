@@ -47,12 +47,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, BoundsError, DataError, DimensionError
+from ..errors import AssumptionError, BoundsError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
-from ..validation import as_box, as_matrix, as_time
+from ..validation import as_box, as_matrix
 from .base import Observer, ObserverState
 
 if TYPE_CHECKING:
@@ -243,6 +243,7 @@ class HighGainIntervalObserver(Observer):
     """
 
     summary_fields = ("theta", "predictor", "rewrap", "scheme")
+    missing_samples = True
 
     h: float
 
@@ -527,28 +528,21 @@ class HighGainIntervalObserver(Observer):
         new_hi = np.minimum(hi, cand_hi.min(axis=-2))
         return new_lo, new_hi
 
-    def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
+    def _step(
+        self, state: ObserverState, y: FloatArray, u: FloatArray, times: FloatArray | None = None
+    ) -> ObserverState:
         """Consume ``y(t_k)`` (all-NaN: no sample at this grid point) and ``u_k``; return the state at ``t_{k+1}``.
 
-        Parameters
-        ----------
-        state : ObserverState
-            State at ``t_k`` (``internal['t']``).
-        y : array_like, shape (p,) or (M, p)
-            Measurement at ``t_k`` or NaN.
-        u : array_like, shape (m,) or (M, m), optional
-            Known input at ``t_k``.
-
-        Returns
-        -------
-        ObserverState
+        ``times`` is ``(t_k, t_{k+1})`` from the record's grid (default: the state's time and one step
+        ``h`` later). ``internal`` of the result holds the box of ``Cx(t_k)`` with the sample taken into
+        account (``output_lower``/``output_upper``).
         """
-        t = float(state.internal["t"])
-        yk = self._check_y(np.asarray(y, dtype=float))
-        uk = self._input(u, yk.shape[:-1])
-        rot_s = self.state_modal.rotations(np.array([t, t + self.h]))
-        rot_w = self.output_modal.rotations(np.array([t, t + self.h]))
-        new, _ = self._advance(state, yk, uk, t, rot_s, rot_w, 0)
+        t = float(state.internal["t"]) if times is None else float(times[0])
+        pair = np.array([t, t + self.h]) if times is None else np.asarray(times, dtype=float)
+        rot_s = self.state_modal.rotations(pair)
+        rot_w = self.output_modal.rotations(pair)
+        new, (y_lo, y_hi) = self._advance(state, y, u, t, rot_s, rot_w, 0)
+        new.internal["output_lower"], new.internal["output_upper"] = y_lo, y_hi
         return new
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
@@ -567,70 +561,42 @@ class HighGainIntervalObserver(Observer):
         -------
         Estimate
             State bounds; ``meta`` holds the output bounds (``output_lower``/``output_upper``: bounds
-            of the noise-free output ``Cx(t_k)``, with the sample at ``t_k`` taken into account).
+            of the noise-free output ``Cx(t_k)``, with the sample at ``t_k`` taken into account) and
+            Theorem 4.5's own state bounds (``theorem45_lower``/``theorem45_upper``).
         """
-        times = as_time("t", t)
-        steps = times.size
-        self._check_spacing(times, self.h)
-        ys = np.asarray(y, dtype=float)
-        if ys.ndim == 1 and self.p == 1:
-            ys = ys[:, None]
-        if ys.ndim not in (2, 3) or ys.shape[-2:] != (steps, self.p):
-            raise DataError(f"y: expected shape ({steps}, {self.p}) or (runs, {steps}, {self.p}), got {ys.shape}")
-        self._check_y(ys)
-        us = self._record_input(u, ys, times)
-        lead = ys.shape[:-2]
-        lo0, hi0 = self.bounds.x0
-        state = self._initial(
-            np.broadcast_to(lo0, (*lead, self.n)).copy(), np.broadcast_to(hi0, (*lead, self.n)).copy(), float(times[0])
+        times, ys, us = self._signals(t, y, u)
+        state = self._initial(*self.bounds.x0, float(times[0]))
+        grid = np.stack([times, np.append(times[1:], times[-1] + self.h)], axis=-1)
+        estimate, rows = self._loop(
+            times, ys, us, state, {"times": grid}, ("xs_lower", "xs_upper", "y_lower", "y_upper")
         )
-        rot_s = self.state_modal.rotations(times)
-        rot_w = self.output_modal.rotations(times)
-        lower = np.empty((*lead, steps, self.n))
-        upper = np.empty_like(lower)
-        out_lo = np.empty((*lead, steps, self.p))
-        out_hi = np.empty_like(out_lo)
-        th_lo = np.empty_like(lower)
-        th_hi = np.empty_like(lower)
-        for k in range(steps):
-            lower[..., k, :], upper[..., k, :] = state.lower, state.upper
-            th_lo[..., k, :], th_hi[..., k, :] = state.internal["xs_lower"], state.internal["xs_upper"]
-            if k + 1 == steps:
-                out_lo[..., k, :], out_hi[..., k, :] = self._measured_output(state, ys[..., k, :])
-                break
-            state, (ylo, yhi) = self._advance(state, ys[..., k, :], us[..., k, :], float(times[k]), rot_s, rot_w, k)
-            out_lo[..., k, :], out_hi[..., k, :] = ylo, yhi
-        meta = {
+        out_lo, out_hi = self._measured_output(rows["y_lower"], rows["y_upper"], ys)
+        estimate.meta.update(
+            output_lower=out_lo, output_upper=out_hi, theorem45_lower=rows["xs_lower"], theorem45_upper=rows["xs_upper"]
+        )
+        return estimate
+
+    def meta(self) -> dict[str, Any]:
+        """Facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.
+
+        Returns
+        -------
+        dict
+            ``method``, ``L``, ``output_gain``, ``theta``, ``eigenvalues`` and ``refined``.
+        """
+        return {
             "method": "HGIO (seed 004, Theorems 4.2 and 4.5), "
             + ("sound exact discretisation" if self.scheme == "exact" else "paper's Euler step (not sound)"),
             "L": self.L,
             "output_gain": self.output_gain,
             "theta": self.theta,
             "eigenvalues": self.state_modal.decomposition.eigenvalues,
-            "transient_s": float(times[0]),
-            "output_lower": out_lo,
-            "output_upper": out_hi,
-            "theorem45_lower": th_lo,
-            "theorem45_upper": th_hi,
             "refined": self.refine,
         }
-        return Estimate(times, lower, upper, meta=meta)
 
     # ------------------------------------------------------------------ internals
-    def _check_y(self, y: FloatArray) -> FloatArray:
-        if y.shape[-1] != self.p:
-            raise DataError(f"y: expected {self.p} outputs in the last axis, got shape {y.shape}")
-        missing = np.isnan(y)
-        if np.any(np.isinf(y)):
-            raise DataError("y: expected finite measurements or NaN (no sample), got inf")
-        if np.any(missing.any(axis=-1) != missing.all(axis=-1)):
-            raise DataError("y: a measurement row must be all NaN (no sample) or fully finite")
-        return y
-
-    def _measured_output(self, state: ObserverState, yk: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Box of ``Cx(t_k)``: predicted (27) intersected with the measurement box (28)–(29)."""
-        lo = state.internal["y_lower"]
-        hi = state.internal["y_upper"]
+    def _measured_output(self, lo: FloatArray, hi: FloatArray, yk: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Box of ``Cx(t_k)``: the predicted one ``[lo, hi]`` (27) intersected with the measurement box (28)–(29)."""
         if np.isnan(yk).all():
             return lo, hi
         have = ~np.isnan(yk).any(axis=-1, keepdims=True)
@@ -732,7 +698,7 @@ class HighGainIntervalObserver(Observer):
     ) -> tuple[ObserverState, tuple[FloatArray, FloatArray]]:
         internal = state.internal
         # every box below encloses x(t_k): the a-priori enclosure starts from their intersection
-        y_lo, y_hi = self._measured_output(state, yk)
+        y_lo, y_hi = self._measured_output(internal["y_lower"], internal["y_upper"], yk)
         if self.refine and np.all(np.isnan(yk)):
             x_lo, x_hi = state.lower, state.upper  # already the refined intersection at t_k
         else:
