@@ -65,6 +65,7 @@ def test_run_equals_repeated_step(derivative) -> None:
     t = np.arange(400) * H
     y = np.stack([ac.simulate_aircraft(t, seed=s).y for s in range(2)])
     est = obs.run(t, y)
+    assert est.meta["rows"] == obs.rows == "filtered"  # step consumes y_k and returns the box at t_k
     state = obs.init()
     for k in range(t.size):
         state = obs.step(state, y[:, k])

@@ -224,6 +224,7 @@ class UnknownInputIntervalObserver(Observer):
     """
 
     summary_fields = ("q", "derivative")
+    rows = "filtered"
 
     h: float
 
@@ -886,6 +887,7 @@ class UnknownInputIntervalObserver(Observer):
             "rho_x": self.rho_x.tolist(),
             "rho_xi": self.rho_xi.tolist(),
             "known_input": "none" if self.m == 0 else ("interval" if np.any(u_lo != u_hi) else "held point"),
+            "rows": self.rows,
         }
         return Estimate(times, x_lo, x_hi, xi_lo, xi_hi, meta)
 
