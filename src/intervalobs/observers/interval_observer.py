@@ -343,8 +343,9 @@ class IntervalObserver(Observer):
         # A batched y or u (or a batched ΔA disturbance) gives the queues their leading axes.
         lead = np.broadcast_shapes(np.shape(disturbance)[:-1], z_r.shape[:-1], new_c.shape[:-1])
         disturbance = np.broadcast_to(disturbance, (*lead, self.n))
-        history = np.broadcast_to(history, (*lead, self.horizon, self.n))
-        queue = np.broadcast_to(queue, (*lead, self.horizon, self.n))
+        if queue.shape[:-2] != lead:  # the first step of a batch from the shared prior
+            history = np.broadcast_to(history, (*lead, self.horizon, self.n))
+            queue = np.broadcast_to(queue, (*lead, self.horizon, self.n))
         history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
         lag = min(k + 1, self.horizon)
         new_r = queue[..., 0, :] @ self._abs_powers[lag].T + np.einsum(

@@ -209,7 +209,8 @@ class ZonotopicObserver(Observer):
         """
         c, g = state.internal["center"], state.internal["generators"]
         lead = np.broadcast_shapes(c.shape[:-1], y.shape[:-1], u.shape[:-1])  # runs of a batched y or u
-        c, g = np.broadcast_to(c, (*lead, self.n)), np.broadcast_to(g, (*lead, *g.shape[-2:]))
+        if c.shape[:-1] != lead:  # the first step of a batch from the shared prior
+            c, g = np.broadcast_to(c, (*lead, self.n)), np.broadcast_to(g, (*lead, *g.shape[-2:]))
         c, g = self._advance(c, g, y, u)
         lower, upper = self._hull(c, g)
         return ObserverState(lower, upper, internal={"center": c, "generators": g})
