@@ -10,7 +10,8 @@ from intervalobs.errors import AssumptionError
 from intervalobs.examples import gsisio as ex
 from intervalobs.observers.gsisio import GSISIO
 from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
-from intervalobs.systems import NonlinearSystem, simulate_nonlinear
+from intervalobs.simulate import simulate_nonlinear
+from intervalobs.systems import NonlinearSystem
 
 
 def delayed(d: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from intervalobs.estimate import enclosure_report
 from intervalobs.examples import hgio as example
 from intervalobs.interval import matvec_bounds
 from intervalobs.observers.hgio import HighGainIntervalObserver, _Split
-from intervalobs.systems.sampled import simulate_sampled
+from intervalobs.simulate import simulate_sampled
 
 HORIZON = 1.0
 

@@ -8,7 +8,8 @@ import pytest
 from intervalobs.errors import AssumptionError, BoundsError, DataError, DimensionError
 from intervalobs.examples import gsisio
 from intervalobs.inclusion import interval_matrix
-from intervalobs.systems import NonlinearSystem, simulate_nonlinear
+from intervalobs.simulate import simulate_nonlinear
+from intervalobs.systems import NonlinearSystem
 
 
 def f(x):

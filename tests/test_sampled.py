@@ -7,7 +7,8 @@ import pytest
 
 from intervalobs import AssumptionError, BoundsError, DataError, DimensionError
 from intervalobs.examples import hgio as example
-from intervalobs.systems.sampled import SampledSystem, simulate_sampled
+from intervalobs.simulate import simulate_sampled
+from intervalobs.systems.sampled import SampledSystem
 
 
 def test_validation() -> None:

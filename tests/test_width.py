@@ -18,8 +18,9 @@ from intervalobs.design.regions import (
 from intervalobs.design.width import design_for_width, modal_width_bound
 from intervalobs.examples import hgio as example
 from intervalobs.observers.hgio import HighGainIntervalObserver
+from intervalobs.simulate import simulate_sampled
 from intervalobs.systems import Bounds
-from intervalobs.systems.sampled import SampledSystem, simulate_sampled
+from intervalobs.systems.sampled import SampledSystem
 
 COARSE_STEP = 0.01  # the design at a coarse step: same code path, 10x fewer points
 D_RADIUS = np.array([0.1, 1.0, 1.0])

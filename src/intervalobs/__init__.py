@@ -32,10 +32,10 @@ from .observers.null_space_gsisio import NullSpaceGSISIO
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
-from .simulate import Simulation, simulate
-from .systems import Bounds, LTISystem, ResolvedBounds, SampledModel, SampledSystem, sampled_model, simulate_sampled
+from .simulate import Simulation, simulate, simulate_nonlinear, simulate_sampled
+from .systems import Bounds, LTISystem, ResolvedBounds, SampledModel, SampledSystem, sampled_model
 from .systems.lpv import LPVSystem
-from .systems.nonlinear import NonlinearSystem, simulate_nonlinear
+from .systems.nonlinear import NonlinearSystem
 from .tightness import format_tightness, tightness_reference, tightness_report
 from .zonotope import Zonotope
 

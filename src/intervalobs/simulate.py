@@ -1,6 +1,15 @@
 """Truth simulation with admissible noise: the reference every enclosure test is judged against.
 
-Continuous-time systems are simulated *exactly* for piecewise-constant noise: the noise ``w`` is held
+Every truth simulator of the package lives here, written independently of the observers (no bound,
+no sampled model, no inclusion function is used): :func:`simulate` for :class:`LTISystem`,
+:func:`simulate_sampled` for the sampled-output :class:`SampledSystem` (seed 004) and
+:func:`simulate_nonlinear` for the discrete-time :class:`NonlinearSystem` (seed 003). They share the
+public helpers that draw admissible unknowns — :func:`noise_signal` (uniform, bang-bang ``"extreme"``
+switching at random steps, i.i.d. ``"vertex"``, sinusoidal, constant), :func:`draw_box` (a point or a
+random vertex of a box per run) — and :func:`runge_kutta_step`, the classical fourth-order step used
+for nonlinear continuous-time truths (also by :mod:`intervalobs.examples.manipulator`).
+
+Continuous-time LTI systems are simulated *exactly* for piecewise-constant noise: the noise ``w`` is held
 over sub-steps of ``h / substeps`` (so it switches inside the observer's sampling intervals), the known
 input ``u`` over whole sampling intervals (zero-order hold, as the observers assume), and each
 sub-step uses the matrix exponential of the augmented system. Discrete-time systems are iterated.
@@ -9,7 +18,7 @@ Measurements are taken at the sample times with their own noise ``v``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,14 +30,29 @@ from . import _tables
 from .errors import DataError
 from .systems.bounds import Bounds
 from .systems.lti import LTISystem
-from .validation import as_names, as_signal, as_time
+from .systems.nonlinear import NonlinearSystem
+from .systems.sampled import SampledSystem
+from .validation import as_box, as_matrix, as_names, as_signal, as_time, as_vector
 
-__all__ = ["NOISE_KINDS", "Simulation", "noise_signal", "simulate"]
+__all__ = [
+    "NOISE_KINDS",
+    "NonlinearSimulation",
+    "SampledSimulation",
+    "Simulation",
+    "draw_box",
+    "noise_signal",
+    "runge_kutta_step",
+    "simulate",
+    "simulate_nonlinear",
+    "simulate_sampled",
+]
 
 FloatArray = NDArray[np.float64]
+Rate = Callable[[float, FloatArray], FloatArray]
 
-NOISE_KINDS = ("uniform", "extreme", "sine", "constant")
-"""Built-in noise kinds; ``"extreme"`` jumps between the two bounds at random times (bang-bang)."""
+NOISE_KINDS = ("uniform", "extreme", "vertex", "sine", "constant")
+"""Built-in noise kinds; ``"extreme"`` jumps between the two bounds at random times (bang-bang),
+``"vertex"`` picks a bound independently at every step."""
 
 _SWITCH_PROBABILITY = 0.1
 
@@ -185,7 +209,8 @@ def noise_signal(
     ----------
     kind : str
         ``"uniform"`` (independent samples), ``"extreme"`` (each component at one of its bounds,
-        switching with probability 0.1 per step), ``"sine"`` (full-amplitude sinusoid of random period
+        switching with probability 0.1 per step), ``"vertex"`` (each component at a bound drawn
+        independently at every step), ``"sine"`` (full-amplitude sinusoid of random period
         between 5 and 200 steps and random phase) or ``"constant"`` (a random constant).
     lower, upper : array_like, shape (k,)
         Bounds of each component.
@@ -209,6 +234,8 @@ def noise_signal(
         first = rng.integers(0, 2, size=(shape[0], 1, shape[2]))
         flips = rng.uniform(size=(shape[0], steps - 1, shape[2])) < _SWITCH_PROBABILITY
         unit = (first + np.concatenate([np.zeros_like(first), np.cumsum(flips, axis=1)], axis=1)) % 2
+    elif kind == "vertex":
+        unit = rng.integers(0, 2, size=shape).astype(float)
     elif kind == "sine":
         period = rng.uniform(5, 200, size=(shape[0], 1, shape[2]))
         phase = rng.uniform(0, 2 * np.pi, size=(shape[0], 1, shape[2]))
@@ -221,12 +248,76 @@ def noise_signal(
     return signal[0] if runs is None else signal
 
 
-def _draw_box(kind: str, lower: FloatArray, upper: FloatArray, rng: np.random.Generator, runs: int) -> FloatArray:
-    """A point per run in the box: a random vertex for extreme noise, uniform otherwise."""
-    unit = (
-        rng.integers(0, 2, size=(runs, *lower.shape)) if kind == "extreme" else rng.uniform(size=(runs, *lower.shape))
-    )
-    return np.asarray(lower + (upper - lower) * unit)
+def draw_box(kind: str, lower: ArrayLike, upper: ArrayLike, rng: np.random.Generator, runs: int) -> FloatArray:
+    """One point of the box per run: a random vertex for ``"extreme"`` and ``"vertex"``, uniform otherwise.
+
+    Parameters
+    ----------
+    kind : str
+        The noise kind of the simulation (see :func:`noise_signal`).
+    lower, upper : array_like
+        Bounds of the box (any shape, e.g. a vector or a matrix).
+    rng : numpy.random.Generator
+        Random source.
+    runs : int
+        Number of points (leading axis).
+
+    Returns
+    -------
+    numpy.ndarray, shape (runs, *lower.shape)
+    """
+    lo = np.asarray(lower, dtype=float)
+    hi = np.asarray(upper, dtype=float)
+    size = (runs, *lo.shape)
+    unit = rng.integers(0, 2, size=size) if kind in ("extreme", "vertex") else rng.uniform(size=size)
+    return np.asarray(lo + (hi - lo) * unit)
+
+
+def runge_kutta_step(rate: Rate, t: float, x: FloatArray, dt: float) -> FloatArray:
+    r"""One classical fourth-order Runge–Kutta step of :math:`\dot x = \text{rate}(t, x)`.
+
+    Parameters
+    ----------
+    rate : callable
+        ``rate(t, x)`` for states ``x`` of shape (..., n) (runs on leading axes); everything it holds
+        constant over the step (an input, a disturbance) it closes over.
+    t : float
+        Start of the step.
+    x : numpy.ndarray, shape (..., n)
+        State at ``t``.
+    dt : float
+        Step length.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., n)
+        State at ``t + dt``.
+    """
+    k1 = rate(t, x)
+    k2 = rate(t + dt / 2, x + dt / 2 * k1)
+    k3 = rate(t + dt / 2, x + dt / 2 * k2)
+    k4 = rate(t + dt, x + dt * k3)
+    return np.asarray(x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
+
+
+def _count(name: str, value: object) -> int:
+    """A positive integer argument, refused in one line otherwise."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise DataError(f"{name}: expected a positive integer, got {value!r}")
+    return int(value)
+
+
+def _seed(seed: object) -> np.random.Generator:
+    """The generator of a simulation, from a nonnegative integer seed."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise DataError(f"seed: expected a nonnegative integer, got {seed!r}")
+    return np.random.default_rng(seed)
+
+
+def _noise_kind(noise: object) -> str:
+    if not isinstance(noise, str) or noise not in NOISE_KINDS:
+        raise DataError(f"noise: expected one of {NOISE_KINDS}, got {noise!r}")
+    return noise
 
 
 def simulate(
@@ -265,16 +356,22 @@ def simulate(
     Returns
     -------
     Simulation
+
+    Raises
+    ------
+    DataError
+        ``runs``, ``substeps`` or ``seed`` is not a positive (nonnegative) integer, ``noise`` is not a
+        kind or a dict with ``"w"`` and ``"v"``, or a signal has the wrong shape.
     """
     times = as_time("t", t)
     full = bounds.resolve(system)
     steps = times.size
-    rng = np.random.default_rng(seed)
-    count = 1 if runs is None else int(runs)
+    count = 1 if runs is None else _count("runs", runs)
+    fine = _count("substeps", substeps) if system.continuous else 1
+    rng = _seed(seed)
     us = np.zeros((steps, system.m)) if u is None else as_signal("u", u, steps, system.m)
     if us.ndim != 2:
         raise DataError(f"u: expected shape ({steps}, {system.m}) shared by all runs, got {us.shape}")
-    fine = substeps if system.continuous else 1
     if system.continuous and steps > 1:
         h = float(times[1] - times[0])
         if np.max(np.abs(np.diff(times) - h)) > 1e-9 * h:
@@ -282,20 +379,22 @@ def simulate(
     else:
         h = 1.0
     if isinstance(noise, dict):
+        if set(noise) != {"w", "v"}:
+            raise DataError(f"noise: expected a dict with the keys 'w' and 'v', got keys {sorted(noise)}")
         w = as_signal("noise['w']", noise["w"], steps * fine, system.nw)
         v = as_signal("noise['v']", noise["v"], steps, system.nv)
         w = np.broadcast_to(w, (count, *w.shape[-2:]))
         v = np.broadcast_to(v, (count, *v.shape[-2:]))
         kind = "uniform"
     else:
-        kind = noise
+        kind = _noise_kind(noise)
         w = noise_signal(kind, full.w[0], full.w[1], steps * fine, rng, count)
         v = noise_signal(kind, full.v[0], full.v[1], steps, rng, count)
-    x0 = _draw_box(kind, *full.x0, rng, count)
+    x0 = draw_box(kind, *full.x0, rng, count)
     if system.dA is None:
         d_a = np.zeros((count, system.n, system.n))
     else:
-        d_a = _draw_box(kind, *system.dA, rng, count)
+        d_a = draw_box(kind, *system.dA, rng, count)
     n, m, nw = system.n, system.m, system.nw
     a_true = system.A + d_a
     if system.continuous:
@@ -327,3 +426,227 @@ def simulate(
     if runs is None:
         return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0], *names)
     return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a, *names)
+
+
+@dataclass(frozen=True)
+class SampledSimulation:
+    """A simulated record of a :class:`SampledSystem` on the observer's grid (leading run axis if ``runs``).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Observer grid.
+    x : numpy.ndarray, shape (..., T, n)
+        True state on the grid.
+    y : numpy.ndarray, shape (..., T, p)
+        Measurements at the sample times, NaN at the other grid points.
+    u : numpy.ndarray, shape (T, m)
+        Known input on the grid.
+    d : numpy.ndarray, shape (..., T * substeps, n)
+        Disturbance on the fine grid (constant over each fine step).
+    v : numpy.ndarray, shape (..., T, p)
+        Measurement noise (used at the sample times only).
+    sampled : numpy.ndarray of bool, shape (T,)
+        Grid points carrying a measurement.
+    """
+
+    t: FloatArray
+    x: FloatArray
+    y: FloatArray
+    u: FloatArray
+    d: FloatArray
+    v: FloatArray
+    sampled: NDArray[np.bool_]
+
+
+def simulate_sampled(
+    system: SampledSystem,
+    bounds: Bounds,
+    t: ArrayLike,
+    u: Callable[[float], ArrayLike] | ArrayLike | None = None,
+    noise: str = "extreme",
+    seed: int = 0,
+    runs: int | None = None,
+    substeps: int = 4,
+) -> SampledSimulation:
+    """Simulate seed 004's eq. (8) with admissible disturbance, noise and initial state.
+
+    Classical Runge–Kutta (:func:`runge_kutta_step`) on a grid ``substeps`` times finer than the
+    observer's, the disturbance switching on that finer grid (inside the observer's steps), the known
+    input evaluated in continuous time when given as a function, and measurements only every
+    ``system.sample_period`` (NaN rows in between).
+
+    Parameters
+    ----------
+    system : SampledSystem
+        The model.
+    bounds : Bounds
+        Boxes of ``x0``, ``d`` (as ``w``) and ``V`` (as ``v``).
+    t : array_like, shape (T,)
+        Uniform observer grid; ``system.sample_period`` must be a multiple of its step.
+    u : callable or array_like, optional
+        ``u(t) -> (m,)`` evaluated in continuous time, or samples (T, m) held over each step.
+    noise : str
+        A kind of :func:`noise_signal` (``"extreme"``: bang-bang, switching on the fine grid, inside
+        the observer's steps; the initial state at a random vertex).
+    seed : int
+        Random seed.
+    runs : int, optional
+        Number of Monte Carlo runs (leading axis).
+    substeps : int
+        Runge–Kutta steps (and disturbance switching opportunities) per observer step.
+
+    Returns
+    -------
+    SampledSimulation
+
+    Raises
+    ------
+    DataError
+        A bad grid, or ``runs``, ``substeps``, ``seed`` or ``noise`` out of its range.
+    """
+    times = as_time("t", t)
+    steps = times.size
+    if steps < 2:
+        raise DataError("t: expected at least two samples")
+    h = float(times[1] - times[0])
+    if np.max(np.abs(np.diff(times) - h)) > 1e-9 * h:
+        raise DataError("t: expected a uniformly spaced grid")
+    ratio = system.sample_period / h
+    every = round(ratio)
+    if every < 1 or abs(ratio - every) > 1e-6 * ratio:
+        raise DataError(f"t: the sample period {system.sample_period:g} is not a multiple of the grid step {h:g}")
+    fine = _count("substeps", substeps)
+    count = 1 if runs is None else _count("runs", runs)
+    kind = _noise_kind(noise)
+    rng = _seed(seed)
+    full = bounds.resolve(system)
+    n, m = system.n, system.m
+    if callable(u):
+        u_of = u
+
+        def u_at(tt: float, k: int) -> FloatArray:
+            return np.asarray(u_of(tt), dtype=float).reshape(m)
+
+        u_grid = np.array([u_at(float(tk), k) for k, tk in enumerate(times)]).reshape(steps, m)
+    else:
+        u_grid = np.zeros((steps, m)) if u is None else as_signal("u", u, steps, m)
+        if u_grid.ndim != 2:
+            raise DataError(f"u: expected shape ({steps}, {m}) shared by all runs, got {u_grid.shape}")
+        held = u_grid
+
+        def u_at(tt: float, k: int) -> FloatArray:
+            return held[k]
+
+    d = noise_signal(kind, full.w[0], full.w[1], steps * fine, rng, count)
+    v = noise_signal(kind, full.v[0], full.v[1], steps, rng, count)
+    x0 = draw_box(kind, *full.x0, rng, count)
+    dt = h / fine
+    a_t = system.A.T
+    x = np.empty((count, steps, n))
+    state = np.array(x0, dtype=float)
+    for k in range(steps):
+        x[:, k] = state
+        if k + 1 == steps:
+            break
+        tk = float(times[k])
+        for j in range(fine):
+            dd = d[:, k * fine + j]
+
+            def rate(tt: float, xx: FloatArray, k: int = k, dd: FloatArray = dd) -> FloatArray:
+                return np.asarray(xx @ a_t + system.nonlinearity(tt, u_at(tt, k), xx) + dd)
+
+            state = runge_kutta_step(rate, tk + j * dt, state, dt)
+    sampled = (np.arange(steps) % every) == 0
+    y = x @ system.C.T + v
+    y[:, ~sampled] = np.nan
+    if runs is None:
+        return SampledSimulation(times, x[0], y[0], u_grid, d[0], v[0], sampled)
+    return SampledSimulation(times, x, y, u_grid, np.asarray(d), np.asarray(v), sampled)
+
+
+@dataclass(frozen=True)
+class NonlinearSimulation:
+    """A simulated record of a :class:`NonlinearSystem`, time-first (leading run axis if ``runs``).
+
+    Attributes
+    ----------
+    x : numpy.ndarray, shape (..., T, n)
+    y : numpy.ndarray, shape (..., T, p)
+    u : numpy.ndarray, shape (T, m)
+    d : numpy.ndarray, shape (..., T, q)
+    w : numpy.ndarray, shape (..., T, n)
+    v : numpy.ndarray, shape (..., T, p)
+    """
+
+    x: FloatArray
+    y: FloatArray
+    u: FloatArray
+    d: FloatArray
+    w: FloatArray
+    v: FloatArray
+
+
+def simulate_nonlinear(
+    system: NonlinearSystem,
+    x0: ArrayLike | tuple[ArrayLike, ArrayLike],
+    d: ArrayLike,
+    u: ArrayLike | None = None,
+    noise: str = "extreme",
+    seed: int = 0,
+    runs: int | None = None,
+) -> NonlinearSimulation:
+    """Iterate seed 003's eq. (3) with admissible noise.
+
+    Parameters
+    ----------
+    system : NonlinearSystem
+        The model.
+    x0 : array_like, shape (n,), or tuple (lower, upper)
+        Initial state, or a box from which each run draws one (:func:`draw_box`: a random vertex for
+        ``"extreme"`` noise, uniform otherwise).
+    d : array_like, shape (T, q) or (runs, T, q)
+        Unknown input; its length fixes the horizon T.
+    u : array_like, shape (T, m), optional
+        Known input (default zero).
+    noise : str
+        Kind of :func:`noise_signal` ("extreme" is bang-bang between the bounds).
+    seed : int
+        Random seed.
+    runs : int, optional
+        Number of Monte Carlo runs (leading axis).
+
+    Returns
+    -------
+    NonlinearSimulation
+
+    Raises
+    ------
+    DataError
+        ``d`` of the wrong shape or not finite, or ``runs``, ``seed`` or ``noise`` out of its range.
+    """
+    dd = np.asarray(d, dtype=float)
+    if dd.ndim not in (2, 3) or dd.shape[-1] != system.q:
+        raise DataError(f"d: expected shape (T, {system.q}) or (runs, T, {system.q}), got {dd.shape}")
+    if not np.all(np.isfinite(dd)):
+        raise DataError("d: expected finite values, got NaN or inf")
+    steps = dd.shape[-2]
+    uu = np.zeros((steps, system.m)) if u is None else as_matrix("u", u, (steps, system.m))
+    count = 1 if runs is None else _count("runs", runs)
+    kind = _noise_kind(noise)
+    rng = _seed(seed)
+    if isinstance(x0, tuple):
+        x_init = draw_box(kind, *as_box("x0", x0, system.n), rng, count)
+    else:
+        x_init = np.broadcast_to(as_vector("x0", x0, system.n), (count, system.n)).copy()
+    w = noise_signal(kind, system.w[0], system.w[1], steps, rng, runs=count)
+    v = noise_signal(kind, system.v[0], system.v[1], steps, rng, runs=count)
+    dr = np.broadcast_to(dd, (count, steps, system.q))
+    x = np.empty((count, steps, system.n))
+    x[:, 0] = x_init
+    for k in range(steps - 1):
+        x[:, k + 1] = system.evaluate_f(x[:, k]) + uu[k] @ system.B.T + dr[:, k] @ system.G.T + w[:, k]
+    y = system.evaluate_g(x) + uu @ system.D.T + dr @ system.H.T + v
+    if runs is None:
+        return NonlinearSimulation(x[0], y[0], uu, dr[0].copy(), w[0], v[0])
+    return NonlinearSimulation(x, y, uu, np.array(dr), w, v)

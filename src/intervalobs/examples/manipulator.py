@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.lpv import CertifiedVertexBounds, certify_vertex_extremes
 from ..errors import AssumptionError, BoundsError
+from ..simulate import runge_kutta_step
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_vector
 
@@ -245,7 +246,7 @@ def _true_rate(x: FloatArray, tau: FloatArray, at: FloatArray, bt: FloatArray, c
 
 
 def rk4_step(x: FloatArray, tau: FloatArray, params: FloatArray, h: float) -> FloatArray:
-    """One classical RK4 step of the true manipulator with the torque held over the step.
+    """One classical RK4 step (:func:`~intervalobs.simulate.runge_kutta_step`) of the true manipulator, torque held.
 
     Parameters
     ----------
@@ -263,11 +264,7 @@ def rk4_step(x: FloatArray, tau: FloatArray, params: FloatArray, h: float) -> Fl
     numpy.ndarray, shape (M, 4)
     """
     at, bt, ct = params[:, 0], params[:, 1], params[:, 2]
-    k1 = _true_rate(x, tau, at, bt, ct)
-    k2 = _true_rate(x + 0.5 * h * k1, tau, at, bt, ct)
-    k3 = _true_rate(x + 0.5 * h * k2, tau, at, bt, ct)
-    k4 = _true_rate(x + h * k3, tau, at, bt, ct)
-    return np.asarray(x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4))
+    return runge_kutta_step(lambda _, xx: _true_rate(xx, tau, at, bt, ct), 0.0, x, h)
 
 
 def simulate_closed_loop(

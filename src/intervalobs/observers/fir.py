@@ -59,7 +59,7 @@ from scipy.optimize import linprog
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
-from ..simulate import simulate
+from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
@@ -548,9 +548,7 @@ def _training_noise(
     if record % 2:
         return "extreme"
     fine = 10 if system.continuous else 1  # simulate's default substeps
-    w_bits = rng.integers(0, 2, size=(steps * fine, system.nw))
-    v_bits = rng.integers(0, 2, size=(steps, system.nv))
     return {
-        "w": bounds.w[0] + (bounds.w[1] - bounds.w[0]) * w_bits,
-        "v": bounds.v[0] + (bounds.v[1] - bounds.v[0]) * v_bits,
+        "w": noise_signal("vertex", *bounds.w, steps * fine, rng),
+        "v": noise_signal("vertex", *bounds.v, steps, rng),
     }

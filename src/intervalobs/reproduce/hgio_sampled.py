@@ -27,7 +27,7 @@ from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
 from ..observers.hgio import HighGainIntervalObserver
 from ..plotting import plot_widths, save_figure
-from ..systems.sampled import simulate_sampled
+from ..simulate import simulate_sampled
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "hgio-sampled"

@@ -38,7 +38,8 @@ from ..inclusion import evaluate_matrix
 from ..interval import Interval
 from ..observers.gsisio import GSISIO
 from ..observers.null_space_gsisio import NullSpaceGSISIO
-from ..systems.nonlinear import NonlinearSimulation, NonlinearSystem, simulate_nonlinear
+from ..simulate import NonlinearSimulation, simulate_nonlinear
+from ..systems.nonlinear import NonlinearSystem
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "nonlinear-gsisio"

@@ -19,8 +19,6 @@ automatic ones.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -34,9 +32,9 @@ from ..inclusion import (
     interval_matrix,
 )
 from ..interval_dual import automatic_jacobian
-from ..validation import as_box, as_matrix, as_vector
+from ..validation import as_box, as_matrix
 
-__all__ = ["NonlinearSimulation", "NonlinearSystem", "simulate_nonlinear"]
+__all__ = ["NonlinearSystem"]
 
 FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
@@ -247,87 +245,3 @@ class NonlinearSystem:
 
     def __repr__(self) -> str:
         return f"NonlinearSystem(n={self.n}, m={self.m}, p={self.p}, q={self.q})"
-
-
-@dataclass(frozen=True)
-class NonlinearSimulation:
-    """A simulated record of a :class:`NonlinearSystem`, time-first (leading run axis if ``runs``).
-
-    Attributes
-    ----------
-    x : numpy.ndarray, shape (..., T, n)
-    y : numpy.ndarray, shape (..., T, p)
-    u : numpy.ndarray, shape (T, m)
-    d : numpy.ndarray, shape (..., T, q)
-    w : numpy.ndarray, shape (..., T, n)
-    v : numpy.ndarray, shape (..., T, p)
-    """
-
-    x: FloatArray
-    y: FloatArray
-    u: FloatArray
-    d: FloatArray
-    w: FloatArray
-    v: FloatArray
-
-
-def simulate_nonlinear(
-    system: NonlinearSystem,
-    x0: ArrayLike | tuple[ArrayLike, ArrayLike],
-    d: ArrayLike,
-    u: ArrayLike | None = None,
-    noise: str = "extreme",
-    seed: int = 0,
-    runs: int | None = None,
-) -> NonlinearSimulation:
-    """Iterate seed 003's eq. (3) with admissible noise.
-
-    Parameters
-    ----------
-    system : NonlinearSystem
-    x0 : array_like, shape (n,), or tuple (lower, upper)
-        Initial state, or a box from which each run draws one (a random vertex for ``"extreme"`` noise,
-        uniform otherwise).
-    d : array_like, shape (T, q) or (runs, T, q)
-        Unknown input; its length fixes the horizon T.
-    u : array_like, shape (T, m), optional
-        Known input (default zero).
-    noise : str
-        Kind of :func:`intervalobs.simulate.noise_signal` ("extreme" is bang-bang between the bounds).
-    seed : int
-        Random seed.
-    runs : int, optional
-        Number of Monte Carlo runs (leading axis).
-
-    Returns
-    -------
-    NonlinearSimulation
-    """
-    from ..simulate import noise_signal
-
-    dd = np.asarray(d, dtype=float)
-    if dd.ndim not in (2, 3) or dd.shape[-1] != system.q:
-        raise DataError(f"d: expected shape (T, {system.q}) or (runs, T, {system.q}), got {dd.shape}")
-    if not np.all(np.isfinite(dd)):
-        raise DataError("d: expected finite values, got NaN or inf")
-    steps = dd.shape[-2]
-    uu = np.zeros((steps, system.m)) if u is None else as_matrix("u", u, (steps, system.m))
-    rng = np.random.default_rng(seed)
-    count = 1 if runs is None else runs
-    if isinstance(x0, tuple):
-        lo, hi = as_box("x0", x0, system.n)
-        unit = rng.integers(0, 2, size=(count, system.n)) if noise == "extreme" else rng.uniform(size=(count, system.n))
-        x_init = lo + (hi - lo) * unit
-    else:
-        x_init = np.broadcast_to(as_vector("x0", x0, system.n), (count, system.n)).copy()
-    w = noise_signal(noise, system.w[0], system.w[1], steps, rng, runs=count)
-    v = noise_signal(noise, system.v[0], system.v[1], steps, rng, runs=count)
-    dr = np.broadcast_to(dd, (count, steps, system.q))
-    x = np.empty((count, steps, system.n))
-    x[:, 0] = x_init
-    for k in range(steps - 1):
-        x[:, k + 1] = system.evaluate_f(x[:, k]) + uu[k] @ system.B.T + dr[:, k] @ system.G.T + w[:, k]
-    y = system.evaluate_g(x) + uu @ system.D.T + dr @ system.H.T + v
-    if runs is None:
-        return NonlinearSimulation(x[0], y[0], uu, dr[0].copy(), w[0], v[0])
-    return NonlinearSimulation(x, y, uu, np.array(dr), w, v)

@@ -16,25 +16,20 @@ the range :math:`e^{-|x|} \in [e^{-\max|x|}, e^{-\operatorname{mig}|x|}] \subset
 paper's example). The constructor spot-checks it on random points and refuses an enclosure that
 misses one.
 
-:func:`simulate_sampled` produces the truth for tests and reproductions: classical Runge–Kutta on a
-grid ``substeps`` times finer than the observer's, the disturbance switching on that finer grid
-(inside the observer's steps), the known input evaluated in continuous time when given as a
-function, and measurements only every ``sample_every`` observer steps (NaN rows in between).
+:func:`intervalobs.simulate.simulate_sampled` produces the truth for tests and reproductions.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, BoundsError, DataError, DimensionError
-from ..validation import as_matrix, as_signal, as_time
-from .bounds import Bounds
+from ..errors import AssumptionError, BoundsError, DimensionError
+from ..validation import as_matrix
 
-__all__ = ["PhiBounds", "PhiFunction", "SampledSimulation", "SampledSystem", "simulate_sampled"]
+__all__ = ["PhiBounds", "PhiFunction", "SampledSystem"]
 
 FloatArray = NDArray[np.float64]
 PhiFunction = Callable[[float, FloatArray, FloatArray], FloatArray]
@@ -195,138 +190,3 @@ class SampledSystem:
 
     def __repr__(self) -> str:
         return f"SampledSystem(n={self.n}, m={self.m}, p={self.p}, sample_period={self.sample_period:g})"
-
-
-@dataclass(frozen=True)
-class SampledSimulation:
-    """A simulated record on the observer's grid (a leading run axis when ``runs`` was given).
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-        Observer grid.
-    x : numpy.ndarray, shape (..., T, n)
-        True state on the grid.
-    y : numpy.ndarray, shape (..., T, p)
-        Measurements at the sample times, NaN at the other grid points.
-    u : numpy.ndarray, shape (T, m)
-        Known input on the grid.
-    d : numpy.ndarray, shape (..., T * substeps, n)
-        Disturbance on the fine grid (constant over each fine step).
-    v : numpy.ndarray, shape (..., T, p)
-        Measurement noise (used at the sample times only).
-    sampled : numpy.ndarray of bool, shape (T,)
-        Grid points carrying a measurement.
-    """
-
-    t: FloatArray
-    x: FloatArray
-    y: FloatArray
-    u: FloatArray
-    d: FloatArray
-    v: FloatArray
-    sampled: NDArray[np.bool_]
-
-
-def simulate_sampled(
-    system: SampledSystem,
-    bounds: Bounds,
-    t: ArrayLike,
-    u: Callable[[float], ArrayLike] | ArrayLike | None = None,
-    noise: str = "extreme",
-    seed: int = 0,
-    runs: int | None = None,
-    substeps: int = 4,
-) -> SampledSimulation:
-    """Simulate eq. (8) with admissible disturbance, noise and initial state.
-
-    Parameters
-    ----------
-    system : SampledSystem
-        The model.
-    bounds : Bounds
-        Boxes of ``x0``, ``d`` (as ``w``) and ``V`` (as ``v``).
-    t : array_like, shape (T,)
-        Uniform observer grid; ``system.sample_period`` must be a multiple of its step.
-    u : callable or array_like, optional
-        ``u(t) -> (m,)`` evaluated in continuous time, or samples (T, m) held over each step.
-    noise : str
-        A kind of :func:`intervalobs.simulate.noise_signal` (``"extreme"``: bang-bang, switching on
-        the fine grid, inside the observer's steps; the initial state at a random vertex).
-    seed : int
-        Random seed.
-    runs : int, optional
-        Number of Monte Carlo runs (leading axis).
-    substeps : int
-        Runge–Kutta steps (and disturbance switching opportunities) per observer step.
-
-    Returns
-    -------
-    SampledSimulation
-    """
-    from ..simulate import _draw_box, noise_signal
-
-    times = as_time("t", t)
-    steps = times.size
-    if steps < 2:
-        raise DataError("t: expected at least two samples")
-    h = float(times[1] - times[0])
-    if np.max(np.abs(np.diff(times) - h)) > 1e-9 * h:
-        raise DataError("t: expected a uniformly spaced grid")
-    ratio = system.sample_period / h
-    every = round(ratio)
-    if every < 1 or abs(ratio - every) > 1e-6 * ratio:
-        raise DataError(f"t: the sample period {system.sample_period:g} is not a multiple of the grid step {h:g}")
-    if not (isinstance(substeps, int) and substeps >= 1):
-        raise DimensionError(f"substeps: expected a positive integer, got {substeps!r}")
-    full = bounds.resolve(system)
-    rng = np.random.default_rng(seed)
-    count = 1 if runs is None else int(runs)
-    n, m = system.n, system.m
-    if callable(u):
-        u_of = u
-
-        def u_at(tt: float, k: int) -> FloatArray:
-            return np.asarray(u_of(tt), dtype=float).reshape(m)
-
-        u_grid = np.array([u_at(float(tk), k) for k, tk in enumerate(times)]).reshape(steps, m)
-    else:
-        u_grid = np.zeros((steps, m)) if u is None else as_signal("u", u, steps, m)
-        if u_grid.ndim != 2:
-            raise DataError(f"u: expected shape ({steps}, {m}) shared by all runs, got {u_grid.shape}")
-        held = u_grid
-
-        def u_at(tt: float, k: int) -> FloatArray:
-            return held[k]
-
-    d = noise_signal(noise, full.w[0], full.w[1], steps * substeps, rng, count)
-    v = noise_signal(noise, full.v[0], full.v[1], steps, rng, count)
-    x0 = _draw_box(noise, *full.x0, rng, count)
-    dt = h / substeps
-    a_t = system.A.T
-
-    def f(tt: float, uu: FloatArray, xx: FloatArray, dd: FloatArray) -> FloatArray:
-        return np.asarray(xx @ a_t + system.nonlinearity(tt, uu, xx) + dd)
-
-    x = np.empty((count, steps, n))
-    state = np.array(x0, dtype=float)
-    for k in range(steps):
-        x[:, k] = state
-        if k + 1 == steps:
-            break
-        tk = float(times[k])
-        for j in range(substeps):
-            t0 = tk + j * dt
-            dd = d[:, k * substeps + j]
-            u0, um, u1 = u_at(t0, k), u_at(t0 + dt / 2, k), u_at(t0 + dt, k)
-            k1 = f(t0, u0, state, dd)
-            k2 = f(t0 + dt / 2, um, state + dt / 2 * k1, dd)
-            k3 = f(t0 + dt / 2, um, state + dt / 2 * k2, dd)
-            k4 = f(t0 + dt, u1, state + dt * k3, dd)
-            state = state + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    sampled = (np.arange(steps) % every) == 0
-    y = x @ system.C.T + v
-    y[:, ~sampled] = np.nan
-    if runs is None:
-        return SampledSimulation(times, x[0], y[0], u_grid, d[0], v[0], sampled)
-    return SampledSimulation(times, x, y, u_grid, np.asarray(d), np.asarray(v), sampled)
