@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs.errors import AssumptionError, BoundsError, DataError, DimensionError
+from intervalobs.errors import AssumptionError, DataError, DimensionError
 from intervalobs.examples import gsisio
 from intervalobs.inclusion import interval_matrix
 from intervalobs.simulate import simulate_nonlinear
@@ -30,8 +30,7 @@ def jg(x):
 
 def test_dimensions_and_defaults():
     s = NonlinearSystem(f, g, G=[[1.0], [0.0]], H=[[0.5]], f_jacobian=jf, g_jacobian=jg)
-    assert (s.n, s.m, s.p, s.q) == (2, 0, 1, 1)
-    np.testing.assert_array_equal(s.w[0], 0.0)
+    assert (s.n, s.m, s.p, s.q, s.nw, s.nv) == (2, 0, 1, 1, 2, 1)
     assert s.evaluate_f(np.zeros((4, 2))).shape == (4, 2)
 
 
@@ -40,7 +39,6 @@ def test_dimensions_and_defaults():
     [
         ({"G": [[1.0], [0.0]], "H": [[0.5, 1.0]]}, DimensionError, "H"),
         ({"G": [[0.0], [0.0]], "H": [[0.0]]}, AssumptionError, "full column rank"),
-        ({"G": [[1.0], [0.0]], "H": [[0.5]], "w": ([0.1, 0.1], [0.0, 0.0])}, BoundsError, "lower <= upper"),
         (
             {"G": [[1.0], [0.0]], "H": [[0.5]], "f_jacobian": lambda x: [[0.5, 0.0], [0.0, 0.5]]},
             DataError,
@@ -48,7 +46,7 @@ def test_dimensions_and_defaults():
         ),
         ({"G": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "H": [[0.5, 0, 0]]}, DimensionError, "f"),
     ],
-    ids=["H-shape", "GH-rank", "noise-box", "wrong-jacobian", "f-size"],
+    ids=["H-shape", "GH-rank", "wrong-jacobian", "f-size"],
 )
 def test_invalid_models_are_rejected(kwargs, error, match):
     with pytest.raises(error, match=match):
@@ -83,10 +81,10 @@ def test_a_jacobian_wrong_only_away_from_the_origin_is_caught():
 def test_simulation_satisfies_the_model_equations_and_noise_bounds():
     s = gsisio.paper_system()
     d = gsisio.paper_input(50)
-    sim = simulate_nonlinear(s, gsisio.X0_BOX, d, seed=3, runs=4)
+    sim = simulate_nonlinear(s, gsisio.paper_bounds(), d, seed=3, runs=4)
     assert sim.x.shape == (4, 50, 2) and sim.y.shape == (4, 50, 2)
     np.testing.assert_allclose(sim.x[:, 1:], s.evaluate_f(sim.x[:, :-1]) + d[:-1] @ s.G.T + sim.w[:, :-1], atol=1e-12)
     np.testing.assert_allclose(sim.y, s.evaluate_g(sim.x) + d @ s.H.T + sim.v, atol=1e-12)
     assert np.all(np.abs(sim.w) <= 0.2 + 1e-15) and np.all(np.isclose(np.abs(sim.v), 0.2))  # bang-bang
     with pytest.raises(DataError, match="d"):
-        simulate_nonlinear(s, gsisio.X0_BOX, np.zeros((10, 3)))
+        simulate_nonlinear(s, gsisio.paper_bounds(), np.zeros((10, 3)))

@@ -32,7 +32,7 @@ from .systems.bounds import Bounds
 from .systems.lti import LTISystem
 from .systems.nonlinear import NonlinearSystem
 from .systems.sampled import SampledSystem
-from .validation import as_box, as_matrix, as_names, as_signal, as_time, as_vector
+from .validation import as_matrix, as_names, as_signal, as_time
 
 __all__ = [
     "NOISE_KINDS",
@@ -589,7 +589,7 @@ class NonlinearSimulation:
 
 def simulate_nonlinear(
     system: NonlinearSystem,
-    x0: ArrayLike | tuple[ArrayLike, ArrayLike],
+    bounds: Bounds,
     d: ArrayLike,
     u: ArrayLike | None = None,
     noise: str = "extreme",
@@ -602,9 +602,9 @@ def simulate_nonlinear(
     ----------
     system : NonlinearSystem
         The model.
-    x0 : array_like, shape (n,), or tuple (lower, upper)
-        Initial state, or a box from which each run draws one (:func:`draw_box`: a random vertex for
-        ``"extreme"`` noise, uniform otherwise).
+    bounds : Bounds
+        Boxes of ``x0`` (each run draws a point, :func:`draw_box`: a random vertex for ``"extreme"``
+        noise, uniform otherwise; a point when lower = upper), ``w`` and ``v``.
     d : array_like, shape (T, q) or (runs, T, q)
         Unknown input; its length fixes the horizon T.
     u : array_like, shape (T, m), optional
@@ -635,12 +635,10 @@ def simulate_nonlinear(
     count = 1 if runs is None else _count("runs", runs)
     kind = _noise_kind(noise)
     rng = _seed(seed)
-    if isinstance(x0, tuple):
-        x_init = draw_box(kind, *as_box("x0", x0, system.n), rng, count)
-    else:
-        x_init = np.broadcast_to(as_vector("x0", x0, system.n), (count, system.n)).copy()
-    w = noise_signal(kind, system.w[0], system.w[1], steps, rng, runs=count)
-    v = noise_signal(kind, system.v[0], system.v[1], steps, rng, runs=count)
+    full = bounds.resolve(system)
+    x_init = draw_box(kind, *full.x0, rng, count)
+    w = noise_signal(kind, full.w[0], full.w[1], steps, rng, runs=count)
+    v = noise_signal(kind, full.v[0], full.v[1], steps, rng, runs=count)
     dr = np.broadcast_to(dd, (count, steps, system.q))
     x = np.empty((count, steps, system.n))
     x[:, 0] = x_init

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DesignError
 from ..interval import neg, pos
+from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_box
 from .lmi import solve_lmi, verify_definite
@@ -237,13 +238,17 @@ def _condition_iii(script_l: float, n: int) -> dict[str, Any]:
     return {"holds": True, "status": str(problem.status), "note": note}
 
 
-def gsisio_design(system: NonlinearSystem, jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None) -> GSISIODesign:
+def gsisio_design(
+    system: NonlinearSystem, bounds: Bounds, jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None
+) -> GSISIODesign:
     r"""Recompute every design quantity of seed 003's Theorems 1–2 and Lemmas 2, 5 for a system.
 
     Parameters
     ----------
     system : NonlinearSystem
         With both Jacobians.
+    bounds : Bounds
+        Boxes of the noises ``w``, ``v`` (their widths enter Lemma 5's :math:`\delta_z`).
     jacobian_domain : tuple of array_like, optional
         Box on which the Jacobian bounds (and so :math:`C_f, C_g`, the Lipschitz constants) hold;
         default the whole space (the bounds must then be finite, as for the paper's example).
@@ -253,6 +258,7 @@ def gsisio_design(system: NonlinearSystem, jacobian_domain: tuple[ArrayLike, Arr
     GSISIODesign
     """
     n, p = system.n, system.p
+    full = bounds.resolve(system)
     f_jac, g_jac = system.jacobians()
     if jacobian_domain is None:
         dom_lo, dom_hi = np.full(n, -np.inf), np.full(n, np.inf)
@@ -278,8 +284,8 @@ def gsisio_design(system: NonlinearSystem, jacobian_domain: tuple[ArrayLike, Arr
     nf, ng = np.linalg.norm(T_f, 2), np.linalg.norm(T_g, 2)
     script_l = float(L_fd * nf + L_gd * ng)
     script_l_paper = float(L_fd_paper * nf + L_gd_paper * ng)
-    dw = system.w[1] - system.w[0]
-    dv = system.v[1] - system.v[0]
+    dw = full.w[1] - full.w[0]
+    dv = full.v[1] - full.v[0]
     delta_z = float(np.linalg.norm(T_f @ dw + T_g @ dv))
     comp = float(np.max(np.abs(np.linalg.eigvals(T_f @ dec_f.W + T_g @ dec_g.W))))
     nonneg = bool(np.all(T_f >= -1e-12) and np.all(T_g >= -1e-12))

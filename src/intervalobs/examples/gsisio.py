@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 
 __all__ = [
@@ -40,10 +41,13 @@ __all__ = [
     "X0_BOX",
     "G",
     "H",
+    "fullrank_bounds",
     "fullrank_input",
     "fullrank_system",
+    "paper_bounds",
     "paper_input",
     "paper_system",
+    "two_hidden_bounds",
     "two_hidden_input",
     "two_hidden_system",
 ]
@@ -95,14 +99,23 @@ def _g_jacobian(x: Sequence[Any]) -> list[list[Any]]:
 
 
 def paper_system() -> NonlinearSystem:
-    """The example of seed 003, Section V (noise bounds 0.2 on every channel).
+    """The example of seed 003, Section V (its boxes: :func:`paper_bounds`).
 
     Returns
     -------
     NonlinearSystem
     """
-    noise = (-NOISE * np.ones(2), NOISE * np.ones(2))
-    return NonlinearSystem(_f, _g, G, H, f_jacobian=_f_jacobian, g_jacobian=_g_jacobian, w=noise, v=noise)
+    return NonlinearSystem(_f, _g, G, H, f_jacobian=_f_jacobian, g_jacobian=_g_jacobian)
+
+
+def paper_bounds() -> Bounds:
+    """The paper's initial box :data:`X0_BOX` and noise bounds :math:`|w|, |v| \\le 0.2` (Section V).
+
+    Returns
+    -------
+    Bounds
+    """
+    return Bounds(x0=X0_BOX, w=(-NOISE, NOISE), v=(-NOISE, NOISE))
 
 
 def paper_input(steps: int = STEPS) -> FloatArray:
@@ -158,11 +171,20 @@ def fullrank_system() -> NonlinearSystem:
     -------
     NonlinearSystem
     """
-    w = (-FULLRANK_NOISE[0] * np.ones(2), FULLRANK_NOISE[0] * np.ones(2))
-    v = (-FULLRANK_NOISE[1] * np.ones(2), FULLRANK_NOISE[1] * np.ones(2))
     return NonlinearSystem(
-        _f_own, _g_own, FULLRANK_G, FULLRANK_H, f_jacobian=_f_own_jacobian, g_jacobian=_g_own_jacobian, w=w, v=v
+        _f_own, _g_own, FULLRANK_G, FULLRANK_H, f_jacobian=_f_own_jacobian, g_jacobian=_g_own_jacobian
     )
+
+
+def fullrank_bounds() -> Bounds:
+    """Initial box and noise bounds of :func:`fullrank_system`.
+
+    Returns
+    -------
+    Bounds
+    """
+    w, v = FULLRANK_NOISE
+    return Bounds(x0=FULLRANK_X0_BOX, w=(-w, w), v=(-v, v))
 
 
 def fullrank_input(steps: int = 200) -> FloatArray:
@@ -214,8 +236,19 @@ def two_hidden_system() -> NonlinearSystem:
     -------
     NonlinearSystem
     """
-    noise = (-TWO_HIDDEN_NOISE * np.ones(3), TWO_HIDDEN_NOISE * np.ones(3))
-    return NonlinearSystem(_f_two_hidden, _g_two_hidden, TWO_HIDDEN_G, TWO_HIDDEN_H, w=noise, v=noise)
+    return NonlinearSystem(_f_two_hidden, _g_two_hidden, TWO_HIDDEN_G, TWO_HIDDEN_H)
+
+
+def two_hidden_bounds() -> Bounds:
+    """Initial box and noise bounds (:math:`|w|, |v| \\le 0.02`) of :func:`two_hidden_system`.
+
+    Returns
+    -------
+    Bounds
+    """
+    return Bounds(
+        x0=TWO_HIDDEN_X0_BOX, w=(-TWO_HIDDEN_NOISE, TWO_HIDDEN_NOISE), v=(-TWO_HIDDEN_NOISE, TWO_HIDDEN_NOISE)
+    )
 
 
 def two_hidden_input(steps: int = 150) -> FloatArray:

@@ -46,6 +46,7 @@ from ..design.gsisio import GSISIODesign, gsisio_design
 from ..design.mixed_monotone import decomposition_bounds, jacobian_bounds
 from ..errors import AssumptionError
 from ..interval import inflate, matvec_bounds
+from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_box, check_no_kwargs
 from .base import Observer, ObserverState
@@ -98,8 +99,8 @@ class GSISIO(Observer):
         The model, with Jacobians.
     design_result : GSISIODesign
         From :func:`gsisio_design` (the constructor does not check (8): :meth:`design` does).
-    x0 : tuple of numpy.ndarray
-        Initial box.
+    bounds : Bounds
+        Boxes of ``x0``, ``w`` and ``v``.
     abstraction_f, abstraction_g : AffineAbstraction, optional
         LP (1) solutions on the abstraction domain.
     tight : bool
@@ -118,7 +119,7 @@ class GSISIO(Observer):
         self,
         system: NonlinearSystem,
         design_result: GSISIODesign,
-        x0: BoxPair,
+        bounds: Bounds,
         abstraction_f: AffineAbstraction | None = None,
         abstraction_g: AffineAbstraction | None = None,
         tight: bool = True,
@@ -127,7 +128,7 @@ class GSISIO(Observer):
     ) -> None:
         self.system = system
         self.design_result = design_result
-        self.x0 = x0
+        self.bounds = bounds.resolve(system)
         self.abstraction_f, self.abstraction_g = abstraction_f, abstraction_g
         self.tight = tight
         self.input_hull = input_hull
@@ -143,7 +144,7 @@ class GSISIO(Observer):
     def design(
         cls,
         system: NonlinearSystem,
-        x0: tuple[ArrayLike, ArrayLike],
+        bounds: Bounds,
         jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None,
         abstraction_domain: tuple[ArrayLike, ArrayLike] | None = None,
         **options: Any,
@@ -153,8 +154,9 @@ class GSISIO(Observer):
         Parameters
         ----------
         system : NonlinearSystem
-        x0 : tuple of array_like
-            Initial box ``(lower, upper)``.
+            The model.
+        bounds : Bounds
+            Boxes of ``x0``, ``w`` and ``v``.
         jacobian_domain : tuple of array_like, optional
             Domain of the global Jacobian bounds (default: the whole space).
         abstraction_domain : tuple of array_like, optional
@@ -173,8 +175,9 @@ class GSISIO(Observer):
             Condition (8) fails, or :math:`\\rho(K_1 + L_1) \\ge 1` (framers of (9) not guaranteed).
         """
         check_no_kwargs("GSISIO.design", options, ("tight", "splits", "input_hull"))
-        box = as_box("x0", x0, system.n)
-        d = gsisio_design(system, jacobian_domain)
+        full = bounds.resolve(system)
+        box = full.x0
+        d = gsisio_design(system, full, jacobian_domain)
         n = system.n
         if not d.condition_8:
             hidden = ""
@@ -196,7 +199,7 @@ class GSISIO(Observer):
         jg = jacobian_bounds(g_jac, dom[0], dom[1], (system.p, n))
         abs_f = affine_abstraction(system.f, dom[0], dom[1], abstraction_sigma(dom[0], dom[1], *jf), n)
         abs_g = affine_abstraction(system.g, dom[0], dom[1], abstraction_sigma(dom[0], dom[1], *jg), system.p)
-        return cls(system, d, box, abs_f, abs_g, tight=bool(options.get("tight", True)),
+        return cls(system, d, full, abs_f, abs_g, tight=bool(options.get("tight", True)),
                    splits=int(options.get("splits", 1)), input_hull=bool(options.get("input_hull", False)))  # fmt: skip
 
     # ---- Corollary 1 -------------------------------------------------------------------------------
@@ -228,7 +231,7 @@ class GSISIO(Observer):
         -------
         ObserverState
         """
-        lo, hi = self._prior_box(self.x0, x0_lower, x0_upper)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         unbounded = np.full(self.system.q, np.inf)
         return ObserverState(lo.copy(), hi.copy(), -unbounded, unbounded, {"k": 0})
 
@@ -239,8 +242,8 @@ class GSISIO(Observer):
         d, sysm = self.design_result, self.system
         (f_lo, f_hi), (g_lo, g_hi) = self._fg_bounds(lo, hi)
         bu, du = uk @ sysm.B.T, uk @ sysm.D.T
-        wl, wu = sysm.w
-        vl, vu = sysm.v
+        wl, wu = self.bounds.w
+        vl, vu = self.bounds.v
         fu_lo, fu_hi = f_lo + bu + wl, f_hi + bu + wu  # f + Bu + w bounds
         gy_hi = yk - g_lo - du - vl  # upper bound of y - g - Du - v
         gy_lo = yk - g_hi - du - vu
@@ -294,6 +297,6 @@ class GSISIO(Observer):
         yk = np.asarray(y, dtype=float)
         du = 0.0 if u is None else np.asarray(u, dtype=float) @ sysm.D.T
         gl, gh = matvec_bounds(U1.T, g_lo, g_hi)
-        vl, vh = matvec_bounds(U1.T, *sysm.v)
+        vl, vh = matvec_bounds(U1.T, *self.bounds.v)
         base = (yk - du) @ U1
         return inflate((base - gh - vh) / S[:r], (base - gl - vl) / S[:r]), V1

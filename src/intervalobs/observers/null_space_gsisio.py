@@ -55,8 +55,9 @@ from ..design.mixed_monotone import jacobian_bounds, width_matrix
 from ..errors import AssumptionError, DimensionError
 from ..inclusion import evaluate_matrix
 from ..interval import inflate, matvec_bounds
+from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
-from ..validation import as_box, check_no_kwargs
+from ..validation import check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["NullSpaceGSISIO", "WidthCertificate"]
@@ -212,8 +213,8 @@ class NullSpaceGSISIO(Observer):
     ----------
     system : NonlinearSystem
         The model (Jacobians automatic or given).
-    x0 : tuple of numpy.ndarray
-        Initial box.
+    bounds : Bounds
+        Boxes of ``x0``, ``w`` and ``v``.
     direction : str
         ``'orthogonal'`` (default: :math:`S = (GV_2)^\dagger`) or ``'output'`` (:math:`S` from the d-free
         outputs' gradients at the centre of x0).
@@ -246,7 +247,7 @@ class NullSpaceGSISIO(Observer):
     def __init__(
         self,
         system: NonlinearSystem,
-        x0: BoxPair,
+        bounds: Bounds,
         direction: str = "orthogonal",
         gain_factors: tuple[float, ...] = (0.0, 1.0),
         splits: int = 2,
@@ -257,7 +258,7 @@ class NullSpaceGSISIO(Observer):
         from scipy.linalg import null_space
 
         self.system = system
-        self.x0 = x0
+        self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.gain_factors = tuple(float(c) for c in gain_factors)
         self.newton_steps = int(newton_steps)
@@ -271,7 +272,7 @@ class NullSpaceGSISIO(Observer):
         h = q - rank
         self.hidden = h
         H_pinv = np.linalg.pinv(system.H)
-        centre = 0.5 * (x0[0] + x0[1])
+        centre = self.bounds.centre("x0")
         if direction not in ("output", "orthogonal"):
             raise DimensionError(f"direction: expected 'output' or 'orthogonal', got {direction!r}")
         self.g2 = system.G @ self.V2  # (n, h): how the hidden input components move the state
@@ -337,7 +338,7 @@ class NullSpaceGSISIO(Observer):
         self._p_stack = np.concatenate(self.preconditioners, axis=0) if self.preconditioners else np.zeros((0, r2))
 
     @classmethod
-    def design(cls, system: NonlinearSystem, x0: tuple[ArrayLike, ArrayLike], **options: Any) -> NullSpaceGSISIO:
+    def design(cls, system: NonlinearSystem, bounds: Bounds, **options: Any) -> NullSpaceGSISIO:
         """Build the observer; checks the existence condition.
 
         The existence condition: at least as many d-free outputs as hidden input directions
@@ -350,8 +351,8 @@ class NullSpaceGSISIO(Observer):
         ----------
         system : NonlinearSystem
             Any number of hidden input directions the structure allows.
-        x0 : tuple of array_like
-            Initial box.
+        bounds : Bounds
+            Boxes of ``x0``, ``w`` and ``v``.
         **options
             ``direction`` ('orthogonal' (default) or 'output'), ``gain_factors`` (multiples of the
             per-step t-cancelling gain; default (0, 1)), ``splits`` (per axis, default 2),
@@ -367,8 +368,7 @@ class NullSpaceGSISIO(Observer):
             The existence condition fails (the message names which part).
         """
         check_no_kwargs("NullSpaceGSISIO.design", options, ("direction", "gain_factors", "splits", "newton_steps"))
-        box = as_box("x0", x0, system.n)
-        return cls(system, box, **options)
+        return cls(system, bounds, **options)
 
     # ---- helpers -----------------------------------------------------------------------------------
     def _cancelling(self, xc: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -397,7 +397,7 @@ class NullSpaceGSISIO(Observer):
     def _target(self, y: FloatArray, u: FloatArray) -> BoxPair:
         """Bounds of the preconditioned d-free outputs P U2' g(x_k), stacked over the preconditioners."""
         base = (y - u @ self.system.D.T) @ self.U2
-        vlo, vhi = matvec_bounds(self.U2.T, *self.system.v)
+        vlo, vhi = matvec_bounds(self.U2.T, *self.bounds.v)
         return _mat_bounds(self._p_stack, base - vhi, base - vlo)
 
     def _correct_t(
@@ -479,13 +479,12 @@ class NullSpaceGSISIO(Observer):
     # ---- the width certificate ---------------------------------------------------------------------
     def _small_gain(self, ell: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None:
         """Gamma, gamma, W_a, W_F, <M>^-1 of the certificate for the a-prediction gain ``ell`` (None: unbounded)."""
-        sysm = self.system
         n, na, h = self.n, self.n_a, self.hidden
         ja = self._range.global_jacobian(np.concatenate([self.R, -ell], axis=1))
         if ja is None:
             return None
         W_a = width_matrix(*ja)
-        dw, dv = sysm.w[1] - sysm.w[0], sysm.v[1] - sysm.v[0]
+        dw, dv = self.bounds.w[1] - self.bounds.w[0], self.bounds.v[1] - self.bounds.v[0]
         omega_a = np.abs(self.R) @ dw + np.abs(ell) @ dv
         if h == 0:
             return W_a, omega_a, W_a, np.zeros((0, na)), np.zeros((0, 0))
@@ -560,7 +559,7 @@ class NullSpaceGSISIO(Observer):
         """
         sysm = self.system
         n, na, h = self.n, self.n_a, self.hidden
-        dw, dv = sysm.w[1] - sysm.w[0], sysm.v[1] - sysm.v[0]
+        dw, dv = self.bounds.w[1] - self.bounds.w[0], self.bounds.v[1] - self.bounds.v[0]
         nan_n, nan_q = np.full(n, np.nan), np.full(sysm.q, np.nan)
         V = np.concatenate([self.V1, self.V2], axis=1)
         empty = np.zeros((0, 0))
@@ -616,7 +615,7 @@ class NullSpaceGSISIO(Observer):
         -------
         ObserverState
         """
-        lo, hi = self._prior_box(self.x0, x0_lower, x0_upper)
+        lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         zlo, zhi = inflate(*matvec_bounds(self.Z, lo, hi))
         unbounded = np.full(self.system.q, np.inf)
         internal = {"z_lower": zlo, "z_upper": zhi, "started": False}
@@ -672,9 +671,9 @@ class NullSpaceGSISIO(Observer):
         phi_all = np.concatenate([*phis, u1g, *chis], axis=-2)
         lo, hi = self._range.bounds(phi_all, zlo, zhi)
         ydu = y - u @ sysm.D.T
-        rbw = matvec_bounds(self.R, *sysm.w)
-        v_lo = np.broadcast_to(sysm.v[0], (*lead, self.p))
-        v_hi = np.broadcast_to(sysm.v[1], (*lead, self.p))
+        rbw = matvec_bounds(self.R, *self.bounds.w)
+        v_lo = np.broadcast_to(self.bounds.v[0], (*lead, self.p))
+        v_hi = np.broadcast_to(self.bounds.v[1], (*lead, self.p))
         a_lo = np.full((*lead, na), -np.inf)
         a_hi = np.full((*lead, na), np.inf)
         for i, ell in enumerate(ells):
@@ -704,7 +703,7 @@ class NullSpaceGSISIO(Observer):
         sysm = self.system
         ydu = y - u @ sysm.D.T
         base = ydu @ self.U1
-        u1v = matvec_bounds(self.U1.T, *sysm.v)
+        u1v = matvec_bounds(self.U1.T, *self.bounds.v)
         d1_lo = (base - g1[1] - u1v[1]) / self.sigma
         d1_hi = (base - g1[0] - u1v[0]) / self.sigma
         parts_lo, parts_hi = [d1_lo], [d1_hi]
@@ -712,10 +711,10 @@ class NullSpaceGSISIO(Observer):
             na = self.n_a
             t_lo, t_hi = z_next_lo[..., na:], z_next_hi[..., na:]
             sbu = u @ (self.S @ sysm.B).T
-            sw = matvec_bounds(self.S, *sysm.w)
+            sw = matvec_bounds(self.S, *self.bounds.w)
             lead = t_lo.shape[:-1]
-            v_lo = np.broadcast_to(sysm.v[0], (*lead, self.p))
-            v_hi = np.broadcast_to(sysm.v[1], (*lead, self.p))
+            v_lo = np.broadcast_to(self.bounds.v[0], (*lead, self.p))
+            v_hi = np.broadcast_to(self.bounds.v[1], (*lead, self.p))
             d2_lo = np.full(t_lo.shape, -np.inf)
             d2_hi = np.full(t_lo.shape, np.inf)
             for kap, (c_lo, c_hi) in chi_rows:

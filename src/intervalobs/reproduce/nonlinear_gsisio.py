@@ -39,6 +39,7 @@ from ..interval import Interval
 from ..observers.gsisio import GSISIO
 from ..observers.null_space_gsisio import NullSpaceGSISIO
 from ..simulate import NonlinearSimulation, simulate_nonlinear
+from ..systems.bounds import ResolvedBounds
 from ..systems.nonlinear import NonlinearSystem
 from .contract import Example, base_summary, write_reproduction
 
@@ -120,27 +121,28 @@ def _paper_constants_check() -> dict[str, Any]:
 
 def _fullrank_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], dict[str, Any]]:
     system = ex.fullrank_system()
-    box = ex.FULLRANK_X0_BOX
+    bounds = ex.fullrank_bounds().resolve(system)
+    box = bounds.x0
     start = time.perf_counter()
-    observer = GSISIO.design(system, box)
-    nullspace = NullSpaceGSISIO.design(system, box)
+    observer = GSISIO.design(system, bounds)
+    nullspace = NullSpaceGSISIO.design(system, bounds)
     design_time = time.perf_counter() - start
     d_true = ex.fullrank_input()
     steps = d_true.shape[0]
     t = np.arange(steps, dtype=float)
-    sim = simulate_nonlinear(system, box, d_true, noise="extreme", seed=seed)
+    sim = simulate_nonlinear(system, bounds, d_true, noise="extreme", seed=seed)
     est = observer.run(t, sim.y)
     est_ns = nullspace.run(t, sim.y)
-    hull = GSISIO.design(system, box, input_hull=True).run(t, sim.y)
+    hull = GSISIO.design(system, bounds, input_hull=True).run(t, sim.y)
     assert hull.input_lower is not None and hull.input_upper is not None
     dr = observer.design_result
     delta0 = float(np.linalg.norm(box[1] - box[0]))
     delta_x = dr.delta_x(delta0, steps)
-    delta_d = dr.delta_d(delta_x, system.w[1] - system.w[0], system.v[1] - system.v[0])
+    delta_d = dr.delta_d(delta_x, bounds.w[1] - bounds.w[0], bounds.v[1] - bounds.v[0])
     width_x = np.linalg.norm(est.width(), axis=-1)
     assert est.input_lower is not None and est.input_upper is not None
     width_d = np.linalg.norm(est.input_upper - est.input_lower, axis=-1)
-    mc = simulate_nonlinear(system, box, d_true, noise="extreme", seed=seed + 7, runs=MONTE_CARLO_RUNS)
+    mc = simulate_nonlinear(system, bounds, d_true, noise="extreme", seed=seed + 7, runs=MONTE_CARLO_RUNS)
     mc_est = observer.run(t, mc.y)
     facts = {
         "system": "our own: f = (0.3x1 + 0.1 sin x2, 0.25x2 - 0.1 tanh x1), g = (x1 + 0.1 sin x2, 0.2x2 + 0.05x1), "
@@ -184,7 +186,7 @@ def _fullrank_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], di
 
 
 def _known_state_inner_hull(
-    system: NonlinearSystem, sim: NonlinearSimulation, iterations: int = 40
+    system: NonlinearSystem, bounds: ResolvedBounds, sim: NonlinearSimulation, iterations: int = 40
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     r"""Inner hulls of what the data allow for :math:`x_{k+1}` and :math:`d_k` when :math:`x_k` is known exactly.
 
@@ -208,7 +210,7 @@ def _known_state_inner_hull(
     r = int(np.sum(S > S.max() * 1e-10)) if S.size else 0
     U1, U2, V1, V2, sig = U[:, :r], U[:, r:], Vt[:r].T, Vt[r:].T, S[:r]
     n, p = system.n, system.p
-    vl, vh = system.v
+    vl, vh = bounds.v
     x, y, v = sim.x, sim.y, sim.v
     c = system.evaluate_f(x[..., :-1, :])
     res = y[..., :-1, :] - system.evaluate_g(x[..., :-1, :])
@@ -223,7 +225,7 @@ def _known_state_inner_hull(
                 )
             cands.append(v[..., :-1, :] + np.min(room, axis=-1, keepdims=True) * dirn)
     d1 = np.stack([((res - vk) @ U1) / sig for vk in cands], axis=-2)  # (..., K, C, r)
-    w_vert = Interval(*system.w).vertices()
+    w_vert = Interval(*bounds.w).vertices()
     v_vert = Interval(vl, vh).vertices()
     base = c[..., None, None, None, :] + (d1 @ (system.G @ V1).T)[..., :, None, None, :] + w_vert[:, None, :]
     tau = (y[..., 1:, None, None, None, :] - v_vert) @ U2  # (..., K, 1, 1, Vv, p - r)
@@ -282,13 +284,15 @@ def _tightness(est: Estimate, inner: tuple[FloatArray, FloatArray, FloatArray, F
 def _two_hidden_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], dict[str, Any]]:
     """Our three-state system with two hidden inputs, Jacobians automatic: certificate, 5 seeds, bound."""
     system = ex.two_hidden_system()
-    box = ex.TWO_HIDDEN_X0_BOX
+    bounds = ex.two_hidden_bounds().resolve(system)
     start = time.perf_counter()
-    observer = NullSpaceGSISIO.design(system, box)
+    observer = NullSpaceGSISIO.design(system, bounds)
     cert = observer.width_certificate()
     design_time = time.perf_counter() - start
     steps = TWO_HIDDEN_STEPS
-    sims = [simulate_nonlinear(system, box, ex.two_hidden_input(steps), seed=seed + i) for i in range(TWO_HIDDEN_SEEDS)]
+    sims = [
+        simulate_nonlinear(system, bounds, ex.two_hidden_input(steps), seed=seed + i) for i in range(TWO_HIDDEN_SEEDS)
+    ]
     x = np.stack([sm.x for sm in sims])
     d_rows = _delayed(np.stack([sm.d for sm in sims]))
     t = np.arange(steps, dtype=float)
@@ -299,7 +303,7 @@ def _two_hidden_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], 
     init = observer.init()
     x_bound, d_bound = cert.width_bounds(init.internal["z_upper"] - init.internal["z_lower"], steps)
     width_x, width_d = est.width(), est.input_upper - est.input_lower
-    inner = [np.stack(parts) for parts in zip(*(_known_state_inner_hull(system, sm) for sm in sims))]
+    inner = [np.stack(parts) for parts in zip(*(_known_state_inner_hull(system, bounds, sm) for sm in sims))]
     facts = {
         "system": "examples.gsisio.two_hidden_system: n = 3, q = 3 unknown inputs, rk H = 1 (two hidden), "
         "no Jacobians written (automatic interval forward-mode)",
@@ -352,22 +356,23 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         The summary written to ``summary.json``.
     """
     system = ex.paper_system()
+    bounds = ex.paper_bounds().resolve(system)
     start = time.perf_counter()
-    design = gsisio_design(system)
+    design = gsisio_design(system, bounds)
     try:
-        GSISIO.design(system, ex.X0_BOX)
+        GSISIO.design(system, bounds)
         paper_construction = "unexpectedly designed"
     except AssumptionError as exc:
         paper_construction = f"AssumptionError: {exc}"
-    observer = NullSpaceGSISIO.design(system, ex.X0_BOX, splits=SPLITS)
+    observer = NullSpaceGSISIO.design(system, bounds, splits=SPLITS)
     certificate = observer.width_certificate()
-    naive = GSISIO(system, design, ex.X0_BOX, tight=False)
+    naive = GSISIO(system, design, bounds, tight=False)
     design_time = time.perf_counter() - start
 
     steps = ex.STEPS
     t = np.arange(steps, dtype=float)
     d_true = ex.paper_input(steps)
-    sim = simulate_nonlinear(system, ex.X0_BOX, d_true, noise="extreme", seed=seed)
+    sim = simulate_nonlinear(system, bounds, d_true, noise="extreme", seed=seed)
     start = time.perf_counter()
     est = observer.run(t, sim.y)
     run_time = time.perf_counter() - start
@@ -378,7 +383,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     # Monte Carlo over a longer horizon: several noise seeds and input amplitudes, all vectorised
     scale = np.linspace(0.5, 2.0, MONTE_CARLO_RUNS)[:, None, None]
     mc_d = ex.paper_input(LONG_HORIZON)[None] * scale
-    mc = simulate_nonlinear(system, ex.X0_BOX, mc_d, noise="extreme", seed=seed + 1, runs=MONTE_CARLO_RUNS)
+    mc = simulate_nonlinear(system, bounds, mc_d, noise="extreme", seed=seed + 1, runs=MONTE_CARLO_RUNS)
     mc_est = observer.run(np.arange(LONG_HORIZON, dtype=float), mc.y)
     long_width = np.linalg.norm(mc_est.width(), axis=-1)
 
@@ -388,7 +393,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     naive_bad = np.flatnonzero(~(naive_violation <= 0))
     full_facts, full_arrays, full_plot = _fullrank_demo(seed)
     two_facts, two_arrays, two_plot = _two_hidden_demo(seed)
-    tightness = _tightness(est, _known_state_inner_hull(system, sim))
+    tightness = _tightness(est, _known_state_inner_hull(system, bounds, sim))
 
     summary = base_summary(
         example=NAME,

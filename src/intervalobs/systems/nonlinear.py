@@ -4,7 +4,8 @@ r"""Nonlinear discrete-time systems with unknown inputs and bounded noise (seed 
 
     x_{k+1} = f(x_k) + Bu_k + Gd_k + w_k,\qquad y_k = g(x_k) + Du_k + Hd_k + v_k,
 
-with :math:`\underline w \le w_k \le \overline w`, :math:`\underline v \le v_k \le \overline v` and an
+with :math:`\underline w \le w_k \le \overline w`, :math:`\underline v \le v_k \le \overline v` (the
+boxes ``w``, ``v`` of a :class:`~intervalobs.systems.bounds.Bounds`, with the initial box ``x0``) and an
 unknown input :math:`d_k` about which nothing is assumed (no bound, no model).
 
 Dimensions use the library's names: ``n`` states, ``m`` known inputs, ``p`` outputs, ``q`` unknown
@@ -32,12 +33,11 @@ from ..inclusion import (
     interval_matrix,
 )
 from ..interval_dual import automatic_jacobian
-from ..validation import as_box, as_matrix
+from ..validation import as_matrix
 
 __all__ = ["NonlinearSystem"]
 
 FloatArray = NDArray[np.float64]
-BoxPair = tuple[FloatArray, FloatArray]
 
 
 class NonlinearSystem:
@@ -61,16 +61,15 @@ class NonlinearSystem:
         Jacobians of ``f`` and ``g`` (rows of entries). Default: computed automatically from ``f`` and
         ``g`` (:func:`intervalobs.interval_dual.automatic_jacobian`). A Jacobian given here is used
         instead (it may be tighter over boxes) and is checked against the automatic one.
-    w : tuple of array_like, optional
-        ``(lower, upper)`` bounds of the process noise (default zero).
-    v : tuple of array_like, optional
-        ``(lower, upper)`` bounds of the measurement noise (default zero).
     check_jacobians : bool
         Compare user Jacobians with the automatic ones at sample points (default True): at each sample
         the interval value of the user's entry must meet the automatic derivative's enclosure.
 
     Attributes
     ----------
+    n, m, p, q, nw, nv : int
+        States, known inputs, outputs, unknown inputs, process-noise (= n) and measurement-noise
+        (= p) channels.
     f_jacobian, g_jacobian : callable
         The Jacobians used for bounds (the user's, or the automatic ones).
     jacobian_source : dict
@@ -96,8 +95,6 @@ class NonlinearSystem:
         D: ArrayLike | None = None,
         f_jacobian: MatrixFunction | None = None,
         g_jacobian: MatrixFunction | None = None,
-        w: tuple[ArrayLike, ArrayLike] | None = None,
-        v: tuple[ArrayLike, ArrayLike] | None = None,
         check_jacobians: bool = True,
     ) -> None:
         if not callable(f) or not callable(g):
@@ -116,8 +113,6 @@ class NonlinearSystem:
         }
         self.f_jacobian: MatrixFunction = automatic_jacobian(f, n) if f_jacobian is None else f_jacobian
         self.g_jacobian: MatrixFunction = automatic_jacobian(g, n) if g_jacobian is None else g_jacobian
-        self.w: BoxPair = (np.zeros(n), np.zeros(n)) if w is None else as_box("w", w, n)
-        self.v: BoxPair = (np.zeros(p), np.zeros(p)) if v is None else as_box("v", v, p)
         rank = int(np.linalg.matrix_rank(np.vstack([self.G, self.H])))
         if rank < q:
             raise AssumptionError(f"[G; H]: expected full column rank {q} (seed 003, Section III), got rank {rank}")
@@ -148,6 +143,16 @@ class NonlinearSystem:
     def q(self) -> int:
         """Number of unknown inputs (the seed's p)."""
         return int(self.G.shape[1])
+
+    @property
+    def nw(self) -> int:
+        """Number of process-noise channels (``w`` enters every state)."""
+        return self.n
+
+    @property
+    def nv(self) -> int:
+        """Number of measurement-noise channels (one per output)."""
+        return self.p
 
     def evaluate_f(self, x: ArrayLike) -> FloatArray:
         """:math:`f(x)` at points.
