@@ -31,6 +31,15 @@ def test_a_pair_of_numbers_is_the_same_interval_for_every_component(system):
     np.testing.assert_array_equal(full.x0[1], [2.0, 2.0, 2.0])
 
 
+def test_a_nonzero_box_for_an_absent_channel_is_refused():
+    no_noise = LTISystem(-np.eye(2), np.ones((1, 2)), E=np.zeros((2, 0)))
+    assert Bounds(x0=(-1, 1), w=(0.0, 0.0)).resolve(no_noise).w[0].shape == (0,)
+    with pytest.raises(
+        DimensionError, match=r"^bounds\.w: expected no box or zeros \(the model's nw is 0\), got \(-0\.1, 0\.1\)$"
+    ):
+        Bounds(x0=(-1, 1), w=(-0.1, 0.1)).resolve(no_noise)
+
+
 def test_resolving_twice_checks_sizes_and_returns_the_same_object(system):
     full = Bounds(x0=(-1.0, 1.0)).resolve(system)
     assert full.resolve(system) is full

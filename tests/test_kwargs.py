@@ -82,16 +82,14 @@ def _lpv_system() -> Any:
 def _lpv_design(**kwargs: Any) -> Any:
     from intervalobs import LPVIntervalObserver
 
-    return LPVIntervalObserver.design(_lpv_system(), x0=(-np.ones(2), np.ones(2)), h=0.01, theta_rate=1.0, **kwargs)
+    return LPVIntervalObserver.design(_lpv_system(), Bounds(x0=(-1, 1)), h=0.01, theta_rate=1.0, **kwargs)
 
 
 def _lpv_uio_design(**kwargs: Any) -> Any:
     from intervalobs import LPVIntervalUIO
 
     box = (-np.ones(1), np.ones(1))
-    return LPVIntervalUIO.design(
-        _lpv_system(), x0=(-np.ones(2), np.ones(2)), h=0.01, theta_rate=1.0, unknown_input=box, **kwargs
-    )
+    return LPVIntervalUIO.design(_lpv_system(), Bounds(x0=(-1, 1)), h=0.01, theta_rate=1.0, unknown_input=box, **kwargs)
 
 
 # qualified name -> (call with extra keywords, keywords the function documents and must accept)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, BoundsError, DesignError, DimensionError
+from intervalobs import AssumptionError, Bounds, BoundsError, DesignError, DimensionError
 from intervalobs.design.lpv import IntervalJet, boundedness_lmi, uio_observer_matrix, verify_boundedness
 from intervalobs.examples.manipulator import (
     FAULT_BOUND,
@@ -196,7 +196,9 @@ X0_BOX = (np.asarray(X0) - 0.1, np.asarray(X0) + 0.1)
 
 def _uio(model, f=None):
     f = -np.eye(4) if f is None else f
-    return LPVIntervalUIO(model, H, f, x0=X0_BOX, unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)))
+    return LPVIntervalUIO(
+        model, H, f, bounds=Bounds(x0=X0_BOX), unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2))
+    )
 
 
 def test_observer_rejects_bad_gains(model):

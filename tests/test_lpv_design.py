@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, DataError, DesignError, LPVIntervalObserver, LPVIntervalUIO, LPVSystem
+from intervalobs import AssumptionError, Bounds, DataError, DesignError, LPVIntervalObserver, LPVIntervalUIO, LPVSystem
 from intervalobs.design.lpv_gains import design_lpv_observer, rotate_bounds
 
 H = 0.02
@@ -41,6 +41,9 @@ def a_true(theta):
     return out
 
 
+BOUNDS = Bounds(x0=X0_BOX, w=(-D, D))
+
+
 def make_system(**over):
     args = dict(
         A=a_rows,
@@ -49,7 +52,6 @@ def make_system(**over):
         theta_box=([-1.0], [1.0]),
         B_un=lambda th: [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]],
         dA=(-DA, DA),
-        d=(-D * np.ones(4), D * np.ones(4)),
     )
     args.update(over)
     return LPVSystem(**args)
@@ -62,13 +64,13 @@ def system():
 
 @pytest.fixture(scope="module")
 def observer(system):
-    return LPVIntervalObserver.design(system, x0=X0_BOX, h=H, theta_rate=RHO)
+    return LPVIntervalObserver.design(system, bounds=BOUNDS, h=H, theta_rate=RHO)
 
 
 @pytest.fixture(scope="module")
 def uio(system):
     return LPVIntervalUIO.design(
-        system, x0=X0_BOX, h=H, theta_rate=RHO, unknown_input=(-2 * np.ones(2), 2 * np.ones(2))
+        system, bounds=BOUNDS, h=H, theta_rate=RHO, unknown_input=(-2 * np.ones(2), 2 * np.ones(2))
     )
 
 
@@ -146,7 +148,7 @@ def test_design_errors_name_the_failed_condition():
     with pytest.raises(AssumptionError, match=r"Assumption 2\.3"):
         LPVIntervalUIO.design(
             make_system(dA=(-np.ones((4, 4)) * 0.01, np.ones((4, 4)) * 0.01)),
-            x0=X0_BOX,
+            bounds=BOUNDS,
             h=H,
             theta_rate=RHO,
             unknown_input=(-np.ones(2), np.ones(2)),
@@ -205,6 +207,6 @@ def test_theta_is_required_and_checked(system, observer):
     with pytest.raises(DataError, match="theta_box"):
         obs.run(t, y, np.zeros((t.size, 1)), theta=2 * np.ones((t.size, 1)))
     with pytest.raises(DataError, match="theta_rate"):
-        LPVIntervalObserver.design(system, x0=X0_BOX, h=H, theta_rate=-1.0)
+        LPVIntervalObserver.design(system, bounds=BOUNDS, h=H, theta_rate=-1.0)
     with pytest.raises(TypeError, match="unexpected keyword"):
-        LPVIntervalObserver.design(system, x0=X0_BOX, h=H, theta_rate=RHO, gird=3)
+        LPVIntervalObserver.design(system, bounds=BOUNDS, h=H, theta_rate=RHO, gird=3)

@@ -45,10 +45,8 @@ def _gsisio() -> Observer:
         B=[[0.0], [0.1]],
         f_jacobian=paper.f_jacobian,
         g_jacobian=paper.g_jacobian,
-        w=paper.w,
-        v=paper.v,
     )
-    return GSISIO.design(system, gsisio_example.FULLRANK_X0_BOX)
+    return GSISIO.design(system, gsisio_example.fullrank_bounds())
 
 
 def _hgio() -> Observer:
@@ -62,7 +60,7 @@ def _hgio() -> Observer:
 
 def _lpv() -> Observer:
     box = (np.asarray(X0) - 0.1, np.asarray(X0) + 0.1)
-    return LPVIntervalObserver(ManipulatorModel(cells=8, splits=2, pieces=2), 1e-3, -np.eye(4), x0=box)
+    return LPVIntervalObserver(ManipulatorModel(cells=8, splits=2, pieces=2), 1e-3, -np.eye(4), bounds=Bounds(x0=box))
 
 
 OBSERVERS: dict[str, Callable[[], Observer]] = {

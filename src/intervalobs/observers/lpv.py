@@ -70,6 +70,7 @@ from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer, rotate_bo
 from ..errors import AssumptionError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
+from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel
 from ..validation import as_box, as_matrix
 from .base import Observer, ObserverState
@@ -130,6 +131,7 @@ class _IntervalEnclosure:
         theta_rate: ArrayLike,
         h: float,
         unknown_input: tuple[FloatArray, FloatArray] | None,
+        disturbance: tuple[FloatArray, FloatArray],
     ) -> None:
         self.system, self.design, self.h = system, design, h
         rate = np.asarray(theta_rate, dtype=float).reshape(-1)
@@ -145,7 +147,7 @@ class _IntervalEnclosure:
         right = (self.R @ system.matrix_at("A", pts))[..., design.p :]
         self.constant_f = bool(np.allclose(right, right[0], rtol=0.0, atol=0.0))
         self._cache: tuple[FloatArray, ...] | None = None
-        d = system.d if system.d is not None else (np.zeros(system.n), np.zeros(system.n))
+        d = disturbance
         rd_lo, rd_hi = matvec_bounds(self.R, *d)
         self.rc_lo, self.rc_hi = rd_lo + self.R @ system.c, rd_hi + self.R @ system.c
         self.d = d
@@ -285,14 +287,14 @@ class LPVIntervalObserver(Observer):
         Sampling interval (s).
     f_lower, f_upper : array_like, shape (n, n)
         Constant Metzler Hurwitz :math:`\underline F, \overline F` (Section 5: :math:`-\lambda I`).
-    x0 : tuple of array_like
-        Default prior box of :math:`x(t_0)` (20).
+    bounds : Bounds, optional
+        Default prior box ``x0`` of :math:`x(t_0)` (20); its disturbance box ``w`` must be zero.
 
     Raises
     ------
     AssumptionError
         If F is not Metzler, C is not square invertible (a model-specific enclosure measures the whole
-        state; use :meth:`design` for n_y < n_x), or the model has a disturbance d.
+        state; use :meth:`design` for n_y < n_x), or ``bounds`` has a disturbance d.
     DesignError
         If F is not Hurwitz.
     """
@@ -310,7 +312,7 @@ class LPVIntervalObserver(Observer):
         h: float,
         f_lower: ArrayLike,
         f_upper: ArrayLike | None = None,
-        x0: tuple[ArrayLike, ArrayLike] | None = None,
+        bounds: Bounds | None = None,
     ) -> None:
         if not isinstance(model, SampledLPVModel):
             raise DimensionError(f"model: expected a SampledLPVModel, got {type(model).__name__}")
@@ -325,8 +327,12 @@ class LPVIntervalObserver(Observer):
                 f"C: expected n_y = n_x for a model-specific enclosure, got n_y = {self.p}, n_x = {self.n}; "
                 f"use LPVIntervalObserver.design for unmeasured states"
             )
-        if system.d is not None:
-            raise AssumptionError("d: the model-specific enclosure covers c but not a bounded disturbance d; got d")
+        self.bounds = None if bounds is None else bounds.resolve(system)
+        if self.bounds is not None and (np.any(self.bounds.w[0] != 0) or np.any(self.bounds.w[1] != 0)):
+            raise AssumptionError(
+                "bounds.w: the model-specific enclosure covers c but not a bounded disturbance d; "
+                f"expected zeros, got {self.bounds.w[0].tolist()}, {self.bounds.w[1].tolist()}"
+            )
         self.h = self._check_h(h)
         self.f_lower = as_matrix("f_lower", f_lower, (self.n, self.n))
         self.f_upper = self.f_lower.copy() if f_upper is None else as_matrix("f_upper", f_upper, (self.n, self.n))
@@ -335,7 +341,6 @@ class LPVIntervalObserver(Observer):
         self.e_lower, self.phi_lower = _sampled(self.f_lower, self.h)
         self.e_upper, self.phi_upper = _sampled(self.f_upper, self.h)
         self.c_inv = np.linalg.inv(system.C)
-        self.x0 = None if x0 is None else as_box("x0", x0, self.n)
 
     @staticmethod
     def _check_h(h: float) -> float:
@@ -347,7 +352,7 @@ class LPVIntervalObserver(Observer):
     def design(
         cls,
         system: LPVSystem,
-        x0: tuple[ArrayLike, ArrayLike],
+        bounds: Bounds,
         h: float,
         theta_rate: ArrayLike,
         **design_options: Any,
@@ -359,8 +364,8 @@ class LPVIntervalObserver(Observer):
         system : LPVSystem
             Model with :math:`C = (\tilde C\ 0)` (measured states first) and matrix functions in the
             component convention.
-        x0 : tuple of array_like
-            Prior box of :math:`x(t_0)` (20).
+        bounds : Bounds
+            Prior box ``x0`` of :math:`x(t_0)` (20) and the box ``w`` of the disturbance d (10).
         h : float
             Sampling interval (s).
         theta_rate : array_like, shape (n_theta,) or float
@@ -382,13 +387,13 @@ class LPVIntervalObserver(Observer):
         for key in design_options:
             if key not in unknown:
                 raise TypeError(f"design() got an unexpected keyword argument {key!r}")
-        return cls._generic(system, x0, h, theta_rate, design_lpv_observer(system, **design_options), None)
+        return cls._generic(system, bounds, h, theta_rate, design_lpv_observer(system, **design_options), None)
 
     @classmethod
     def _generic(
         cls,
         system: LPVSystem,
-        x0: tuple[ArrayLike, ArrayLike],
+        bounds: Bounds,
         h: float,
         theta_rate: ArrayLike,
         design: LPVObserverDesign,
@@ -402,8 +407,8 @@ class LPVIntervalObserver(Observer):
         obs.n, obs.p, obs.m = system.n, system.p, system.m
         obs.h = cls._check_h(h)
         obs.design_result = design
-        obs.generic = _IntervalEnclosure(system, design, theta_rate, obs.h, unknown_input)
-        obs.x0 = as_box("x0", x0, system.n)
+        obs.bounds = bounds.resolve(system)
+        obs.generic = _IntervalEnclosure(system, design, theta_rate, obs.h, unknown_input, obs.bounds.w)
         return obs
 
     # --- the recursion ----------------------------------------------------------------------------
@@ -511,16 +516,16 @@ class LPVIntervalObserver(Observer):
         Parameters
         ----------
         x0_lower, x0_upper : array_like, shape (n,) or (M, n), optional
-            Prior box (default: ``x0`` of the constructor).
+            Prior box (default: ``bounds.x0`` of the constructor).
 
         Returns
         -------
         ObserverState
         """
         if x0_lower is None or x0_upper is None:
-            if self.x0 is None:
-                raise DataError("x0: expected a prior box (constructor or init), got None")
-            lo, hi = self.x0
+            if self.bounds is None:
+                raise DataError("x0_lower, x0_upper: expected a prior box (or bounds in the constructor), got None")
+            lo, hi = self.bounds.x0
         else:
             lo = np.asarray(x0_lower, dtype=float)
             hi = np.asarray(x0_upper, dtype=float)
@@ -603,7 +608,7 @@ class LPVIntervalObserver(Observer):
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs.
         x0_lower, x0_upper : array_like, optional
-            Prior box (default: the constructor's ``x0``).
+            Prior box (default: the constructor's ``bounds.x0``).
         theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
             Measured scheduling vector (required by designed observers).
 
@@ -666,8 +671,8 @@ class LPVIntervalUIO(LPVIntervalObserver):
         Sampling interval (s).
     f_lower, f_upper : array_like, shape (n, n)
         Metzler Hurwitz observer matrices.
-    x0 : tuple of array_like
-        Default prior box.
+    bounds : Bounds, optional
+        Default prior box ``x0`` (its disturbance box ``w`` must be zero).
     unknown_input : tuple of array_like
         ``(lower, upper)`` of :math:`u_{un}` with lower ≤ 0 ≤ upper (Assumption 2.2).
 
@@ -688,10 +693,10 @@ class LPVIntervalUIO(LPVIntervalObserver):
         h: float,
         f_lower: ArrayLike,
         f_upper: ArrayLike | None = None,
-        x0: tuple[ArrayLike, ArrayLike] | None = None,
+        bounds: Bounds | None = None,
         unknown_input: tuple[ArrayLike, ArrayLike] = ((), ()),
     ) -> None:
-        super().__init__(model, h, f_lower, f_upper, x0)
+        super().__init__(model, h, f_lower, f_upper, bounds)
         system = model.system
         if system.B_un is None:
             raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
@@ -726,7 +731,7 @@ class LPVIntervalUIO(LPVIntervalObserver):
     def design(
         cls,
         system: LPVSystem,
-        x0: tuple[ArrayLike, ArrayLike],
+        bounds: Bounds,
         h: float,
         theta_rate: ArrayLike,
         unknown_input: tuple[ArrayLike, ArrayLike] = ((), ()),
@@ -739,8 +744,8 @@ class LPVIntervalUIO(LPVIntervalObserver):
         ----------
         system : LPVSystem
             Model with :math:`C = (\tilde C\ 0)`, a constant ``B_un`` and Assumption 2.3 (ΔA12 = 0).
-        x0 : tuple of array_like
-            Prior box of :math:`x(t_0)`.
+        bounds : Bounds
+            Prior box ``x0`` of :math:`x(t_0)` and the box ``w`` of the disturbance d.
         h : float
             Sampling interval (s).
         theta_rate : array_like, shape (n_theta,) or float
@@ -772,7 +777,7 @@ class LPVIntervalUIO(LPVIntervalObserver):
         box = cls._unknown_input_box(system, unknown_input)
         _check_assumption_3(system)
         design = design_lpv_observer(system, uio=True, decay=decay, **design_options)
-        obs = cls._generic(system, x0, h, theta_rate, design, box)
+        obs = cls._generic(system, bounds, h, theta_rate, design, box)
         obs.q = system.q
         obs.u_un = box
         assert design.H is not None

@@ -37,6 +37,7 @@ from ..examples.manipulator import (
     simulate_closed_loop,
 )
 from ..observers.lpv import LPVIntervalUIO
+from ..systems.bounds import Bounds
 from .contract import Example, base_summary, write_reproduction
 
 __all__ = ["CAMPAIGN", "EXAMPLE", "campaign_task", "run"]
@@ -185,7 +186,7 @@ def run(out_dir: Path, seed: int = 0, plots: bool = True) -> dict[str, Any]:
         model,
         H_STEP,
         -LAMBDA * np.eye(4),
-        x0=(x0 - X0_RADIUS, x0 + X0_RADIUS),
+        bounds=Bounds(x0=(x0 - X0_RADIUS, x0 + X0_RADIUS)),
         unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)),
     )
     est, rec = obs.isolate(t, x, u)
@@ -309,7 +310,7 @@ def _campaign_observer(level: float) -> LPVIntervalUIO:
         model,
         CAMPAIGN_H,
         -LAMBDA * np.eye(4),
-        x0=(x0 - X0_RADIUS, x0 + X0_RADIUS),
+        bounds=Bounds(x0=(x0 - X0_RADIUS, x0 + X0_RADIUS)),
         unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)),
     )
 

@@ -165,6 +165,11 @@ class Bounds:
                 boxes.append((np.zeros(size), np.zeros(size)))
             else:
                 size = _size(system, name, box[0].size if box[0].ndim else None)
+                if size == 0 and (np.any(box[0] != 0) or np.any(box[1] != 0)):
+                    raise DimensionError(
+                        f"bounds.{name}: expected no box or zeros (the model's {_SIZE_OF[name]} is 0), "
+                        f"got ({box[0].tolist()}, {box[1].tolist()})"
+                    )
                 boxes.append((np.broadcast_to(box[0], (size,)).copy(), np.broadcast_to(box[1], (size,)).copy()))
         return ResolvedBounds(*boxes)
 

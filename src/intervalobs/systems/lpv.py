@@ -7,7 +7,8 @@ r"""Uncertain continuous-time LPV systems (seed 001, (1)â€“(2), Assumptions 2.1â
 with a known scheduling vector :math:`\vartheta \in \Theta` (a box), elementwise bounds
 :math:`\underline{\Delta A}(\vartheta) \le \Delta A(\vartheta) \le \overline{\Delta A}(\vartheta)`
 (same for :math:`\Delta B, \Delta B_{un}`), a known term :math:`c` and a bounded disturbance
-:math:`\underline d \le d \le \overline d`.
+:math:`\underline d \le d \le \overline d` (10), given with the initial box as the ``w`` and ``x0`` of
+a :class:`~intervalobs.systems.bounds.Bounds`.
 
 A sampled-data interval observer of a continuous-time LPV system must bound what happens *between*
 samples (DESIGN.md). That needs interval extensions of the model over one step, which depend on the
@@ -66,13 +67,13 @@ class LPVSystem:
         Elementwise bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` ((11), (12), (23)).
     c : array_like, shape (n,), optional
         Known constant term.
-    d : tuple of array_like, optional
-        ``(lower, upper)`` bounds of the disturbance (10).
-
     Attributes
     ----------
     n, m, p, q, n_theta : int
         States, known inputs, outputs, unknown inputs, scheduling variables.
+    nw, nv : int
+        Channels of the disturbance d (= n, the ``w`` of :class:`~intervalobs.systems.bounds.Bounds`)
+        and of measurement noise (0: :math:`y = Cx`).
     continuous : bool
         Always True (the paper's systems are continuous time).
     """
@@ -90,7 +91,6 @@ class LPVSystem:
         dB: BoundSpec | None = None,
         dB_un: BoundSpec | None = None,
         c: ArrayLike | None = None,
-        d: tuple[ArrayLike, ArrayLike] | None = None,
     ) -> None:
         for name, f in (("A", A), ("B", B), ("B_un", B_un)):
             if f is not None and not callable(f):
@@ -129,7 +129,16 @@ class LPVSystem:
             if spec is not None:
                 self._check_bounds(name, spec, points, cols)
         self.c = np.zeros(self.n) if c is None else as_vector("c", c, self.n)
-        self.d = None if d is None else as_box("d", d, self.n)
+
+    @property
+    def nw(self) -> int:
+        """Number of disturbance channels (``d`` enters every state)."""
+        return self.n
+
+    @property
+    def nv(self) -> int:
+        """Number of measurement-noise channels (none: :math:`y = Cx`)."""
+        return 0
 
     def test_points(self) -> FloatArray:
         """The centre and up to 63 vertices of ``theta_box`` used for validation.
