@@ -264,7 +264,7 @@ def draw_box(kind: str, lower: ArrayLike, upper: ArrayLike, rng: np.random.Gener
 
     Returns
     -------
-    numpy.ndarray, shape (runs, *lower.shape)
+    numpy.ndarray, shape ``(runs,) + lower.shape``
     """
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)

@@ -67,6 +67,7 @@ class LPVSystem:
         Elementwise bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` ((11), (12), (23)).
     c : array_like, shape (n,), optional
         Known constant term.
+
     Attributes
     ----------
     n, m, p, q, n_theta : int
