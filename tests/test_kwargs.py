@@ -57,14 +57,14 @@ def _gsisio_design(**kwargs: Any) -> Any:
     from intervalobs.examples import gsisio
     from intervalobs.observers.gsisio import GSISIO
 
-    return GSISIO.design(gsisio.fullrank_system(), gsisio.FULLRANK_X0_BOX, **kwargs)
+    return GSISIO.design(gsisio.fullrank_system(), gsisio.fullrank_bounds(), **kwargs)
 
 
 def _nullspace_gsisio_design(**kwargs: Any) -> Any:
     from intervalobs.examples import gsisio
     from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
 
-    return NullSpaceGSISIO.design(gsisio.paper_system(), gsisio.X0_BOX, **kwargs)
+    return NullSpaceGSISIO.design(gsisio.paper_system(), gsisio.paper_bounds(), **kwargs)
 
 
 def _lpv_system() -> Any:

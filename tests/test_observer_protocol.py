@@ -182,7 +182,7 @@ def test_repr_is_short_and_names_dimensions_and_method_facts(observer: Observer)
 def _null_space_gsisio() -> Observer:
     from intervalobs.observers.null_space_gsisio import NullSpaceGSISIO
 
-    return NullSpaceGSISIO.design(gsisio_example.paper_system(), gsisio_example.X0_BOX)
+    return NullSpaceGSISIO.design(gsisio_example.paper_system(), gsisio_example.paper_bounds())
 
 
 # HullEstimator still runs its own loop (not yet on the base loop).

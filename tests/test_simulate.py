@@ -62,7 +62,7 @@ def _call(name, system, bounds, **kwargs):
         t = np.arange(0.0, 0.05, sampled_example.STEP)
         return simulate_sampled(sampled_example.system(), sampled_example.bounds(), t, **kwargs)
     model = gsisio.paper_system()
-    return simulate_nonlinear(model, np.zeros(model.n), np.zeros((5, model.q)), **kwargs)
+    return simulate_nonlinear(model, gsisio.paper_bounds(), np.zeros((5, model.q)), **kwargs)
 
 
 @pytest.mark.parametrize("simulator", ["lti", "sampled", "nonlinear"])
