@@ -87,9 +87,9 @@ def paper_designs() -> tuple[HighGainIntervalObserver, ModalDecomposition, Theta
     printed : ThetaDesign
         Theorem 4.4 for the printed L₁, its paper reading with the printed v₁ (``paper_v1``).
     """
-    system, bounds = example.system(), example.bounds()
-    d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
-    delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
+    system = example.system()
+    bounds = example.bounds().resolve(system)
+    d_radius, delta = bounds.w[1], bounds.v[1]  # the example's boxes are symmetric
     constructive = HighGainIntervalObserver.design(
         system,
         bounds,
@@ -176,9 +176,9 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     dict
         The summary.
     """
-    system, bounds = example.system(), example.bounds()
-    d_radius = bounds.w[1] if bounds.w is not None else np.zeros(3)
-    delta = bounds.v[1] if bounds.v is not None else np.zeros(1)
+    system = example.system()
+    bounds = example.bounds().resolve(system)
+    d_radius, delta = bounds.w[1], bounds.v[1]  # the example's boxes are symmetric
     start = time.perf_counter()
     constructive, printed_modal, printed = paper_designs()
     assert constructive.placement is not None and constructive.theta_design is not None
