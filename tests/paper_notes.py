@@ -1,7 +1,8 @@
 """The numbers docs/paper-notes.md quotes, each tied to the ``summary.json`` value it must show.
 
 A :class:`Quote` is a piece of the page with ``{name:spec}`` fields; each field's value is a key path
-of the reproduction's summary (dot-separated, list indices as numbers) or a function of the summary.
+of the reproduction's summary (dot-separated, or a tuple of keys when a key has a dot; list indices as
+numbers) or a function of the summary.
 A list is written element by element, joined by what follows ``|`` in the spec (default ", ").
 Numbers are written as on the page: the minus sign is "−" and exponents have no leading zero (2e-16).
 Whitespace is compared collapsed, so a quote may span a line break of the page.
@@ -21,7 +22,7 @@ from typing import Any
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "paper-notes.md"
 
-Value = str | Callable[[Mapping[str, Any]], Any]
+Value = str | tuple[str, ...] | Callable[[Mapping[str, Any]], Any]
 
 
 @dataclass(frozen=True)
@@ -63,10 +64,10 @@ class _Formatter(string.Formatter):
         return number(value, spec)
 
 
-def lookup(summary: Mapping[str, Any], path: str) -> Any:
-    """The value at a dot-separated key path (list indices as numbers)."""
+def lookup(summary: Mapping[str, Any], path: str | tuple[str, ...]) -> Any:
+    """The value at a dot-separated key path, or a tuple of keys (for keys with dots); indices as numbers."""
     value: Any = summary
-    for part in path.split("."):
+    for part in path.split(".") if isinstance(path, str) else path:
         value = value[int(part)] if isinstance(value, list) else value[part]
     return value
 
@@ -358,8 +359,120 @@ QUOTES: dict[str, list[Quote]] = {
         ),
         Quote("whose gain stays 0 (abscissa {v:.1f})", {"v": "design.width_design.output_radius_abscissa"}),
     ],
+    "numerical-3state": [
+        Quote(
+            "ours [{g:.5g}] vs printed [0.3 0.2 0.8], γ = {c:.4f}",
+            {"g": "design.system_68.gains.(54)-(55).gain", "c": "design.system_68.gains.(54)-(55).gamma"},
+        ),
+        Quote(
+            "feasible and gives L = [{g:.3f}] with A0 − LC still holding {m:.1f}",
+            {
+                "g": "design.system_70.gains.(54) with full P (printed form).gain",
+                "m": "design.system_70.gains.(54) with full P (printed form).min_entry",
+            },
+        ),
+        Quote("(an LP; shift ≤ {v:.0e})", {"v": "design.system_68.gains.(54)-(55).projection_shift"}),
+        Quote(
+            "Ours (68): [{g:.4f}] vs printed (Thm 3.4 + 3.5) [{p:.4f| }]",
+            {
+                "g": "design.system_68.gains.(26).gain",
+                "p": ("paper", "system_68", "set_based_thm3.4+3.5", "gain"),
+            },
+        ),
+        Quote(
+            "(70) set-based (19) [{g:.4f| }]: ρ(M) = {r:.3f}",
+            {"g": "paper.system_70.set_based_(19).gain", "r": "paper.system_70.set_based_(19).spectral_radius"},
+        ),
+        Quote(
+            "(70) interval (54a) [{g:.4f| }]: min entry {m:.3f}; the literal (39) loses the truth by up to {v:.2f}",
+            {
+                "g": "paper.system_70.interval_(54a)-(55a).gain",
+                "m": "paper.system_70.interval_(54a)-(55a).min_entry",
+                "v": "design.system_70.naive.naive_interval_printed_(54a).max_violation",
+            },
+        ),
+        Quote(
+            '(70) "integrated" [{g:.4f| }]: not monotone ({m:.1f}), stable',
+            {"g": "paper.system_70.integrated_(19)+(65).gain", "m": "paper.system_70.integrated_(19)+(65).min_entry"},
+        ),
+        Quote(
+            "(68) monotone gain {a:.4f}, (70) (19) gain {b:.4f},",
+            {
+                "a": "design.system_68.gains.(54)-(55).width_spectral_radius",
+                "b": "design.system_70.gains.(19).width_spectral_radius",
+            },
+        ),
+        Quote(
+            "mean-width ratio interval/zonotopic {v:.3f} on (68),",
+            {"v": "design.system_68.width_ratio_interval_over_zonotopic.mean"},
+        ),
+        Quote(
+            "on (70) zonotopic/interval = {v:.3f}", {"v": "design.system_70.width_ratio_zonotopic_over_interval.mean"}
+        ),
+        Quote(
+            "on the monotone cases they coincide (ratio {v:.3f})",
+            {"v": "design.system_68.width_ratio_zonotopic_same_gain_over_interval.mean"},
+        ),
+        Quote(
+            "listed as `tube`: {a:.3f} × the framer on (68) and the tank, {b:.3f} × on (70)",
+            {
+                "a": "design.system_68.width_ratio_tube_over_interval.mean",
+                "b": "design.system_70.width_ratio_tube_over_interval.mean",
+            },
+        ),
+        Quote(
+            "diverges (width {v:.0e} at k = 199)",
+            {"v": "design.system_70.naive.naive_zonotopic_printed_(19).final_width_max"},
+        ),
+        Quote("reduction order q = 5n = {v}", {"v": lambda s: str(s["design"]["choices"]["reduction_order"])}),
+    ],
+    "two-tank": [
+        Quote(
+            "tank: [{g:.4f}] vs printed [{p:.4f| }]",
+            {"g": "design.gains.(26).gain", "p": ("paper", "gains", "set_based_thm3.4+3.5", "gain")},
+        ),
+        Quote(
+            "Tank (19) [{g:.4f| }]: ρ(|M|) = {a:.7f}, ρ(|M| + D) = {w:.3f}",
+            {
+                "g": "paper.gains.set_based_(19).gain",
+                "a": "paper.gains.set_based_(19).abs_spectral_radius",
+                "w": "paper.gains.set_based_(19).width_spectral_radius",
+            },
+        ),
+        Quote(
+            "Tank (54a) [{g:.4f| }]: literal (39) loses the truth by up to {v:.1f} cm",
+            {
+                "g": "paper.gains.interval_(54a)-(55a).gain",
+                "v": "design.naive.naive_interval_printed_(54a).max_violation",
+            },
+        ),
+        Quote(
+            'Tank "monotone" (54)-(55) and integrated [{g:.4g| }]: min entry {m:.3f} (not monotone); '
+            "set-based [{s:.4f| }]: {n:.2f}",
+            {
+                "g": "paper.gains.interval_(54)-(55).gain",
+                "m": "paper.gains.interval_(54)-(55).min_entry",
+                "s": ("paper", "gains", "set_based_thm3.4+3.5", "gain"),
+                "n": ("paper", "gains", "set_based_thm3.4+3.5", "min_entry"),
+            },
+        ),
+        Quote("Ours (diag P): [{g:.5g}], M ≥ 0", {"g": "design.gains.(54)-(55).gain"}),
+        Quote(
+            "Our (19) tank gain [{g:.3f}] (printed [0.6647 0.6542]; same defect: ρ(|M|) = {a:.4f})",
+            {"g": "design.gains.(19).gain", "a": "design.gains.(19).abs_spectral_radius"},
+        ),
+        Quote("tank monotone gain {v:.4f}.", {"v": "design.gains.(54)-(55).width_spectral_radius"}),
+        Quote(
+            "the tank (19) gain is uncertified, {v:.3f},",
+            {"v": "design.observers.zonotopic_hinf.certificate_spectral_radius"},
+        ),
+        Quote(
+            "{v:.3f} on the tank (zonotopic gain from (26))", {"v": "design.width_ratio_interval_over_zonotopic.mean"}
+        ),
+        Quote("{v:.3f} × the framer on (68) and the tank", {"v": "design.width_ratio_tube_over_interval.mean"}),
+    ],
 }
-"""Every number of the seed 000 and seed 004 sections that a reproduction's summary holds."""
+"""Every number of the seed 000, 002 and 004 sections that a reproduction's summary holds."""
 
 
 def _mean(values: list[float]) -> float:
