@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
+from scipy.linalg import block_diag, expm
 
 from intervalobs import AssumptionError, Bounds, BoundsError, IntervalObserver, LTISystem, sampled_model
 from intervalobs.design.tube import tube_horizon
@@ -29,24 +29,30 @@ def unit_bounds(n: int, nw: int, p: int) -> Bounds:
     )
 
 
-def random_stiff(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stable A with real eigenvalues spread over 5 decades (-1e-2 … -1e3), a well-conditioned basis."""
+def random_stiff(n: int, seed: int, oscillating: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stable A with eigenvalues spread over 5 decades (-1e-2 … -1e3), a well-conditioned basis.
+
+    Real eigenvalues, or (``oscillating``, n even) the pairs -σ(1 ± i) for σ spread the same way.
+    """
     rng = np.random.default_rng(seed)
-    lam = -(10.0 ** np.linspace(-2.0, 3.0, n))
     basis = np.eye(n) + 0.3 * rng.standard_normal((n, n))
-    a = basis @ np.diag(rng.permutation(lam)) @ np.linalg.inv(basis)
+    if oscillating:
+        rates = 10.0 ** np.linspace(-2.0, 3.0, n // 2)
+        modal = block_diag(*[sigma * np.array([[-1.0, 1.0], [-1.0, -1.0]]) for sigma in rng.permutation(rates)])
+    else:
+        modal = np.diag(rng.permutation(-(10.0 ** np.linspace(-2.0, 3.0, n))))
+    a = basis @ modal @ np.linalg.inv(basis)
     e = rng.standard_normal((n, 2))
     c = rng.standard_normal((1, n))
     return a, e, c
 
 
 def exact_noise_radius(a: np.ndarray, e: np.ndarray, h: float) -> np.ndarray:
-    """∫_0^h |e^{Aτ}E| 1 dτ by a fine trapezoid rule on eigen-evaluated exponentials (real spectrum)."""
+    """∫_0^h |e^{Aτ}E| 1 dτ by a fine trapezoid rule on eigen-evaluated exponentials."""
     lam, vec = np.linalg.eig(a)
-    lam, vec = lam.real, vec.real
     coef = np.linalg.solve(vec, e)
     tau = np.unique(np.concatenate([[0.0], np.geomspace(1e-9, h, 40000), np.linspace(0, h, 20000)]))
-    values = np.abs(np.einsum("ip,tp,pk->tik", vec, np.exp(np.outer(tau, lam)), coef)).sum(axis=2)
+    values = np.abs(np.einsum("ip,tp,pk->tik", vec, np.exp(np.outer(tau, lam)), coef).real).sum(axis=2)
     return np.asarray(np.trapezoid(values, tau, axis=0))
 
 
@@ -113,9 +119,15 @@ def robust_box(a: np.ndarray) -> np.ndarray:
     return np.asarray(EIGENVALUE_SHIFT / shift.max() * np.abs(a))
 
 
-@pytest.mark.parametrize(("n", "seed"), RANDOM_CASES, ids=[f"n={n}-seed={s}" for n, s in RANDOM_CASES])
-def test_random_stiff_systems_tight(n: int, seed: int) -> None:
-    a, e, c = random_stiff(n, seed)
+OSCILLATING_CASES = [(4, 3), (6, 4), (10, 5)]
+TIGHT_CASES = [(n, seed, False) for n, seed in RANDOM_CASES] + [(n, seed, True) for n, seed in OSCILLATING_CASES]
+
+
+@pytest.mark.parametrize(
+    ("n", "seed", "oscillating"), TIGHT_CASES, ids=[f"n={n}-seed={s}{'-complex' * o}" for n, s, o in TIGHT_CASES]
+)
+def test_random_stiff_systems_tight(n: int, seed: int, oscillating: bool) -> None:
+    a, e, c = random_stiff(n, seed, oscillating)
     d = robust_box(a)
     system = LTISystem(a, c, E=e, dA=(-d, d))
     point = LTISystem(a, c, E=e)
@@ -162,7 +174,13 @@ def simulate_truth(
     return x, y
 
 
-SOUND_CASES = [("stiff", h) for h in STEPS] + [(f"n={n}", h) for n in (3, 6) for h in STEPS]
+# "n=K": real spectrum; "c=K": complex pairs (one slow pair sampled fast is beyond the tube at h = 0.001 and
+# 0.01 for n = 10: |M_z^J| of a slowly rotating 2x2 block hardly contracts).
+SOUND_CASES = (
+    [("stiff", h) for h in STEPS]
+    + [(f"n={n}", h) for n in (3, 6) for h in STEPS]
+    + [("c=6", h) for h in (0.001, 0.1, 10.0)]
+)
 SLOW_SOUND_CASES = [("n=10", h) for h in STEPS]
 
 
@@ -174,7 +192,8 @@ def check_enclosure(name: str, h: float) -> None:
         d = 1e-3 * np.abs(a)
     else:
         n = int(name[2:])
-        a, e, c = random_stiff(n, dict(RANDOM_CASES)[n])
+        oscillating = name.startswith("c")
+        a, e, c = random_stiff(n, dict(OSCILLATING_CASES if oscillating else RANDOM_CASES)[n], oscillating)
         d = robust_box(a)
     n = a.shape[0]
     system = LTISystem(a, c, E=e, dA=(-d, d))

@@ -111,8 +111,8 @@ again a block exponential).
 *Scope.* The remainder is small next to the first-order term while :math:`M + D'` keeps a margin of
 stability, i.e. while no vertex of the :math:`\Delta A` box moves an eigenvalue by a sizeable
 fraction of itself (to first order :math:`|w_i^H|D|v_i| \ll |\operatorname{Re}\lambda_i|`); on random
-3-10 state systems with eigenvalues over five decades and the largest such shift 10 % of
-:math:`|\lambda_i|`, :math:`\delta\Phi` is within 1.5x of the vertex lower bound for every
+3-10 state systems with real eigenvalues or complex pairs over five decades and the largest such shift
+10 % of :math:`|\lambda_i|`, :math:`\delta\Phi` is within 1.5x of the vertex lower bound for every
 :math:`h` from :math:`10^{-3}` to 10 (``tests/test_sampling.py``). A box that lets some vertex
 become unstable makes :math:`M + D'` unstable and :math:`R_2` grow like :math:`e^{\rho(M + D')h}`;
 the minimum with the cheap bound keeps it sound, not tight.
