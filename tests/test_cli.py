@@ -1,6 +1,14 @@
 import json
+import os
+import signal
+import sqlite3
 import subprocess
 import sys
+import threading
+import time
+from collections.abc import Callable
+from contextlib import closing
+from pathlib import Path
 
 import pytest
 
@@ -16,12 +24,12 @@ def test_list_names_every_example(capsys):
 def test_bad_name_is_one_line_exit_2(capsys):
     assert main(["reproduce", "no-such-example"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("error: NAME: expected one of")
+    assert len(err) == 1 and err[0].startswith("intervalobs: error: argument NAME: expected one of")
 
 
 def test_bad_option_is_one_line_exit_2(capsys):
     assert main(["reproduce", "all", "--seed", "x"]) == 2
-    assert capsys.readouterr().err.startswith("error:")
+    assert capsys.readouterr().err.startswith("intervalobs: error: argument --seed:")
 
 
 def test_version():
@@ -115,3 +123,119 @@ def test_reproduce_all(tmp_path):
     assert main(["reproduce", "all", "--out", str(tmp_path)]) == 0
     for name in QUOTES:  # docs/paper-notes.md quotes these summaries
         assert misquoted(name, json.loads((tmp_path / name / "summary.json").read_text()))[0] == []
+
+
+# ---------------------------------------------------------------------------------------------- bad input
+CLI = [sys.executable, "-m", "intervalobs.cli"]
+NO_PROC = not os.path.isdir("/proc")
+
+
+def _cli(args: list[str], **kwargs) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=120, **kwargs)
+
+
+# (arguments, text the one line must contain); {tmp} is a fresh folder, {file} a file in it.
+CAMPAIGN = ["campaign", "manipulator-lpv"]
+REPRODUCE = ["reproduce", "spring-mass-lti"]
+FRACTION = "expected a fraction in [0, 1) (0.05 means ±5 %)"
+BAD_INPUT = {
+    "seed-negative": ([*REPRODUCE, "--seed", "-1"], "argument --seed: expected an integer >= 0, got -1"),
+    "seed-text": ([*REPRODUCE, "--seed", "x"], "argument --seed: expected an integer >= 0, got 'x' (str)"),
+    "name": (["reproduce", "no-such-example"], "argument NAME: expected one of 'spring-mass-lti'"),
+    "out-file": ([*REPRODUCE, "--out", "{file}"], "argument --out: expected a folder to write into"),
+    "out-under-file": ([*REPRODUCE, "--out", "{file}/sub"], "argument --out: expected a folder to write into"),
+    "out-unwritable": ([*REPRODUCE, "--out", "/proc/intervalobs"], "argument --out: expected a writable folder"),
+    "campaign-out-file": ([*CAMPAIGN, "--out", "{file}"], "argument --out: expected a folder to write into"),
+    "workers-zero": ([*CAMPAIGN, "--workers", "0"], "argument --workers: expected an integer >= 1, got 0"),
+    "runs-zero": ([*CAMPAIGN, "--runs", "0"], "argument --runs: expected an integer >= 1, got 0"),
+    "levels-negative": ([*CAMPAIGN, "--levels", "-1"], f"argument --levels: {FRACTION}, got -1"),
+    "levels-percent": ([*CAMPAIGN, "--levels", "0.05", "10"], f"argument --levels: {FRACTION}, got 10"),
+    "magnitudes": ([*CAMPAIGN, "--magnitudes", "100", "--out", "{tmp}"], "magnitudes: expected fault sizes in [0, 5]"),
+    "campaign-name": (["campaign", "spring-mass-lti"], "argument NAME: expected one of 'manipulator-lpv', got"),
+    "results-missing": (
+        ["tightness", "spring-mass-lti", "--results", "/nonexistent"],
+        "argument --results: expected an existing folder, got '/nonexistent' (no such folder)",
+    ),
+    "results-empty": (
+        ["tightness", "spring-mass-lti", "--results", "{tmp}"],
+        "argument --results: expected a folder holding spring-mass-lti/summary.json with a tightness report",
+    ),
+    "scheduler": (
+        [*CAMPAIGN, "--scheduler", "tcp://127.0.0.1:1", "--runs", "1", "--levels", "0.05", "--out", "{tmp}"],
+        "scheduler: expected the address of a running Dask scheduler (tcp://host:port), got 'tcp://127.0.0.1:1'",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_INPUT), ids=sorted(BAD_INPUT))
+def test_bad_input_is_one_line_exit_2_no_traceback(case: str, tmp_path) -> None:
+    """Every bad input: exit code 2, one line on stderr naming the option, nothing computed."""
+    if case == "out-unwritable" and NO_PROC:
+        pytest.skip("needs /proc (a folder nobody can create files in)")
+    args, expected = BAD_INPUT[case]
+    (tmp_path / "file.txt").write_text("not a folder")
+    args = [a.format(tmp=tmp_path, file=tmp_path / "file.txt") for a in args]
+    result = _cli(args, cwd=tmp_path)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2, result.stderr
+    assert len(lines) == 1 and lines[0].startswith("intervalobs: error: "), result.stderr
+    assert expected in lines[0]
+    assert result.stdout == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) in (["file.txt"], ["file.txt", "manipulator-lpv"])
+
+
+def test_campaign_help_says_levels_are_fractions(capsys) -> None:
+    assert main(["campaign", "--help"]) == 0
+    assert "fractions in [0, 1): 0.05 is ±5 %" in " ".join(capsys.readouterr().out.split())
+
+
+# ---------------------------------------------------------------------------------------------- Ctrl-C
+def _interrupt_when(args: list[str], ready: Callable[[str], bool], cwd: Path) -> tuple[int, str]:
+    """Run the CLI in its own process group, send SIGINT to the whole group (as a terminal's Ctrl-C
+    does) once ``ready(stderr so far)``, and return the exit code and the whole stderr."""
+    proc = subprocess.Popen([*CLI, *args], stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                            cwd=cwd, start_new_session=True)  # fmt: skip
+    assert proc.stderr is not None
+    err: list[str] = []
+    reader = threading.Thread(target=lambda: err.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)
+    reader.start()
+    deadline = time.monotonic() + 300
+    while not ready("".join(err)) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert proc.poll() is None, "".join(err)
+    os.killpg(proc.pid, signal.SIGINT)
+    code = proc.wait(timeout=120)
+    reader.join(timeout=10)
+    return code, "".join(err)
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGINT") or sys.platform == "win32", reason="POSIX signals")
+def test_ctrl_c_during_reproduce_is_one_line_exit_130(tmp_path) -> None:
+    code, err = _interrupt_when(
+        ["reproduce", "spring-mass-lti", "--no-plots", "--out", str(tmp_path)],
+        lambda _: (tmp_path / "spring-mass-lti").is_dir(),
+        tmp_path,
+    )
+    assert code == 130 and "Traceback" not in err, err
+    assert err.strip().splitlines() == [
+        f"intervalobs: interrupted: 0 of 1 examples written to {tmp_path}; "
+        "rerun `intervalobs reproduce NAME` for the others: spring-mass-lti"
+    ]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not hasattr(signal, "SIGINT") or sys.platform == "win32", reason="POSIX signals")
+def test_ctrl_c_during_campaign_says_how_many_runs_were_saved(tmp_path) -> None:
+    """The workers share the terminal's process group: they must not print tracebacks either."""
+    code, err = _interrupt_when(
+        ["campaign", "manipulator-lpv", "--runs", "2", "--levels", "0.05", "--magnitudes", "1", "2", "--workers", "1",
+         "--out", str(tmp_path)],
+        lambda text: "manipulator-lpv:" in text,
+        tmp_path,
+    )  # fmt: skip
+    assert code == 130 and "Traceback" not in err and "Exception" not in err, err
+    last = err.strip().splitlines()[-1]
+    store = tmp_path / "manipulator-lpv" / "campaign" / "campaign.sqlite"
+    with closing(sqlite3.connect(store)) as con:
+        saved = con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] // 4  # four scenarios per run
+    assert last == f"intervalobs: interrupted: {saved} of 4 runs saved in {store}; run the same command again to resume"

@@ -2,16 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import os
+import signal
 import sqlite3
 import subprocess
 import sys
+import time
+from contextlib import closing
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from intervalobs.diagnosis import (
+    SCHEDULER_TIMEOUT,
     Campaign,
+    CampaignInterrupted,
     first_negative_time,
     isolation_outcome,
     psi_hat,
@@ -19,7 +27,7 @@ from intervalobs.diagnosis import (
     runs_for_sigma,
     scenario_success,
 )
-from intervalobs.errors import BoundsError, DataError
+from intervalobs.errors import ArgumentError, BoundsError, DataError, SchedulerError
 
 CALLS: list[int] = []
 
@@ -92,7 +100,7 @@ def test_campaign_writes_psi_and_resumes_only_missing_runs(tmp_path):
 
 
 def test_campaign_rejects_empty_grid(tmp_path):
-    with pytest.raises(DataError):
+    with pytest.raises(ArgumentError, match="levels, magnitudes: expected at least one of each, got 0 and 2"):
         run_campaign(TOY, tmp_path, levels=[], progress=False, processes=False)
 
 
@@ -108,3 +116,68 @@ def test_manipulator_campaign_cli(tmp_path):
     assert data["psi"]["1"] == [[1.0, 1.0]]
     for s in ("2", "3", "4"):
         assert data["psi"][s][0][1] == 1.0
+
+
+@pytest.mark.parametrize(
+    "kwargs, pattern",
+    [
+        ({"runs": 0}, r"^runs: expected an integer >= 1, got 0$"),
+        ({"workers": 0}, r"^workers: expected an integer >= 1, got 0$"),
+        ({"batch": 0}, r"^batch: expected an integer >= 1, got 0$"),
+        ({"seed": -1}, r"^seed: expected an integer >= 0, got -1$"),
+        ({"levels": [0.1, -1]}, r"^levels\[1\]: expected a fraction in \[0, 1\) \(0.05 means ±5 %\), got -1$"),
+        ({"levels": [10]}, r"^levels\[0\]: expected a fraction in \[0, 1\)"),
+        ({"magnitudes": [1.0, 9.0]}, r"^magnitudes: expected fault sizes in \[0, 5\], got 1, 9$"),
+        ({"magnitudes": []}, r"^levels, magnitudes: expected at least one of each, got 2 and 0$"),
+    ],
+    ids=["runs", "workers", "batch", "seed", "levels-negative", "levels-percent", "magnitudes", "no-magnitudes"],
+)
+def test_campaign_arguments_are_checked_before_anything_runs(tmp_path, kwargs, pattern):
+    CALLS.clear()
+    bounded = dataclasses.replace(TOY, magnitude_bound=5.0)
+    with pytest.raises(ArgumentError, match=pattern):
+        run_campaign(bounded, tmp_path / "out", progress=False, processes=False, **kwargs)
+    assert CALLS == [] and not (tmp_path / "out").exists()
+
+
+def test_unreachable_scheduler_fails_within_the_timeout(tmp_path):
+    start = time.perf_counter()
+    with pytest.raises(SchedulerError, match=r"^scheduler: expected the address of a running Dask scheduler"):
+        run_campaign(TOY, tmp_path, scheduler="tcp://127.0.0.1:1", progress=False)
+    assert time.perf_counter() - start < SCHEDULER_TIMEOUT + 10  # not Dask's default of 30 s
+
+
+STORE: list[Path] = []
+
+
+def _interrupting_task(level, magnitude, run_ids, seed):
+    """The toy task; the third batch is interrupted as by Ctrl-C (SIGINT to this process) once the
+    first two are in the store."""
+    if len(CALLS) == 2:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            with closing(sqlite3.connect(STORE[0])) as con:
+                if con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 2 * 3 * 2:
+                    break
+            time.sleep(0.05)
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)  # the interrupt arrives while this batch runs
+    return _toy_task(level, magnitude, run_ids, seed)
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGINT") or sys.platform == "win32", reason="POSIX signals")
+def test_interrupted_campaign_saves_finished_batches_and_resumes(tmp_path):
+    CALLS.clear()
+    STORE[:] = [tmp_path / "campaign.sqlite"]
+    interrupted = dataclasses.replace(TOY, task=_interrupting_task)
+    with pytest.raises(CampaignInterrupted) as caught:
+        run_campaign(interrupted, tmp_path, batch=3, progress=False, plots=False, processes=False, workers=1)
+    store = tmp_path / "campaign.sqlite"
+    with closing(sqlite3.connect(store)) as con:
+        in_store = con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] // 2  # two scenarios per run
+    assert caught.value.saved == in_store == 2 * 3 and caught.value.total == 24
+    assert str(caught.value) == f"6 of 24 runs saved in {store}; run the same command again to resume"
+    CALLS.clear()
+    res = run_campaign(TOY, tmp_path, batch=3, progress=False, plots=False, processes=False, workers=1)
+    assert res.reused == 6 and res.computed == 18 and sum(CALLS) == 18
+    assert res.psi == {"1": [[1.0, 1.0], [1.0, 1.0]], "2": [[0.0, 1.0], [0.0, 1.0]]}

@@ -66,3 +66,29 @@ def test_repr_is_short_for_long_monte_carlo_records():
     assert repr(Estimate(t[:2], lower[0, :2], lower[0, :2])) == (
         "Estimate(samples=2, t=[0, 1], n=3, final_mean_width=0)"
     )
+
+
+@pytest.mark.parametrize(
+    "content, pattern",
+    [
+        (None, r"^path: expected an existing file, got '.*' \(no such file\)$"),
+        (b"hello", r"^path: expected an \.npz file written by Estimate\.save, got '.*' \(not a NumPy file\)$"),
+        ("npy", r"\(a single array\)$"),
+        ("other-npz", r"\(no t, lower, upper, meta\)$"),
+    ],
+    ids=["missing", "text", "npy", "other-npz"],
+)
+def test_load_refuses_what_save_did_not_write(tmp_path, content, pattern):
+    from intervalobs.errors import FileError
+
+    path = tmp_path / "estimate.npz"
+    if content == "npy":
+        with open(path, "wb") as f:
+            np.save(f, np.ones(3))
+    elif content == "other-npz":
+        with open(path, "wb") as f:
+            np.savez(f, a=np.ones(3))
+    elif content is not None:
+        path.write_bytes(content)
+    with pytest.raises(FileError, match=pattern):
+        Estimate.load(path)

@@ -7,7 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, BoundsError, DataError, LTISystem
+from intervalobs import ArgumentError, ArgumentTypeError, Bounds, BoundsError, DataError, LTISystem
 from intervalobs.examples import gsisio as gsisio_example
 from intervalobs.examples import hgio as hgio_example
 from intervalobs.examples import spring_mass
@@ -221,3 +221,29 @@ def test_run_equals_init_and_steps_as_its_rows_say(name: str) -> None:
     keys = ["lower", "upper"] + (["input_lower", "input_upper"] if est.input_lower is not None else [])
     for key in keys:
         np.testing.assert_allclose(getattr(est, key), stacked(key), rtol=1e-12, atol=1e-12, err_msg=key)
+
+
+def test_init_refuses_one_bound_of_the_prior_box(observer: Observer) -> None:
+    """A single bound would be ignored (the design's prior box used instead): refused."""
+    with pytest.raises(ArgumentError, match=r"^x0_lower, x0_upper: expected both or neither, got x0_lower without"):
+        observer.init(np.ones(observer.n))
+    with pytest.raises(ArgumentError, match=r"got x0_upper without x0_lower$"):
+        observer.init(x0_upper=np.ones(observer.n))
+
+
+def test_step_refuses_a_state_not_made_by_init(observer: Observer) -> None:
+    with pytest.raises(
+        ArgumentTypeError, match=r"^state: expected the ObserverState returned by init or step, got NoneType$"
+    ):
+        observer.step(None, np.zeros(observer.p), np.zeros(observer.m))  # type: ignore[arg-type]
+
+
+def test_complex_measurements_are_refused_not_truncated(observer: Observer) -> None:
+    t, y = _record(observer)
+    u = np.zeros((t.size, observer.m))
+    with pytest.raises(ArgumentTypeError, match=r"^y: expected real numbers, got complex values"):
+        observer.run(t, y + 1e-3j, u)
+    with pytest.raises(ArgumentTypeError, match=r"^y: expected real numbers, got complex values"):
+        observer.step(observer.init(), y[0] + 1e-3j, u[0])
+    with pytest.raises(ArgumentTypeError, match=r"^u: expected real numbers, got complex values"):
+        observer.step(observer.init(), y[0], u[0] + 1e-3j)

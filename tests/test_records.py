@@ -50,7 +50,7 @@ def _fails(capsys, *argv):
     """Run the CLI expecting bad input: exit code 2 and one line on stderr; return that line."""
     assert main(["estimate", *map(str, argv)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("error: "), err
+    assert err.count("\n") == 1 and err.startswith("intervalobs: error: "), err
     return err.strip()
 
 

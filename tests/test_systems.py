@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from intervalobs import BoundsError, DimensionError, IntervalObserverError, LTISystem
+from intervalobs import ArgumentError, BoundsError, DimensionError, IntervalObserverError, LTISystem
 
 
 def test_shapes_are_checked_with_the_argument_name():
@@ -16,7 +16,7 @@ def test_shapes_are_checked_with_the_argument_name():
 def test_model_bounds_are_checked():
     with pytest.raises(BoundsError, match="dA: expected bounds that contain 0"):
         LTISystem(np.eye(2), np.ones((1, 2)), dA=(np.ones((2, 2)), 2 * np.ones((2, 2))))
-    with pytest.raises(BoundsError, match="dt: expected a positive"):
+    with pytest.raises(ArgumentError, match="dt: expected a positive"):
         LTISystem(np.eye(2), np.ones((1, 2)), dt=-1.0)
     with pytest.raises(BoundsError, match="finite"):
         LTISystem(np.array([[np.nan]]), [[1.0]])

@@ -12,12 +12,16 @@ from .design.regions import Disk, RegionPlacement, place_in_disks
 from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
 from .diagnosis import isolation_outcome, psi_hat, run_campaign, runs_for_sigma
 from .errors import (
+    ArgumentError,
+    ArgumentTypeError,
     AssumptionError,
     BoundsError,
     DataError,
     DesignError,
     DimensionError,
+    FileError,
     IntervalObserverError,
+    SchedulerError,
 )
 from .estimate import EnclosureReport, Estimate
 from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
@@ -42,6 +46,8 @@ from .zonotope import Zonotope
 __version__ = "0.1.0"
 
 __all__ = [
+    "ArgumentError",
+    "ArgumentTypeError",
     "AssumptionError",
     "Bounds",
     "BoundsError",
@@ -51,6 +57,7 @@ __all__ = [
     "Disk",
     "EnclosureReport",
     "Estimate",
+    "FileError",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
@@ -66,6 +73,7 @@ __all__ = [
     "RobustHullEstimator",
     "SampledModel",
     "SampledSystem",
+    "SchedulerError",
     "Simulation",
     "ThetaDesign",
     "__version__",

@@ -8,11 +8,17 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from . import __version__
-from .errors import IntervalObserverError
+from . import cli_types as types
+from .errors import FileError, IntervalObserverError
 from .records import OBSERVERS
+from .validation import as_output_folder
+
+if TYPE_CHECKING:
+    from .diagnosis import Campaign
+    from .reproduce import Example
 
 __all__ = ["main"]
 
@@ -21,26 +27,41 @@ class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line and exit code 2."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"error: {message}\n")
-        raise SystemExit(2)
+        raise SystemExit(_fail(message))
 
 
-def _parser() -> argparse.ArgumentParser:
+def _fail(message: str) -> int:
+    """Print ``intervalobs: error: MESSAGE`` on one line; return the exit code of bad input, 2."""
+    sys.stderr.write(f"intervalobs: error: {message}\n")
+    return 2
+
+
+def _parser(examples: Sequence[str], campaigns: Sequence[str]) -> argparse.ArgumentParser:
     parser = _Parser(prog="intervalobs", description="Guaranteed interval estimation: reproduce the papers.")
     parser.add_argument("--version", action="version", version=f"intervalobs {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     commands.add_parser("list", help="list the reproducible examples")
     reproduce = commands.add_parser("reproduce", help="run an example (or all) and write its results")
-    reproduce.add_argument("name", help="example name from `intervalobs list`, or 'all'")
-    reproduce.add_argument("--out", default="results", help="output folder (default: results)")
-    reproduce.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    tightness = commands.add_parser("tightness", help="print an example's width ratios to the exact hull")
-    tightness.add_argument("name", help="example name from `intervalobs list`")
-    tightness.add_argument(
-        "--results", default=None, help="read DIR/NAME/summary.json if it has a tightness report (else run it)"
+    reproduce.add_argument(
+        "name", metavar="NAME", type=types.choice([*examples, "all"]), help="example from `intervalobs list`, or 'all'"
     )
-    tightness.add_argument("--seed", type=int, default=0, help="random seed when the example is run (default: 0)")
+    reproduce.add_argument(
+        "--out", type=types.output_folder, default="results", help="output folder (default: results)"
+    )
+    reproduce.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    reproduce.add_argument("--seed", type=types.seed, default=0, help="random seed, an integer >= 0 (default: 0)")
+    tightness = commands.add_parser("tightness", help="print an example's width ratios to the exact hull")
+    tightness.add_argument("name", metavar="NAME", type=types.choice(examples), help="example from `intervalobs list`")
+    tightness.add_argument(
+        "--results",
+        type=types.input_folder,
+        default=None,
+        metavar="DIR",
+        help="read the report from DIR/NAME/summary.json written by `reproduce` (default: run the example)",
+    )
+    tightness.add_argument(
+        "--seed", type=types.seed, default=0, help="random seed when the example is run (default: 0)"
+    )
     check = commands.add_parser("check", help="check reproduction folders against the file contract")
     check.add_argument("folders", nargs="+", metavar="DIR", help="folders written by reproduce, e.g. results/NAME")
     estimate = commands.add_parser(
@@ -51,53 +72,71 @@ def _parser() -> argparse.ArgumentParser:
     )
     estimate.add_argument("model", nargs="?", metavar="MODEL", help="model file (.toml or .py)")
     estimate.add_argument("data", nargs="?", metavar="DATA", help="record (.csv or .parquet)")
-    estimate.add_argument("--observer", choices=list(OBSERVERS), default="tube", help="observer (default: tube)")
+    estimate.add_argument(
+        "--observer", type=types.choice(list(OBSERVERS)), default="tube", help="observer (default: tube)"
+    )
     estimate.add_argument("--time", default=None, metavar="COLUMN", help="time column (default: t or time)")
-    estimate.add_argument("--out", default=None, metavar="DIR", help="output folder (default: results/DATA-name)")
+    estimate.add_argument(
+        "--out",
+        type=types.output_folder,
+        default=None,
+        metavar="DIR",
+        help="output folder (default: results/DATA-name)",
+    )
     estimate.add_argument("--plot", action="store_true", help="also draw bounds.png")
     estimate.add_argument(
-        "--example", default=None, metavar="DIR", help="write an example model and record into DIR, then stop"
+        "--example",
+        type=types.output_folder,
+        default=None,
+        metavar="DIR",
+        help="write an example model and record into DIR, then stop",
     )
     campaign = commands.add_parser("campaign", help="Monte Carlo performance campaign of an example, on Dask")
-    campaign.add_argument("name", help="example with a campaign (e.g. manipulator-lpv)")
-    campaign.add_argument("--runs", type=int, default=None, help="Monte Carlo runs per cell (default: the paper's)")
-    campaign.add_argument("--levels", type=float, nargs="+", default=None, help="uncertainty levels")
+    campaign.add_argument("name", metavar="NAME", type=types.choice(campaigns), help="example with a campaign")
+    campaign.add_argument(
+        "--runs", type=types.count, default=None, help="Monte Carlo runs per cell (default: the paper's)"
+    )
+    campaign.add_argument(
+        "--levels",
+        type=types.fraction,
+        nargs="+",
+        default=None,
+        help="uncertainty levels as fractions in [0, 1): 0.05 is ±5 %% of the nominal parameters",
+    )
     campaign.add_argument("--magnitudes", type=float, nargs="+", default=None, help="fault magnitudes")
-    campaign.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
-    campaign.add_argument("--workers", type=int, default=2, help="local Dask workers (default: 2)")
-    campaign.add_argument("--out", default="results", help="output folder (default: results)")
-    campaign.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    campaign.add_argument("--scheduler", default=None, help="address of a running Dask scheduler (tcp://host:port)")
+    campaign.add_argument("--workers", type=types.count, default=2, help="local Dask workers (default: 2)")
+    campaign.add_argument("--out", type=types.output_folder, default="results", help="output folder (default: results)")
+    campaign.add_argument("--seed", type=types.seed, default=0, help="random seed, an integer >= 0 (default: 0)")
     campaign.add_argument("--no-plots", action="store_true", help="skip the heat maps")
     return parser
 
 
-def _campaign(args: argparse.Namespace) -> int:
+def _campaigns(examples: dict[str, Example]) -> dict[str, Campaign]:
+    """The examples whose module defines a ``CAMPAIGN``."""
     import importlib
 
-    from .diagnosis import Campaign, run_campaign
-    from .reproduce import registry
+    from .diagnosis import Campaign
 
-    example = registry().get(args.name)
-    found = getattr(importlib.import_module(example.run.__module__), "CAMPAIGN", None) if example else None
-    if not isinstance(found, Campaign):
-        sys.stderr.write(f"error: NAME: expected an example with a campaign (manipulator-lpv), got {args.name!r}\n")
-        return 2
-    out = Path(args.out) / args.name / "campaign"
-    try:
-        result = run_campaign(
-            found,
-            out,
-            runs=args.runs,
-            levels=args.levels,
-            magnitudes=args.magnitudes,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            seed=args.seed,
-            plots=not args.no_plots,
-        )
-    except IntervalObserverError as exc:
-        sys.stderr.write(f"error: {args.name}: {exc}\n")
-        return 2
+    found = {name: getattr(importlib.import_module(e.run.__module__), "CAMPAIGN", None) for name, e in examples.items()}
+    return {name: c for name, c in found.items() if isinstance(c, Campaign)}
+
+
+def _campaign(args: argparse.Namespace, campaign: Campaign) -> int:
+    from .diagnosis import run_campaign
+
+    out = args.out / args.name / "campaign"
+    result = run_campaign(
+        campaign,
+        out,
+        runs=args.runs,
+        levels=args.levels,
+        magnitudes=args.magnitudes,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        seed=args.seed,
+        plots=not args.no_plots,
+    )
     print(
         f"{args.name}: campaign of {result.runs} runs per cell, {result.computed} computed, {result.reused} reused, "
         f"{result.seconds:.1f} s -> {out / 'psi.json'}"
@@ -114,19 +153,14 @@ def _estimate(args: argparse.Namespace) -> int:
         print(f"wrote {', '.join(map(str, files))}; try: intervalobs estimate {files[0]} {files[1]} --plot")
         return 0
     if args.model is None or args.data is None:
-        sys.stderr.write("error: estimate: expected MODEL and DATA (or --example DIR), got fewer\n")
-        return 2
+        return _fail("estimate: expected MODEL and DATA (or --example DIR), got fewer")
     start = time.perf_counter()
-    try:
-        model = records.read_model(args.model)
-        record = records.read_record(args.data, model, time=args.time)
-        result = records.estimate_record(model, record, args.observer)
-        out = Path(args.out) if args.out is not None else Path("results") / record.path.stem
-        source = {"model": str(model.path), "data": str(record.path)}
-        records.write_bounds(result, out, plot=args.plot, parquet=record.path.suffix == ".parquet", source=source)
-    except IntervalObserverError as exc:
-        sys.stderr.write(f"error: {exc}\n")
-        return 2
+    model = records.read_model(args.model)
+    record = records.read_record(args.data, model, time=args.time)
+    out = args.out if args.out is not None else as_output_folder("--out", Path("results") / record.path.stem)
+    result = records.estimate_record(model, record, args.observer)
+    source = {"model": str(model.path), "data": str(record.path)}
+    records.write_bounds(result, out, plot=args.plot, parquet=record.path.suffix == ".parquet", source=source)
     widths = ", ".join(f"{n} {w:.4g}" for n, w in zip(result.state_names, result.width()[-1]))
     print(
         f"{record.path.name}: {record.t.size} samples every {record.h:g} s, {args.observer} observer, "
@@ -135,8 +169,42 @@ def _estimate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
+    from tqdm import tqdm
+
+    chosen = list(examples.values()) if args.name == "all" else [examples[args.name]]
+    out = args.out
+    written = 0
+    progress = tqdm(chosen, desc="reproduce", unit="example", disable=len(chosen) == 1, file=sys.stderr)
+    try:
+        for example in progress:
+            progress.set_postfix_str(example.name)
+            start = time.perf_counter()
+            (out / example.name).mkdir(parents=True, exist_ok=True)
+            summary = example.run(out / example.name, args.seed, not args.no_plots)
+            written += 1
+            state = summary["enclosure"]["state"]
+            tqdm.write(
+                f"{example.name}: enclosure {state['fraction']:.6g} (max violation {state['max_violation']:.3g}), "
+                f"{time.perf_counter() - start:.1f} s -> {out / example.name}",
+                file=sys.stdout,
+            )
+    except KeyboardInterrupt:
+        progress.close()
+        rest = " ".join(e.name for e in chosen[written:])
+        raise KeyboardInterrupt(
+            f"{written} of {len(chosen)} examples written to {out}; rerun `intervalobs reproduce NAME` for the "
+            f"others: {rest}"
+        ) from None
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit code (0 on success, 2 on bad input).
+    """Run the CLI; returns the exit code (0 on success, 2 on bad input, 130 when interrupted).
+
+    Bad input (an option out of range, an unwritable output folder, a library error) is reported on
+    one line, ``intervalobs: error: ...``, with exit code 2. Ctrl-C prints one line saying what was
+    saved, with exit code 130.
 
     Parameters
     ----------
@@ -147,48 +215,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
     """
-    from tqdm import tqdm
-
     from .reproduce import registry
 
     try:
-        args = _parser().parse_args(argv)
-    except SystemExit as exc:
-        return int(exc.code or 0)
-    if args.command == "campaign":
-        return _campaign(args)
-    if args.command == "check":
-        return _check(args.folders)
-    if args.command == "estimate":
-        return _estimate(args)
-    examples = registry()
-    if args.command == "list":
-        for example in examples.values():
-            print(f"{example.name:20s}  {example.seed_file:26s}  {example.description}")
-        return 0
-    if args.command == "tightness":
-        return _tightness(examples, args.name, args.results, args.seed)
-    if args.name != "all" and args.name not in examples:
-        sys.stderr.write(f"error: NAME: expected one of {', '.join(['all', *examples])}, got {args.name!r}\n")
-        return 2
-    chosen = list(examples.values()) if args.name == "all" else [examples[args.name]]
-    out = Path(args.out)
-    progress = tqdm(chosen, desc="reproduce", unit="example", disable=len(chosen) == 1, file=sys.stderr)
-    for example in progress:
-        progress.set_postfix_str(example.name)
-        start = time.perf_counter()
+        examples = registry()
+        campaigns = _campaigns(examples)
         try:
-            summary = example.run(out / example.name, args.seed, not args.no_plots)
-        except IntervalObserverError as exc:
-            sys.stderr.write(f"error: {example.name}: {exc}\n")
-            return 2
-        state = summary["enclosure"]["state"]
-        tqdm.write(
-            f"{example.name}: enclosure {state['fraction']:.6g} (max violation {state['max_violation']:.3g}), "
-            f"{time.perf_counter() - start:.1f} s -> {out / example.name}",
-            file=sys.stdout,
-        )
-    return 0
+            args = _parser(list(examples), list(campaigns)).parse_args(argv)
+        except SystemExit as exc:
+            return int(exc.code or 0)
+        if args.command == "list":
+            for example in examples.values():
+                print(f"{example.name:20s}  {example.seed_file:26s}  {example.description}")
+            return 0
+        if args.command == "check":
+            return _check(args.folders)
+        if args.command == "estimate":
+            return _estimate(args)
+        if args.command == "campaign":
+            return _campaign(args, campaigns[args.name])
+        if args.command == "tightness":
+            return _tightness(examples[args.name], args.results, args.seed)
+        return _reproduce(args, examples)
+    except IntervalObserverError as exc:
+        return _fail(str(exc))
+    except KeyboardInterrupt as exc:
+        sys.stderr.write(f"intervalobs: interrupted{': ' + str(exc) if str(exc) else ''}\n")
+        return 130
 
 
 def _check(folders: Sequence[str]) -> int:
@@ -205,32 +258,30 @@ def _check(folders: Sequence[str]) -> int:
     return 1 if failed else 0
 
 
-def _tightness(examples: dict[str, Any], name: str, results: str | None, seed: int) -> int:
+def _tightness(example: Example, results: Path | None, seed: int) -> int:
     """``intervalobs tightness NAME``: the table of ``summary.json``'s ``tightness`` object."""
     import json
     import tempfile
 
     from .tightness import format_tightness
 
-    if name not in examples:
-        sys.stderr.write(f"error: NAME: expected one of {', '.join(examples)}, got {name!r}\n")
-        return 2
-    summary: dict[str, Any] | None = None
     if results is not None:
-        path = Path(results) / name / "summary.json"
-        if path.is_file():
+        path = results / example.name / "summary.json"
+        try:
             summary = json.loads(path.read_text())
-    if summary is None or "tightness" not in summary:
+        except (OSError, ValueError):
+            summary = {}
+        if "tightness" not in summary:
+            raise FileError(
+                f"argument --results: expected a folder holding {example.name}/summary.json with a tightness report "
+                f"(written by `intervalobs reproduce {example.name}`), got {str(results)!r}"
+            )
+    else:
         with tempfile.TemporaryDirectory() as tmp:
-            try:
-                summary = examples[name].run(Path(tmp) / name, seed, False)
-            except IntervalObserverError as exc:
-                sys.stderr.write(f"error: {name}: {exc}\n")
-                return 2
-    if "tightness" not in summary:
-        sys.stderr.write(f"error: NAME: {name!r} has no tightness report (not a linear example)\n")
-        return 2
-    print(format_tightness(summary["tightness"], title=f"{name}: tightness (seed {summary.get('seed')})"))
+            summary = example.run(Path(tmp) / example.name, seed, False)
+        if "tightness" not in summary:
+            return _fail(f"NAME: expected an example with a tightness report (a linear one), got {example.name!r}")
+    print(format_tightness(summary["tightness"], title=f"{example.name}: tightness (seed {summary.get('seed')})"))
     return 0
 
 

@@ -13,12 +13,15 @@ r"""Fault isolation from interval-observer signals and Monte Carlo performance c
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import signal
 import sqlite3
 import sys
+import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,10 +29,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import BoundsError, DataError, DimensionError
+from .errors import ArgumentError, BoundsError, DataError, DimensionError, SchedulerError
+from .validation import as_count, as_fraction, as_output_folder, as_vector
 
 __all__ = [
     "Campaign",
+    "CampaignInterrupted",
     "CampaignResult",
     "first_negative_time",
     "isolation_outcome",
@@ -188,6 +193,9 @@ class Campaign:
         Default grid.
     runs : int
         Default runs per cell (the paper's M = 100).
+    magnitude_bound : float
+        Largest magnitude the task accepts (its assumption on the fault size); :func:`run_campaign`
+        checks every magnitude against [0, magnitude_bound] before any task starts.
     describe : dict
         Facts copied into ``psi.json`` (what a level, a magnitude and the indicator mean).
     """
@@ -198,6 +206,7 @@ class Campaign:
     levels: tuple[float, ...]
     magnitudes: tuple[float, ...]
     runs: int = 100
+    magnitude_bound: float = math.inf
     describe: dict[str, Any] = field(default_factory=dict)
 
 
@@ -226,6 +235,26 @@ class CampaignResult:
     computed: int
     reused: int
     seconds: float
+
+
+class CampaignInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`run_campaign`: every finished batch is saved; the message says how many runs.
+
+    Parameters
+    ----------
+    saved, total : int
+        Runs of the requested grid in the store, and runs the grid needs.
+    store : pathlib.Path
+        The SQLite file; running the same campaign again computes only the missing runs.
+    """
+
+    def __init__(self, saved: int, total: int, store: Path) -> None:
+        super().__init__(f"{saved} of {total} runs saved in {store}; run the same command again to resume")
+        self.saved, self.total, self.store = saved, total, store
+
+
+SCHEDULER_TIMEOUT = 5.0
+"""Seconds :func:`run_campaign` waits for a Dask scheduler given by address before it gives up."""
 
 
 def _open_store(path: Path) -> sqlite3.Connection:
@@ -295,16 +324,32 @@ def run_campaign(
     Returns
     -------
     CampaignResult
-    """
-    from tqdm import tqdm
 
+    Raises
+    ------
+    ArgumentError
+        When a count is below 1, a level is not a fraction in [0, 1) or a magnitude is outside
+        [0, ``campaign.magnitude_bound``] (checked before anything runs).
+    FileError
+        When ``out_dir`` cannot be written.
+    SchedulerError
+        When the scheduler at ``scheduler`` does not answer within :data:`SCHEDULER_TIMEOUT` seconds.
+    CampaignInterrupted
+        On Ctrl-C (a ``KeyboardInterrupt``), after the finished batches are saved.
+    """
     start = time.perf_counter()
-    m = campaign.runs if runs is None else int(runs)
-    lv = [float(v) for v in (campaign.levels if levels is None else levels)]
-    mg = [float(v) for v in (campaign.magnitudes if magnitudes is None else magnitudes)]
-    if m < 1 or batch < 1 or not lv or not mg:
-        raise DataError(f"runs, batch, levels, magnitudes: expected positive counts, got {m}, {batch}, {lv}, {mg}")
-    out = Path(out_dir)
+    m = as_count("runs", campaign.runs if runs is None else runs)
+    as_count("workers", workers)
+    as_count("batch", batch)
+    as_count("seed", seed, minimum=0)
+    lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
+    mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
+    if not lv or not mg:
+        raise ArgumentError(f"levels, magnitudes: expected at least one of each, got {len(lv)} and {len(mg)}")
+    if not all(0.0 <= v <= campaign.magnitude_bound for v in mg):
+        got = ", ".join(f"{v:g}" for v in mg)
+        raise ArgumentError(f"magnitudes: expected fault sizes in [0, {campaign.magnitude_bound:g}], got {got}")
+    out = as_output_folder("out_dir", out_dir)
     out.mkdir(parents=True, exist_ok=True)
     con = _open_store(out / "campaign.sqlite")
     n_s = len(campaign.scenarios)
@@ -319,35 +364,15 @@ def run_campaign(
     total = len(lv) * len(mg) * m
     computed = 0
     if tasks:
-        from dask.distributed import Client, LocalCluster, as_completed
-
-        cluster = None
-        if scheduler is None:
-            cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=processes, dashboard_address=None, silence_logs=40
-            )
-            client = Client(cluster)
-        else:
-            client = Client(scheduler)
-        bar = tqdm(total=total, initial=reused, desc=campaign.name, unit="run", disable=not progress, file=sys.stderr)
         try:
-            futures = [client.submit(campaign.task, lvl, mag, ids, seed, pure=False) for lvl, mag, ids in tasks]
-            meta = {f.key: (lvl, mag, ids) for f, (lvl, mag, ids) in zip(futures, tasks)}
-            for fut in as_completed(futures):
-                lvl, mag, ids = meta[fut.key]
-                rows = fut.result()
-                con.executemany(
-                    "INSERT OR REPLACE INTO runs VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                    [(lvl, mag, r, s, int(ok), int(fa), json.dumps(fn), seed) for r, s, ok, fa, fn in rows],
-                )
-                con.commit()
-                computed += len(ids)
-                bar.update(len(ids))
-        finally:
-            bar.close()
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            computed = _compute(campaign, tasks, con, seed, scheduler, workers, processes, progress, (reused, total))
+        except KeyboardInterrupt:
+            saved = sum(len({i for i in _done_runs(con, lvl, mag, seed, n_s) if i < m}) for lvl in lv for mag in mg)
+            con.close()
+            raise CampaignInterrupted(saved, total, out / "campaign.sqlite") from None
+        except SchedulerError:
+            con.close()
+            raise
     psi: dict[str, list[list[float]]] = {}
     for s_idx, s_name in enumerate(campaign.scenarios):
         mat = []
@@ -370,6 +395,90 @@ def run_campaign(
     if plots:
         _heatmaps(result, out, campaign.name)
     return result
+
+
+def _compute(
+    campaign: Campaign,
+    tasks: list[tuple[float, float, list[int]]],
+    con: sqlite3.Connection,
+    seed: int,
+    scheduler: str | None,
+    workers: int,
+    processes: bool,
+    progress: bool,
+    done_of_total: tuple[int, int],
+) -> int:
+    """Run ``tasks`` on Dask, appending each finished batch to the store; returns the runs computed."""
+    from dask.distributed import Client, LocalCluster, as_completed
+    from tqdm import tqdm
+
+    cluster = client = bar = None
+    computed = 0
+    try:
+        if scheduler is None:
+            with _sigint_ignored():
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    dashboard_address=None,
+                    silence_logs=40,
+                )
+            client = Client(cluster)
+        else:
+            try:
+                client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
+            except (OSError, TimeoutError, ValueError):
+                raise SchedulerError(
+                    f"scheduler: expected the address of a running Dask scheduler (tcp://host:port), got "
+                    f"{scheduler!r} (no answer within {SCHEDULER_TIMEOUT:g} s)"
+                ) from None
+        bar = tqdm(
+            total=done_of_total[1],
+            initial=done_of_total[0],
+            desc=campaign.name,
+            unit="run",
+            disable=not progress,
+            file=sys.stderr,
+        )
+        futures = [client.submit(campaign.task, lvl, mag, ids, seed, pure=False) for lvl, mag, ids in tasks]
+        meta = {f.key: (lvl, mag, ids) for f, (lvl, mag, ids) in zip(futures, tasks)}
+        for fut in as_completed(futures):
+            lvl, mag, ids = meta[fut.key]
+            rows = fut.result()
+            con.executemany(
+                "INSERT OR REPLACE INTO runs VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                [(lvl, mag, r, s, int(ok), int(fa), json.dumps(fn), seed) for r, s, ok, fa, fn in rows],
+            )
+            con.commit()
+            computed += len(ids)
+            bar.update(len(ids))
+    finally:
+        if bar is not None:
+            bar.close()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    return computed
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT while the local Dask cluster starts its worker processes.
+
+    Ctrl-C in a terminal goes to the whole process group. Processes started while it is ignored
+    inherit that, so the workers never see it (instead of printing a traceback each) and only this
+    process handles it: it saves what finished and stops them. A Ctrl-C pressed during the start
+    (a few seconds) is lost; pressed later, it is handled.
+    """
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        yield
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _heatmaps(result: CampaignResult, out: Path, name: str) -> None:

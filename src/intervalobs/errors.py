@@ -7,12 +7,16 @@ message is one line naming the argument, the expected value and the actual value
 from __future__ import annotations
 
 __all__ = [
+    "ArgumentError",
+    "ArgumentTypeError",
     "AssumptionError",
     "BoundsError",
     "DataError",
     "DesignError",
     "DimensionError",
+    "FileError",
     "IntervalObserverError",
+    "SchedulerError",
 ]
 
 
@@ -38,3 +42,19 @@ class DesignError(IntervalObserverError, RuntimeError):
 
 class DataError(IntervalObserverError, ValueError):
     """Measurements or inputs contain NaN/inf or do not match the time vector."""
+
+
+class ArgumentError(IntervalObserverError, ValueError):
+    """A scalar argument or command-line option is out of its range or not one of its choices."""
+
+
+class ArgumentTypeError(IntervalObserverError, TypeError):
+    """An argument has the wrong type: text or complex numbers for a real array, None for an observer state."""
+
+
+class FileError(IntervalObserverError, OSError):
+    """A file or folder is missing, cannot be written, or is not what the function reads."""
+
+
+class SchedulerError(IntervalObserverError, ConnectionError):
+    """The Dask scheduler at the given address did not answer in time."""

@@ -11,8 +11,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _tables
-from .errors import BoundsError, DataError, DimensionError
-from .validation import as_names, as_truth
+from .errors import BoundsError, DataError, DimensionError, FileError
+from .validation import as_input_file, as_names, as_truth
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -271,13 +271,32 @@ class Estimate:
         Returns
         -------
         Estimate
+
+        Raises
+        ------
+        FileError
+            When ``path`` is missing or is not an ``.npz`` file written by :meth:`save`.
         """
         import json
+        import zipfile
 
-        with np.load(path) as data:
-            extra: dict[str, Any] = {k: data[k] for k in ("input_lower", "input_upper") if k in data.files}
-            extra.update({k: tuple(data[k].tolist()) for k in ("state_names", "input_names") if k in data.files})
-            return cls(data["t"], data["lower"], data["upper"], meta=json.loads(str(data["meta"])), **extra)
+        file = as_input_file("path", path)
+        expected = f"path: expected an .npz file written by Estimate.save, got {str(path)!r}"
+        try:
+            loaded = np.load(file)
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile):
+            raise FileError(f"{expected} (not a NumPy file)") from None
+        if not isinstance(loaded, np.lib.npyio.NpzFile):
+            raise FileError(f"{expected} (a single array)")
+        with loaded as data:
+            stored = {k: data[k] for k in data.files}
+        missing = [k for k in ("t", "lower", "upper", "meta") if k not in stored]
+        if missing:
+            raise FileError(f"{expected} (no {', '.join(missing)})")
+        extra: dict[str, Any] = {k: stored[k] for k in ("input_lower", "input_upper") if k in stored}
+        extra.update({k: tuple(stored[k].tolist()) for k in ("state_names", "input_names") if k in stored})
+        meta = json.loads(str(stored["meta"]))
+        return cls(stored["t"], stored["lower"], stored["upper"], meta=meta, **extra)
 
     def to_pandas(self) -> Any:
         """The bounds as a pandas ``DataFrame`` (needs the ``data`` extra).

@@ -1,42 +1,104 @@
 """Validation of user input at the boundary of the library.
 
-Every model class, observer and simulation converts its arrays through these functions, so that a
-wrong shape or an empty interval is reported once, with the argument's name, the expected and the
-actual value, and never surfaces as a traceback from deep inside NumPy.
+Every model class, observer and simulation converts its arguments through these functions, so that a
+wrong shape, an empty interval, a count of zero or a missing file is reported once, in one line with
+the argument's name, the expected and the actual value, and never surfaces as a traceback from deep
+inside NumPy. The command-line interface converts its options through the same functions
+(:mod:`intervalobs.cli_types`).
 """
 
 from __future__ import annotations
 
+import math
+import numbers
+import tempfile
 from collections.abc import Sequence
-from typing import Any
+from pathlib import Path
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import BoundsError, DataError, DimensionError
+from .errors import ArgumentError, ArgumentTypeError, BoundsError, DataError, DimensionError, FileError
 
 __all__ = [
+    "as_array",
     "as_box",
+    "as_choice",
+    "as_count",
+    "as_fraction",
+    "as_input_file",
+    "as_input_folder",
+    "as_instance",
     "as_matrix",
     "as_names",
+    "as_output_folder",
+    "as_positive",
     "as_signal",
     "as_time",
     "as_truth",
     "as_vector",
+    "check_both_or_neither",
     "check_finite",
     "check_no_kwargs",
     "labelled_parts",
 ]
 
 FloatArray = NDArray[np.float64]
+T = TypeVar("T")
 
 
-def _as_float(name: str, value: ArrayLike) -> FloatArray:
+def _named(name: str, message: str) -> str:
+    """``"name: message"``; the bare message when ``name`` is empty (argparse adds the option's name)."""
+    return f"{name}: {message}" if name else message
+
+
+def as_array(name: str, value: ArrayLike) -> FloatArray:
+    """Convert ``value`` to a float array of any shape, refusing what the conversion would lose.
+
+    NumPy would turn complex numbers into their real parts (with a ``ComplexWarning``) and text such as
+    ``"0.1"`` into numbers; both hide a mistake of the caller, so both are refused. Complex values whose
+    imaginary parts are all exactly zero lose nothing and are accepted.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : array_like
+        The user's value.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as float64, same shape.
+
+    Raises
+    ------
+    ArgumentTypeError
+        When ``value`` holds text, complex numbers with a nonzero imaginary part, or objects that are
+        not numbers.
+    """
+    if value is None:
+        raise ArgumentTypeError(_named(name, "expected a numeric array, got None"))
     try:
-        arr = np.array(value, dtype=float)
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested sequences
+        raise ArgumentTypeError(_named(name, f"expected a numeric array, got {type(value).__name__}")) from exc
+    if raw.dtype.kind in "USV":
+        raise ArgumentTypeError(_named(name, f"expected real numbers, got text ({raw.dtype})"))
+    if raw.dtype.kind == "c":
+        imaginary = float(np.max(np.abs(raw.imag), initial=0.0))
+        if imaginary != 0.0:
+            raise ArgumentTypeError(
+                _named(name, f"expected real numbers, got complex values (largest imaginary part {imaginary:g})")
+            )
+        raw = raw.real
+    if raw.dtype.kind == "O" and any(v is None or isinstance(v, (str, bytes, complex)) for v in raw.flat):
+        raise ArgumentTypeError(_named(name, "expected real numbers, got None, text or complex entries"))
+    try:
+        return np.array(raw, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise DimensionError(f"{name}: expected a numeric array, got {type(value).__name__}") from exc
-    return arr
+        raise ArgumentTypeError(_named(name, f"expected a numeric array, got {type(value).__name__}")) from exc
 
 
 def as_matrix(
@@ -61,7 +123,7 @@ def as_matrix(
     numpy.ndarray
         The matrix, shape ``shape``.
     """
-    arr = _as_float(name, value)
+    arr = as_array(name, value)
     rows, cols = shape
     if arr.ndim == 0:
         arr = arr.reshape(1, 1)
@@ -103,7 +165,7 @@ def as_vector(name: str, value: ArrayLike, size: int | None = None, finite: bool
     BoundsError
         When ``finite`` and an entry is NaN or inf.
     """
-    arr = _as_float(name, value)
+    arr = as_array(name, value)
     if arr.ndim == 0 and size is not None:
         arr = np.full(size, float(arr))
     if arr.ndim != 1 or (size is not None and arr.size != size):
@@ -168,7 +230,7 @@ def as_time(name: str, value: ArrayLike) -> FloatArray:
     DataError
         When a time is not finite or the times do not increase strictly.
     """
-    arr = _as_float(name, _seconds(value))
+    arr = as_array(name, _seconds(value))
     if arr.ndim != 1 or arr.size == 0:
         raise DimensionError(f"{name}: expected a non-empty 1-D time vector, got shape {np.shape(value)}")
     if not np.all(np.isfinite(arr)):
@@ -224,7 +286,7 @@ def as_signal(
     parts = labelled_parts(value)
     if parts is not None:
         value = _select_channels(name, *parts, t=t, names=names)
-    arr = _as_float(name, value)
+    arr = as_array(name, value)
     if arr.ndim == 1 and width == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim not in (2, 3) or arr.shape[-2:] != (steps, width):
@@ -299,11 +361,11 @@ def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> Floa
     else:
         parts = labelled_parts(value)
     if parts is None:
-        return _as_float(name, value)
+        return as_array(name, value)
     values, times, channels = parts
     if channels is not None and not all(c in channels for c in names):
         channels = None  # labels that are not the state names: positional
-    return _as_float(name, _select_channels(name, values, times, channels, t=t, names=names))
+    return as_array(name, _select_channels(name, values, times, channels, t=t, names=names))
 
 
 def as_names(name: str, value: Sequence[str] | None, size: int, prefix: str) -> tuple[str, ...]:
@@ -448,3 +510,271 @@ def check_no_kwargs(function: str, kwargs: dict[str, Any], allowed: Sequence[str
     unknown = [k for k in kwargs if k not in allowed]
     if unknown:
         raise TypeError(f"{function}: unexpected keyword argument {unknown[0]!r}; allowed: {sorted(allowed)}")
+
+
+def _describe(value: object) -> str:
+    """``repr`` of a scalar argument plus its type when the repr does not show it (``'0.1' (str)``)."""
+    shown = repr(value)
+    return (
+        shown
+        if isinstance(value, (int, float)) and not isinstance(value, bool)
+        else f"{shown} ({type(value).__name__})"
+    )
+
+
+def as_count(name: str, value: object, minimum: int = 1) -> int:
+    """Check that ``value`` is an integer of at least ``minimum`` (runs, workers, a seed, a batch size).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : object
+        The user's value; a ``bool`` or a float is refused even when it is integral.
+    minimum : int
+        Smallest accepted value.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ArgumentTypeError
+        When ``value`` is not an integer.
+    ArgumentError
+        When ``value < minimum``.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ArgumentTypeError(_named(name, f"expected an integer >= {minimum}, got {_describe(value)}"))
+    if value < minimum:
+        raise ArgumentError(_named(name, f"expected an integer >= {minimum}, got {value}"))
+    return int(value)
+
+
+def _as_real(name: str, value: object, expected: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ArgumentTypeError(_named(name, f"expected {expected}, got {_describe(value)}"))
+    return float(value)
+
+
+def as_fraction(name: str, value: object) -> float:
+    """Check that ``value`` is a fraction in [0, 1) (a relative uncertainty level: 0.05 means ±5 %).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : object
+        The user's value.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ArgumentTypeError
+        When ``value`` is not a real number.
+    ArgumentError
+        When ``value`` is outside [0, 1).
+    """
+    expected = "a fraction in [0, 1) (0.05 means ±5 %)"
+    fraction = _as_real(name, value, expected)
+    if not 0.0 <= fraction < 1.0:
+        raise ArgumentError(_named(name, f"expected {expected}, got {fraction:g}"))
+    return fraction
+
+
+def as_positive(name: str, value: object, what: str = "a positive number") -> float:
+    """Check that ``value`` is a finite real number > 0 (a sampling period, a step, a time-out).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : object
+        The user's value; text such as ``"0.1"`` is refused.
+    what : str
+        What the value is, for the message ("a positive sampling period").
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ArgumentTypeError
+        When ``value`` is not a real number.
+    ArgumentError
+        When ``value`` is not finite and positive.
+    """
+    number = _as_real(name, value, what)
+    if not (math.isfinite(number) and number > 0.0):
+        raise ArgumentError(_named(name, f"expected {what}, got {number:g}"))
+    return number
+
+
+def as_choice(name: str, value: T, choices: Sequence[T]) -> T:
+    """Check that ``value`` is one of ``choices`` (a method name, an objective, an example).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : object
+        The user's value.
+    choices : sequence
+        The accepted values.
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Raises
+    ------
+    ArgumentError
+        When ``value`` is not in ``choices``.
+    """
+    if value not in choices:
+        raise ArgumentError(_named(name, f"expected one of {', '.join(map(repr, choices))}, got {value!r}"))
+    return value
+
+
+def as_instance(name: str, value: object, kind: type[T], what: str) -> T:
+    """Check that ``value`` is an instance of ``kind``.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    value : object
+        The user's value.
+    kind : type
+        The expected class.
+    what : str
+        What is expected, for the message ("the state returned by init or step").
+
+    Returns
+    -------
+    object
+        ``value``.
+
+    Raises
+    ------
+    ArgumentTypeError
+        When ``value`` is not a ``kind``.
+    """
+    if not isinstance(value, kind):
+        raise ArgumentTypeError(_named(name, f"expected {what}, got {type(value).__name__}"))
+    return value
+
+
+def check_both_or_neither(first: tuple[str, object], second: tuple[str, object]) -> None:
+    """Check that two optional arguments that only make sense together are both given or both omitted.
+
+    Parameters
+    ----------
+    first, second : tuple of (str, object)
+        Each argument's name and value (None when omitted).
+
+    Raises
+    ------
+    ArgumentError
+        When exactly one of them is None.
+    """
+    (name1, value1), (name2, value2) = first, second
+    if (value1 is None) != (value2 is None):
+        given, missing = (name1, name2) if value2 is None else (name2, name1)
+        raise ArgumentError(f"{name1}, {name2}: expected both or neither, got {given} without {missing}")
+
+
+def as_output_folder(name: str, path: str | Path) -> Path:
+    """Check, before anything is computed, that results can be written into the folder ``path``.
+
+    The folder need not exist: its nearest existing ancestor must be a folder in which a file can
+    be created (tried with a temporary file, which is removed). Nothing is created.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    path : str or pathlib.Path
+        The output folder.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileError
+        When ``path`` or an ancestor is a file, or the folder cannot be written.
+    """
+    folder = Path(path)
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise FileError(_named(name, f"expected a folder to write into, got {str(path)!r} ({existing} is a file)"))
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError:
+        raise FileError(
+            _named(name, f"expected a writable folder, got {str(path)!r} (cannot create a file in {existing})")
+        ) from None
+    return folder
+
+
+def as_input_folder(name: str, path: str | Path) -> Path:
+    """Check that the folder ``path`` exists.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    path : str or pathlib.Path
+        A folder to read from.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileError
+        When ``path`` does not exist or is not a folder.
+    """
+    folder = Path(path)
+    if not folder.is_dir():
+        state = "a file" if folder.exists() else "no such folder"
+        raise FileError(_named(name, f"expected an existing folder, got {str(path)!r} ({state})"))
+    return folder
+
+
+def as_input_file(name: str, path: str | Path) -> Path:
+    """Check that the file ``path`` exists.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    path : str or pathlib.Path
+        A file to read.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    FileError
+        When ``path`` does not exist or is a folder.
+    """
+    file = Path(path)
+    if not file.is_file():
+        state = "a folder" if file.exists() else "no such file"
+        raise FileError(_named(name, f"expected an existing file, got {str(path)!r} ({state})"))
+    return file

@@ -39,7 +39,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.signal import place_poles
 
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
-from ..validation import as_matrix
+from ..validation import as_choice, as_matrix
 from .lmi import solve_lmi
 
 __all__ = [
@@ -582,8 +582,7 @@ def place_in_disks(
     if a.shape != (n, n):
         raise DimensionError(f"A: expected a square matrix, got shape {a.shape}")
     c = as_matrix("C", C, (None, n))
-    if objective not in ("min_gain", "center"):
-        raise ValueError(f"objective: expected 'min_gain' or 'center', got {objective!r}")
+    as_choice("objective", objective, ("min_gain", "center"))
     region = tuple(d if isinstance(d, Disk) else Disk(complex(d[0]), float(d[1])) for d in disks)
     if len(region) != n:
         raise AssumptionError(f"disks: expected one disk per state ({n}), got {len(region)}")

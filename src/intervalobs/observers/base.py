@@ -31,7 +31,7 @@ from threadpoolctl import ThreadpoolController
 
 from ..errors import DataError
 from ..estimate import Estimate
-from ..validation import as_box, as_signal, as_time, check_finite
+from ..validation import as_array, as_box, as_instance, as_signal, as_time, check_both_or_neither, check_finite
 
 __all__ = ["Observer", "ObserverState"]
 
@@ -64,6 +64,28 @@ def _named(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
         return estimate
 
     return named
+
+
+def _checked_init(init: Callable[..., ObserverState]) -> Callable[..., ObserverState]:
+    """``init`` that refuses a prior box with only one of its two bounds (it would be ignored)."""
+
+    @functools.wraps(init)
+    def checked(self: Observer, x0_lower: Any = None, x0_upper: Any = None, *args: Any, **kwargs: Any) -> ObserverState:
+        check_both_or_neither(("x0_lower", x0_lower), ("x0_upper", x0_upper))
+        return init(self, x0_lower, x0_upper, *args, **kwargs)
+
+    return checked
+
+
+def _checked_step(step: Callable[..., ObserverState]) -> Callable[..., ObserverState]:
+    """``step`` that refuses a ``state`` not made by ``init`` or ``step`` (None, a box, an array)."""
+
+    @functools.wraps(step)
+    def checked(self: Observer, state: Any, *args: Any, **kwargs: Any) -> ObserverState:
+        as_instance("state", state, ObserverState, "the ObserverState returned by init or step")
+        return step(self, state, *args, **kwargs)
+
+    return checked
 
 
 SPACING_TOLERANCE = 1e-9
@@ -114,10 +136,15 @@ class Observer(ABC):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Every ``run`` written by a subclass runs its hot loop on one BLAS thread (see ``_one_blas_thread``)
-        and labels its estimate with the model's state names."""
+        and labels its estimate with the model's state names; every ``init`` and ``step`` checks its
+        arguments first (``_checked_init``, ``_checked_step``)."""
         super().__init_subclass__(**kwargs)
         if "run" in cls.__dict__:
             cls.run = _named(_one_blas_thread(cls.__dict__["run"]))  # type: ignore[method-assign]
+        if "init" in cls.__dict__:
+            cls.init = _checked_init(cls.__dict__["init"])  # type: ignore[method-assign]
+        if "step" in cls.__dict__:
+            cls.step = _checked_step(cls.__dict__["step"])  # type: ignore[method-assign]
 
     @abstractmethod
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -133,6 +160,7 @@ class Observer(ABC):
         ObserverState
         """
 
+    @_checked_step
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
         """Consume ``y_k`` (and ``u_k``) and return the next state.
 
@@ -248,7 +276,7 @@ class Observer(ABC):
 
     def _sample(self, y: ArrayLike, u: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
         """Validate one sample for :meth:`step`: ``y`` (p,) or (M, p); ``u`` (m,) or (M, m) (None only if m = 0)."""
-        yk = np.asarray(y, dtype=float).reshape(-1) if np.ndim(y) == 0 else np.asarray(y, dtype=float)
+        yk = as_array("y", y).reshape(-1) if np.ndim(y) == 0 else as_array("y", y)
         if yk.ndim not in (1, 2) or yk.shape[-1] != self.p:
             raise DataError(f"y: expected finite values with last dimension {self.p}, got shape {yk.shape}")
         check_finite("y", yk, self.missing_samples)
@@ -267,7 +295,7 @@ class Observer(ABC):
                     f"m = {self.m}; pass zeros for u = 0), got None"
                 )
             return np.zeros((*lead, 0))
-        uk = np.asarray(u, dtype=float).reshape(-1) if np.ndim(u) == 0 else np.asarray(u, dtype=float)
+        uk = as_array("u", u).reshape(-1) if np.ndim(u) == 0 else as_array("u", u)
         if uk.ndim not in (1, 2) or uk.shape[-1] != self.m or not np.all(np.isfinite(uk)):
             raise DataError(f"u: expected finite values with last dimension {self.m}, got shape {uk.shape}")
         try:

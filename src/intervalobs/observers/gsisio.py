@@ -48,7 +48,7 @@ from ..errors import AssumptionError
 from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
-from ..validation import as_box, check_no_kwargs
+from ..validation import as_array, as_box, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["GSISIO"]
@@ -294,8 +294,8 @@ class GSISIO(Observer):
         U1, V1 = U[:, :r], Vt[:r].T
         lo, hi = np.asarray(x_lower, float), np.asarray(x_upper, float)
         _, (g_lo, g_hi) = self._fg_bounds(lo, hi)
-        yk = np.asarray(y, dtype=float)
-        du = 0.0 if u is None else np.asarray(u, dtype=float) @ sysm.D.T
+        yk = as_array("y", y)
+        du = 0.0 if u is None else as_array("u", u) @ sysm.D.T
         gl, gh = matvec_bounds(U1.T, g_lo, g_hi)
         vl, vh = matvec_bounds(U1.T, *self.bounds.v)
         base = (yk - du) @ U1

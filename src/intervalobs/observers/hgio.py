@@ -52,7 +52,7 @@ from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
-from ..validation import as_box, as_matrix
+from ..validation import as_box, as_choice, as_matrix
 from .base import Observer, ObserverState
 
 if TYPE_CHECKING:
@@ -277,15 +277,11 @@ class HighGainIntervalObserver(Observer):
         self.input_rate = float(input_rate)
         self.theta = float(theta)
         self.refine = bool(refine)
-        if predictor not in ("box", "modal"):
-            raise ValueError(f"predictor: expected 'box' or 'modal', got {predictor!r}")
-        self.predictor = predictor
+        self.predictor = as_choice("predictor", predictor, ("box", "modal"))
         self.rewrap = bool(rewrap)
         gain = as_matrix("L", L, (self.n, self.p))
         out_gain = gain if output_gain is None else as_matrix("output_gain", output_gain, (self.n, self.p))
-        if scheme not in ("exact", "paper-euler"):
-            raise ValueError(f"scheme: expected 'exact' or 'paper-euler', got {scheme!r}")
-        self.scheme = scheme
+        self.scheme = as_choice("scheme", scheme, ("exact", "paper-euler"))
         self.state_modal = _Modal(system, gain, self.h, order, scheme, self.theta)
         self.output_modal = _Modal(system, out_gain, self.h, order, scheme, self.theta)
         self.L = gain

@@ -21,7 +21,7 @@ from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
-from ..validation import as_matrix, check_no_kwargs
+from ..validation import as_choice, as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["METHODS", "IntervalObserver"]
@@ -106,8 +106,7 @@ class IntervalObserver(Observer):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
             raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
-        if method not in METHODS:
-            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
+        as_choice("method", method, METHODS)
         self.system = system
         self.method = method
         self.bounds = bounds.resolve(system)
@@ -201,9 +200,7 @@ class IntervalObserver(Observer):
         check_no_kwargs("IntervalObserver.design", options, ("candidates", "method"))
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
-        method = options.get("method", "tube")
-        if method not in METHODS:
-            raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
+        method = as_choice("method", options.get("method", "tube"), METHODS)
         full = bounds.resolve(system)
         model = sampled_model(system, full, h)
         v_radius = full.radius("v")

@@ -72,7 +72,7 @@ from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel
-from ..validation import as_box, as_matrix
+from ..validation import as_array, as_box, as_matrix
 from .base import Observer, ObserverState
 
 __all__ = ["IsolationRecord", "LPVIntervalObserver", "LPVIntervalUIO"]
@@ -491,7 +491,7 @@ class LPVIntervalObserver(Observer):
             raise DataError(
                 f"theta: expected the measured scheduling vector, shape (..., {self.system.n_theta}), got None"
             )
-        th = np.asarray(theta, dtype=float)
+        th = as_array("theta", theta)
         n_t = self.system.n_theta
         if n_t == 1 and th.shape in (lead, lead[-1:]):
             th = th[..., None]
@@ -563,11 +563,11 @@ class LPVIntervalObserver(Observer):
             ``internal`` holds ``z_lower``, ``z_upper`` (at :math:`t_{k+1}`), ``eps_lower``,
             ``eps_upper`` (at :math:`t_k`).
         """
-        ys = np.asarray(y, dtype=float)
+        ys = as_array("y", y)
         if ys.shape[-1:] != (self.p,) or ys.ndim > 2 or not np.all(np.isfinite(ys)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {ys.shape}")
         us = self._input(u, ys.shape[:-1])
-        th = None if theta is None else np.atleast_2d(np.asarray(theta, dtype=float))
+        th = None if theta is None else np.atleast_2d(as_array("theta", theta))
         th = self._check_theta(th, (np.atleast_2d(ys).shape[0],))
         return self._step(state, ys, us, th if th is None or ys.ndim == 2 else th[0])
 

@@ -111,7 +111,7 @@ from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
-from ..validation import as_box, as_matrix, as_signal, as_vector
+from ..validation import as_array, as_box, as_matrix, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState
 
 __all__ = ["UnknownInputIntervalObserver"]
@@ -729,7 +729,7 @@ class UnknownInputIntervalObserver(Observer):
         -------
         ObserverState
         """
-        yk = np.asarray(y, dtype=float)
+        yk = as_array("y", y)
         if yk.shape[-1:] != (self.p,) or not np.all(np.isfinite(yk)):
             raise DataError(f"y: expected finite values of shape (..., {self.p}), got {yk.shape}")
         u_lo, u_hi = self._input_signal(u, yk.shape[:-1], None)

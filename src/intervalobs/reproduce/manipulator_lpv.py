@@ -389,6 +389,7 @@ CAMPAIGN = Campaign(
     levels=(0.02, 0.05, 0.1, 0.15, 0.2),
     magnitudes=(0.25, 0.5, 1.0, 2.0, 5.0),
     runs=100,
+    magnitude_bound=FAULT_BOUND,
     describe={
         "level": "relative half-width of the a, b, c intervals (true values uniform in the box)",
         "magnitude": "fault size (N·m) acting for t > 20 s",

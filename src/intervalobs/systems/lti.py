@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import BoundsError, DimensionError
-from ..validation import as_matrix, as_names
+from ..validation import as_matrix, as_names, as_positive
 
 __all__ = ["LTISystem"]
 
@@ -84,9 +84,7 @@ class LTISystem:
         self.B = np.zeros((n, 0)) if B is None else as_matrix("B", B, (n, None))
         self.E = np.eye(n) if E is None else as_matrix("E", E, (n, None))
         self.F = np.eye(self.C.shape[0]) if F is None else as_matrix("F", F, (self.C.shape[0], None))
-        if dt is not None and not (np.isfinite(dt) and dt > 0):
-            raise BoundsError(f"dt: expected a positive sampling period or None, got {dt!r}")
-        self.dt = None if dt is None else float(dt)
+        self.dt = None if dt is None else as_positive("dt", dt, "a positive sampling period or None")
         self.dA: BoxPair | None = None
         if dA is not None:
             lo = as_matrix("dA lower", dA[0], (n, n))
