@@ -19,8 +19,7 @@ from intervalobs.validation import (
     as_choice,
     as_count,
     as_fraction,
-    as_input_file,
-    as_input_folder,
+    as_input_path,
     as_matrix,
     as_output_folder,
     as_positive,
@@ -114,10 +113,13 @@ def test_output_folder_must_be_writable(tmp_path) -> None:
 
 
 def test_input_paths_must_exist(tmp_path) -> None:
+    (tmp_path / "file.txt").write_text("x")
     with pytest.raises(FileError, match=r"^path: expected an existing file, got '.*missing.npz' \(no such file\)$"):
-        as_input_file("path", tmp_path / "missing.npz")
+        as_input_path("path", tmp_path / "missing.npz")
     with pytest.raises(FileError, match=r"\(a folder\)$"):
-        as_input_file("path", tmp_path)
+        as_input_path("path", tmp_path)
+    with pytest.raises(FileError, match=r"\(a file\)$"):
+        as_input_path("results", tmp_path / "file.txt", "folder")
     with pytest.raises(FileError, match=r"^results: expected an existing folder, got '.*nope' \(no such folder\)$"):
-        as_input_folder("results", tmp_path / "nope")
-    assert as_input_folder("results", tmp_path) == tmp_path
+        as_input_path("results", tmp_path / "nope", "folder")
+    assert as_input_path("results", tmp_path, "folder") == tmp_path

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from .errors import IntervalObserverError
-from .validation import as_choice, as_count, as_fraction, as_input_file, as_input_folder, as_output_folder
+from .validation import as_choice, as_count, as_fraction, as_input_path, as_output_folder
 
 __all__ = ["choice", "count", "fraction", "input_file", "input_folder", "output_folder", "seed"]
 
@@ -106,7 +106,7 @@ def input_folder(text: str) -> Path:
     -------
     pathlib.Path
     """
-    return _convert(as_input_folder, text)
+    return _convert(lambda name, value: as_input_path(name, value, "folder"), text)
 
 
 def input_file(text: str) -> Path:
@@ -121,7 +121,7 @@ def input_file(text: str) -> Path:
     -------
     pathlib.Path
     """
-    return _convert(as_input_file, text)
+    return _convert(as_input_path, text)
 
 
 def choice(choices: Sequence[str]) -> Callable[[str], str]:

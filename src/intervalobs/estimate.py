@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _tables
 from .errors import BoundsError, DataError, DimensionError, FileError
-from .validation import as_input_file, as_names, as_truth
+from .validation import as_input_path, as_names, as_truth
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -280,7 +280,7 @@ class Estimate:
         import json
         import zipfile
 
-        file = as_input_file("path", path)
+        file = as_input_path("path", path)
         expected = f"path: expected an .npz file written by Estimate.save, got {str(path)!r}"
         try:
             loaded = np.load(file)

@@ -14,7 +14,7 @@ import numbers
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -27,8 +27,7 @@ __all__ = [
     "as_choice",
     "as_count",
     "as_fraction",
-    "as_input_file",
-    "as_input_folder",
+    "as_input_path",
     "as_instance",
     "as_matrix",
     "as_names",
@@ -728,15 +727,17 @@ def as_output_folder(name: str, path: str | Path) -> Path:
     return folder
 
 
-def as_input_folder(name: str, path: str | Path) -> Path:
-    """Check that the folder ``path`` exists.
+def as_input_path(name: str, path: str | Path, kind: Literal["file", "folder"] = "file") -> Path:
+    """Check that the file (or folder) ``path`` exists.
 
     Parameters
     ----------
     name : str
         Argument name used in error messages.
     path : str or pathlib.Path
-        A folder to read from.
+        A file or folder to read.
+    kind : {"file", "folder"}
+        What ``path`` must be.
 
     Returns
     -------
@@ -745,36 +746,10 @@ def as_input_folder(name: str, path: str | Path) -> Path:
     Raises
     ------
     FileError
-        When ``path`` does not exist or is not a folder.
+        When ``path`` does not exist or is not a ``kind``.
     """
-    folder = Path(path)
-    if not folder.is_dir():
-        state = "a file" if folder.exists() else "no such folder"
-        raise FileError(_named(name, f"expected an existing folder, got {str(path)!r} ({state})"))
-    return folder
-
-
-def as_input_file(name: str, path: str | Path) -> Path:
-    """Check that the file ``path`` exists.
-
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
-    path : str or pathlib.Path
-        A file to read.
-
-    Returns
-    -------
-    pathlib.Path
-
-    Raises
-    ------
-    FileError
-        When ``path`` does not exist or is a folder.
-    """
-    file = Path(path)
-    if not file.is_file():
-        state = "a folder" if file.exists() else "no such file"
-        raise FileError(_named(name, f"expected an existing file, got {str(path)!r} ({state})"))
-    return file
+    found = Path(path)
+    if not (found.is_dir() if kind == "folder" else found.is_file()):
+        state = ("a file" if kind == "folder" else "a folder") if found.exists() else f"no such {kind}"
+        raise FileError(_named(name, f"expected an existing {kind}, got {str(path)!r} ({state})"))
+    return found
