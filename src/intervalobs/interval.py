@@ -284,7 +284,8 @@ def _product_hull(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatA
     """Hull of the four end products (broadcasting), round to nearest, with ``0 * inf = 0``."""
     with np.errstate(invalid="ignore"):
         p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
-    p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (p1, p2, p3, p4))
+    if not np.isfinite(np.sum(alo) + np.sum(ahi) + np.sum(blo) + np.sum(bhi)):  # an infinite end: 0 * inf
+        p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (p1, p2, p3, p4))
     return np.minimum(np.minimum(p1, p2), np.minimum(p3, p4)), np.maximum(np.maximum(p1, p2), np.maximum(p3, p4))
 
 
@@ -443,7 +444,8 @@ class Interval:
         c = np.asarray(other, dtype=float)
         with np.errstate(invalid="ignore"):
             a, b = c * self.lower, c * self.upper
-        a, b = np.where(np.isnan(a), 0.0, a), np.where(np.isnan(b), 0.0, b)  # 0 * inf = 0
+        if not np.isfinite(np.sum(c) + np.sum(self.lower) + np.sum(self.upper)):  # an infinite end: 0 * inf = 0
+            a, b = np.where(np.isnan(a), 0.0, a), np.where(np.isnan(b), 0.0, b)
         return Interval._raw(*round_outward(np.minimum(a, b), np.maximum(a, b)))
 
     __rmul__ = __mul__

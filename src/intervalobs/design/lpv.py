@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
-from ..interval import ROUNDING_MARGIN, neg, pos
+from ..interval import Interval, inflate, neg, pos, round_outward
 from ..validation import as_box, as_matrix
 from .lmi import solve_lmi
 
@@ -64,23 +64,14 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
-def _down(x: FloatArray) -> FloatArray:
-    return np.nextafter(x, -np.inf)
+def _round_up_nonnegative(x: FloatArray, roundings: int) -> FloatArray:
+    """Round up a nonnegative result of ``roundings`` rounded operations; exact zeros stay exact certificates.
 
-
-def _up(x: FloatArray) -> FloatArray:
-    return np.nextafter(x, np.inf)
-
-
-def _up_pos(x: FloatArray) -> FloatArray:
-    """Round nonnegative numbers up, keeping exact zeros (a zero slack stays an exact certificate)."""
-    return np.where(x > 0, np.nextafter(x, np.inf), x)
-
-
-def _mul(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Outward-rounded interval product (broadcasting)."""
-    prods = np.stack(np.broadcast_arrays(alo * blo, alo * bhi, ahi * blo, ahi * bhi))
-    return _down(prods.min(axis=0)), _up(prods.max(axis=0))
+    A value computed by k rounded operations on nonnegative terms is within k half-ulps of its exact value
+    relative, and one ulp is at least half an ulp relative, so k ulps up cover it (:func:`round_outward`).
+    A zero is exact here: every term was an exact zero.
+    """
+    return np.where(x > 0, round_outward(x, x, roundings)[1], x)
 
 
 class IntervalJet:
@@ -88,7 +79,9 @@ class IntervalJet:
 
     Supports ``+ - * /`` with other jets and with floats or arrays, unary minus, and :meth:`sqr`.
     Every result encloses the true value and gradient for all points of the argument boxes, so a
-    derivative enclosure with one sign is a proof of monotonicity.
+    derivative enclosure with one sign is a proof of monotonicity. The value and the derivatives are
+    :class:`~intervalobs.interval.Interval` objects, so every operation is its outward-rounded interval
+    arithmetic.
 
     Parameters
     ----------
@@ -101,10 +94,34 @@ class IntervalJet:
     __array_ufunc__ = None
 
     def __init__(self, lo: ArrayLike, hi: ArrayLike, dlo: ArrayLike, dhi: ArrayLike) -> None:
-        self.lo = np.asarray(lo, dtype=float)
-        self.hi = np.asarray(hi, dtype=float)
-        self.dlo = np.asarray(dlo, dtype=float)
-        self.dhi = np.asarray(dhi, dtype=float)
+        self.value = Interval(lo, hi)
+        self.derivative = Interval(dlo, dhi)
+
+    @classmethod
+    def _of(cls, value: Interval, derivative: Interval) -> IntervalJet:
+        out = cls.__new__(cls)
+        out.value, out.derivative = value, derivative
+        return out
+
+    @property
+    def lo(self) -> FloatArray:
+        """Lower end of the value."""
+        return self.value.lower
+
+    @property
+    def hi(self) -> FloatArray:
+        """Upper end of the value."""
+        return self.value.upper
+
+    @property
+    def dlo(self) -> FloatArray:
+        """Lower ends of the partial derivatives, shape ``(k, *S)``."""
+        return self.derivative.lower
+
+    @property
+    def dhi(self) -> FloatArray:
+        """Upper ends of the partial derivatives, shape ``(k, *S)``."""
+        return self.derivative.upper
 
     @classmethod
     def variable(cls, lo: ArrayLike, hi: ArrayLike, index: int, count: int) -> IntervalJet:
@@ -123,10 +140,10 @@ class IntervalJet:
         -------
         IntervalJet
         """
-        lo_a, hi_a = np.broadcast_arrays(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float))
-        d = np.zeros((count, *lo_a.shape))
+        value = Interval(lo, hi)
+        d = np.zeros((count, *value.shape))
         d[index] = 1.0
-        return cls(lo_a, hi_a, d, d.copy())
+        return cls._of(value, Interval._raw(d, d.copy()))
 
     @staticmethod
     def _lift(other: Any, like: IntervalJet) -> IntervalJet:
@@ -134,16 +151,16 @@ class IntervalJet:
             return other
         v = np.asarray(other, dtype=float)
         z = np.zeros((like.dlo.shape[0], *np.broadcast_shapes(v.shape, like.lo.shape)))
-        return IntervalJet(v, v, z, z)
+        return IntervalJet._of(Interval._raw(v, v), Interval._raw(z, z))
 
     def __add__(self, other: Any) -> IntervalJet:
         o = self._lift(other, self)
-        return IntervalJet(_down(self.lo + o.lo), _up(self.hi + o.hi), _down(self.dlo + o.dlo), _up(self.dhi + o.dhi))
+        return IntervalJet._of(self.value + o.value, self.derivative + o.derivative)
 
     __radd__ = __add__
 
     def __neg__(self) -> IntervalJet:
-        return IntervalJet(-self.hi, -self.lo, -self.dhi, -self.dlo)
+        return IntervalJet._of(-self.value, -self.derivative)
 
     def __sub__(self, other: Any) -> IntervalJet:
         return self + (-self._lift(other, self))
@@ -153,10 +170,7 @@ class IntervalJet:
 
     def __mul__(self, other: Any) -> IntervalJet:
         o = self._lift(other, self)
-        lo, hi = _mul(self.lo, self.hi, o.lo, o.hi)
-        d1lo, d1hi = _mul(self.dlo, self.dhi, o.lo, o.hi)
-        d2lo, d2hi = _mul(self.lo, self.hi, o.dlo, o.dhi)
-        return IntervalJet(lo, hi, _down(d1lo + d2lo), _up(d1hi + d2hi))
+        return IntervalJet._of(self.value * o.value, self.derivative * o.value + self.value * o.derivative)
 
     __rmul__ = __mul__
 
@@ -174,12 +188,11 @@ class IntervalJet:
         """
         if np.any((self.lo <= 0) & (self.hi >= 0)):
             raise BoundsError("IntervalJet.reciprocal: expected an interval excluding 0, got one containing 0")
-        lo, hi = _down(1.0 / self.hi), _up(1.0 / self.lo)
-        # d(1/x) = -x' / x^2, and 1/x^2 is the square of 1/x
-        sq_lo, sq_hi = _mul(lo, hi, lo, hi)
-        sq_lo = np.where((lo <= 0) & (hi >= 0), 0.0, np.maximum(sq_lo, 0.0))
-        dlo, dhi = _mul(-self.dhi, -self.dlo, sq_lo, sq_hi)
-        return IntervalJet(lo, hi, dlo, dhi)
+        inverse = self.value.reciprocal()
+        # d(1/x) = -x' / x^2, and 1/x^2 is the square of 1/x (nonnegative)
+        square = inverse * inverse
+        square = Interval._raw(np.maximum(square.lower, 0.0), square.upper)
+        return IntervalJet._of(inverse, -self.derivative * square)
 
     def __truediv__(self, other: Any) -> IntervalJet:
         return self * self._lift(other, self).reciprocal()
@@ -196,10 +209,9 @@ class IntervalJet:
         """
         a, b = np.abs(self.lo), np.abs(self.hi)
         straddle = (self.lo <= 0) & (self.hi >= 0)
-        lo = np.where(straddle, 0.0, _down(np.minimum(a, b) ** 2))
-        hi = _up(np.maximum(a, b) ** 2)
-        dlo, dhi = _mul(2 * self.lo, 2 * self.hi, self.dlo, self.dhi)
-        return IntervalJet(lo, hi, dlo, dhi)
+        low, high = round_outward(np.minimum(a, b) ** 2, np.maximum(a, b) ** 2)
+        twice = Interval._raw(2 * self.lo, 2 * self.hi)
+        return IntervalJet._of(Interval._raw(np.where(straddle, 0.0, low), high), twice * self.derivative)
 
     def __pow__(self, power: int) -> IntervalJet:
         if power != 2:
@@ -268,8 +280,8 @@ class CertifiedVertexBounds:
 
     with :math:`v` the parameter vertices, :math:`s_c, r` the centre and radius of the interval,
     ``slack`` the certified vertex slack of the cell of :math:`s_c` and :math:`L` the certified bound
-    of :math:`|\partial g/\partial s|`. All bounds are widened by the relative margin
-    ``ROUNDING_MARGIN``.
+    of :math:`|\partial g/\partial s|`. All bounds are widened by
+    :func:`~intervalobs.interval.inflate`.
 
     Attributes
     ----------
@@ -369,10 +381,7 @@ class CertifiedVertexBounds:
             vals = fast(*params, centre[None])
         cell = np.clip(np.searchsorted(edges, centre, side="right") - 1, 0, edges.size - 2)
         pad = self.slack[rows][:, cell] + self.lipschitz[rows].reshape((-1,) + (1,) * centre.ndim) * radius
-        lo = vals.min(axis=1) - pad
-        hi = vals.max(axis=1) + pad
-        m = ROUNDING_MARGIN * np.maximum(np.abs(lo), np.abs(hi)) + np.finfo(float).tiny
-        return lo - m, hi + m
+        return inflate(vals.min(axis=1) - pad, vals.max(axis=1) + pad)
 
     def check_fast(self, fast: Callable[..., FloatArray], select: Sequence[int], points: int = 201) -> float:
         """Largest relative difference of ``fast`` from the certified rational form (vertices × s grid).
@@ -485,8 +494,7 @@ def certify_vertex_extremes(
     factor_max = np.ones((n_e, cells))
     for e, form in enumerate(forms):
         if len(form) > 2:
-            f_jet = IntervalJet._lift(form[2], s_cells)
-            factor_max[e] = _up(np.maximum(np.abs(f_jet.lo), np.abs(f_jet.hi)))
+            factor_max[e] = np.absolute(IntervalJet._lift(form[2], s_cells).value).upper  # |.| is exact
         den = form[1]
         d_val: Any = 0.0
         for cd, mv in zip(den, mono):
@@ -516,20 +524,23 @@ def certify_vertex_extremes(
         jets = [IntervalJet.variable(lo_vars[j], hi_vars[j], j, n_p + 1) for j in range(n_p)]
         s_jet = IntervalJet.variable(s_lo_c, s_hi_c, n_p, n_p + 1)
         vals = cores(*jets, s_jet)
-        piece_width = _up(hi_vars[k] - lo_vars[k])
+        piece_width = (Interval(hi_vars[k]) - lo_vars[k]).upper
         lines = idx.shape[0] // pieces
         for e, v in enumerate(vals):
             jet = IntervalJet._lift(v, s_jet)
             dlo = np.broadcast_to(jet.dlo[k], s_lo_c.shape)
             dhi = np.broadcast_to(jet.dhi[k], s_lo_c.shape)
             # moving p_k to its upper end loses at most the negative mass, to its lower end the positive
-            neg_mass = _up_pos((piece_width * np.maximum(-dlo, 0.0)).reshape(lines, pieces).sum(axis=1))
-            pos_mass = _up_pos((piece_width * np.maximum(dhi, 0.0)).reshape(lines, pieces).sum(axis=1))
+            # each mass: ``pieces`` products and ``pieces - 1`` sums
+            neg_mass = (piece_width * np.maximum(-dlo, 0.0)).reshape(lines, pieces).sum(axis=1)
+            pos_mass = (piece_width * np.maximum(dhi, 0.0)).reshape(lines, pieces).sum(axis=1)
+            neg_mass = _round_up_nonnegative(neg_mass, 2 * pieces)
+            pos_mass = _round_up_nonnegative(pos_mass, 2 * pieces)
             line_slack = np.minimum(neg_mass, pos_mass)
             certified[e, k] = float(np.mean(line_slack == 0.0))
             per_cell = np.zeros(cells)
             np.maximum.at(per_cell, idx[::pieces, 0], line_slack)
-            slack[e] = _up_pos(slack[e] + factor_max[e] * per_cell)
+            slack[e] = _round_up_nonnegative(slack[e] + factor_max[e] * per_cell, 2)
     # |dg/ds| over the full parameter box, per cell (the maximum over cells is used)
     vals = entries(*box_jets, s_cells)
     lipschitz = np.zeros(n_e)
