@@ -68,6 +68,7 @@ __all__ = [
     "matvec_bounds",
     "neg",
     "pos",
+    "product_bounds",
     "recursion_margin",
     "round_outward",
 ]
@@ -280,13 +281,40 @@ def interval_matvec_bounds(
     return products.min(axis=0).sum(axis=-1), products.max(axis=0).sum(axis=-1)
 
 
-def _product_hull(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Hull of the four end products (broadcasting), round to nearest, with ``0 * inf = 0``."""
-    with np.errstate(invalid="ignore"):
-        p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
-    if not np.isfinite(np.sum(alo) + np.sum(ahi) + np.sum(blo) + np.sum(bhi)):  # an infinite end: 0 * inf
-        p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (p1, p2, p3, p4))
+def product_bounds(
+    a_lower: ArrayLike, a_upper: ArrayLike, b_lower: ArrayLike, b_upper: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Exact bounds of the elementwise product of two interval arrays with finite ends (round to nearest).
+
+    The hull of the four products of the ends (broadcasting). The array form for hot loops whose outputs
+    :func:`inflate` widens; ``Interval(a_lower, a_upper) * Interval(b_lower, b_upper)`` is the
+    outward-rounded form (which also takes infinite ends, with ``0 * inf = 0``).
+
+    Parameters
+    ----------
+    a_lower, a_upper, b_lower, b_upper : array_like
+        Ends of the two factors (shapes that broadcast).
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray
+    """
+    alo, ahi = np.asarray(a_lower, dtype=float), np.asarray(a_upper, dtype=float)
+    blo, bhi = np.asarray(b_lower, dtype=float), np.asarray(b_upper, dtype=float)
+    p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
     return np.minimum(np.minimum(p1, p2), np.minimum(p3, p4)), np.maximum(np.maximum(p1, p2), np.maximum(p3, p4))
+
+
+def _product_hull(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`product_bounds` for ends that may be infinite: ``0 * inf = 0`` (a NaN product)."""
+    with np.errstate(invalid="ignore"):
+        low, high = product_bounds(alo, ahi, blo, bhi)
+    if np.isnan(low.sum() + high.sum()):
+        with np.errstate(invalid="ignore"):
+            p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (alo * blo, alo * bhi, ahi * blo, ahi * bhi))
+        low = np.minimum(np.minimum(p1, p2), np.minimum(p3, p4))
+        high = np.maximum(np.maximum(p1, p2), np.maximum(p3, p4))
+    return low, high
 
 
 def _first_index(mask: NDArray[np.bool_]) -> tuple[int, ...]:
@@ -325,16 +353,17 @@ class Interval:
     def __init__(self, lower: ArrayLike, upper: ArrayLike | None = None) -> None:
         lo = np.asarray(lower, dtype=float)
         hi = lo if upper is None else np.asarray(upper, dtype=float)
-        try:
-            lo, hi = np.broadcast_arrays(lo, hi)
-        except ValueError:
-            raise DimensionError(
-                f"upper: expected a shape that broadcasts with lower's {lo.shape}, got {hi.shape}"
-            ) from None
+        if lo.shape != hi.shape:
+            try:
+                lo, hi = np.broadcast_arrays(lo, hi)
+            except ValueError:
+                raise DimensionError(
+                    f"upper: expected a shape that broadcasts with lower's {lo.shape}, got {hi.shape}"
+                ) from None
         for name, end in (("lower", lo), ("upper", hi)):
-            if np.any(np.isnan(end)):
+            if np.isnan(end).any():
                 raise BoundsError(f"{name}: expected no NaN, got NaN at index {_first_index(np.isnan(end))}")
-        if np.any(lo > hi):
+        if (lo > hi).any():
             i = _first_index(lo > hi)
             raise BoundsError(
                 f"lower: expected lower <= upper, got lower {float(lo[i])!r} > upper {float(hi[i])!r} at index {i}"
@@ -444,7 +473,7 @@ class Interval:
         c = np.asarray(other, dtype=float)
         with np.errstate(invalid="ignore"):
             a, b = c * self.lower, c * self.upper
-        if not np.isfinite(np.sum(c) + np.sum(self.lower) + np.sum(self.upper)):  # an infinite end: 0 * inf = 0
+        if not np.isfinite(a.sum() + b.sum()):  # an infinite end: 0 * inf = 0
             a, b = np.where(np.isnan(a), 0.0, a), np.where(np.isnan(b), 0.0, b)
         return Interval._raw(*round_outward(np.minimum(a, b), np.maximum(a, b)))
 

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.lpv import CertifiedVertexBounds, certify_vertex_extremes
 from ..errors import AssumptionError, BoundsError
+from ..interval import Interval, product_bounds
 from ..simulate import runge_kutta_step
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_vector
@@ -152,29 +153,6 @@ def _fast_factory(nominal: tuple[float, float, float]) -> Any:
         return out
 
     return fast
-
-
-def _imul(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
-    return np.minimum(np.minimum(p1, p2), np.minimum(p3, p4)), np.maximum(np.maximum(p1, p2), np.maximum(p3, p4))
-
-
-def _icos(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Range of cos over [lo, hi] (widened by 4 ulp of 1 for the libm error)."""
-    clo, chi = np.cos(lo), np.cos(hi)
-    vlo, vhi = np.minimum(clo, chi), np.maximum(clo, chi)
-    two_pi = 2 * np.pi
-    has_max = np.ceil(lo / two_pi) * two_pi <= hi
-    has_min = np.ceil((lo - np.pi) / two_pi) * two_pi + np.pi <= hi
-    wide = hi - lo >= two_pi
-    vhi = np.where(has_max | wide, 1.0, vhi)
-    vlo = np.where(has_min | wide, -1.0, vlo)
-    pad = 1e-15
-    return np.maximum(vlo - pad, -1.0), np.minimum(vhi + pad, 1.0)
-
-
-def _isin(lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    return _icos(lo - np.pi / 2, hi - np.pi / 2)
 
 
 def reference(t: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -607,12 +585,10 @@ class ManipulatorModel(SampledLPVModel):
         hi[..., :2] = y[..., :2] + np.maximum(0.0, h * (w + dw))
         return lo, hi
 
-    def _trig(self, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        plo = lo[..., 1] - hi[..., 0]
-        phi = hi[..., 1] - lo[..., 0]
-        klo, khi = _icos(plo, phi)
-        slo, shi = _isin(plo, phi)
-        return klo, khi, slo, shi
+    @staticmethod
+    def _phase(lo: FloatArray, hi: FloatArray) -> Interval:
+        """Range of :math:`q_2 - q_1` over a box of states."""
+        return Interval._raw(lo[..., 1] - hi[..., 0], hi[..., 1] - lo[..., 0])
 
     def rx_bounds(self, x_lower: FloatArray, x_upper: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Bounds of :math:`R(\\vartheta)x = (M(\\phi)\\dot q, q)` over a box of states.
@@ -626,11 +602,13 @@ class ManipulatorModel(SampledLPVModel):
         -------
         lower, upper : numpy.ndarray, shape (M, 4)
         """
+        return self._rx(np.cos(self._phase(x_lower, x_upper)), x_lower, x_upper)
+
+    def _rx(self, kappa: Interval, x_lower: FloatArray, x_upper: FloatArray) -> tuple[FloatArray, FloatArray]:
         a, b, c = self.nominal
-        klo, khi, _, _ = self._trig(x_lower, x_upper)
         w1l, w1h, w2l, w2h = x_lower[..., 2], x_upper[..., 2], x_lower[..., 3], x_upper[..., 3]
-        p12 = _imul(b * klo, b * khi, w2l, w2h)
-        p21 = _imul(b * klo, b * khi, w1l, w1h)
+        p12 = product_bounds(b * kappa.lower, b * kappa.upper, w2l, w2h)
+        p21 = product_bounds(b * kappa.lower, b * kappa.upper, w1l, w1h)
         lo = np.stack([a * w1l + p12[0], p21[0] + c * w2l, x_lower[..., 0], x_lower[..., 1]], axis=-1)
         hi = np.stack([a * w1h + p12[1], p21[1] + c * w2h, x_upper[..., 0], x_upper[..., 1]], axis=-1)
         return lo, hi
@@ -661,32 +639,27 @@ class ManipulatorModel(SampledLPVModel):
         -------
         StepEnclosure
         """
-        a, b, c = self.nominal
+        b = self.nominal[1]
         flo, fhi = self.flow_box(x_lower, x_upper, y, u, h)
-        klo, khi, slo, shi = self._trig(flo, fhi)
+        phase = self._phase(flo, fhi)
+        kappa, sigma = np.cos(phase), np.sin(phase)
         w1l, w1h, w2l, w2h = flo[..., 2], fhi[..., 2], flo[..., 3], fhi[..., 3]
-        # R x
-        p12 = _imul(b * klo, b * khi, w2l, w2h)
-        p21 = _imul(b * klo, b * khi, w1l, w1h)
-        rx_lo, rx_hi = np.empty_like(flo), np.empty_like(fhi)
-        rx_lo[..., 0], rx_hi[..., 0] = a * w1l + p12[0], a * w1h + p12[1]
-        rx_lo[..., 1], rx_hi[..., 1] = p21[0] + c * w2l, p21[1] + c * w2h
-        rx_lo[..., 2:], rx_hi[..., 2:] = flo[..., :2], fhi[..., :2]
+        rx_lo, rx_hi = self._rx(kappa, flo, fhi)
         # known rate
-        ww = _imul(w1l, w1h, w2l, w2h)
-        sw = _imul(b * slo, b * shi, ww[0], ww[1])
+        ww = product_bounds(w1l, w1h, w2l, w2h)
+        sw = product_bounds(b * sigma.lower, b * sigma.upper, ww[0], ww[1])
         rate_lo, rate_hi = np.empty_like(flo), np.empty_like(fhi)
         rate_lo[..., 0], rate_hi[..., 0] = sw[0] + u[..., 0], sw[1] + u[..., 0]
         rate_lo[..., 1], rate_hi[..., 1] = u[..., 1] - sw[1], u[..., 1] - sw[0]
         rate_lo[..., 2:], rate_hi[..., 2:] = flo[..., 2:], fhi[..., 2:]
         # rotated uncertainty
-        g_lo, g_hi = self.bounds.evaluate(klo, khi, select=range(8), fast=self._fast)
-        f3 = _imul(slo, shi, w1l, w1h)
-        f4 = _imul(slo, shi, w2l, w2h)
-        shape = klo.shape
+        g_lo, g_hi = self.bounds.evaluate(kappa.lower, kappa.upper, select=range(8), fast=self._fast)
+        f3 = product_bounds(sigma.lower, sigma.upper, w1l, w1h)
+        f4 = product_bounds(sigma.lower, sigma.upper, w2l, w2h)
+        shape = kappa.shape
         al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
         for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
-            al[..., i, j], ah[..., i, j] = _imul(f[0], f[1], g_lo[e], g_hi[e])
+            al[..., i, j], ah[..., i, j] = product_bounds(f[0], f[1], g_lo[e], g_hi[e])
         bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
         bl[..., :2, :] = g_lo[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
         bh[..., :2, :] = g_hi[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
