@@ -6,7 +6,7 @@ from hypothesis.extra.numpy import arrays
 
 from intervalobs import BoundsError, DimensionError, Interval, interval_matvec_bounds, matvec_bounds, neg, pos
 from intervalobs.errors import AssumptionError
-from intervalobs.interval import ROUNDING_MARGIN, inflate, recursion_margin, round_outward
+from intervalobs.interval import ROUNDING_MARGIN, inflate, recursion_margin, round_outward, sandwich_bounds
 
 finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 
@@ -234,3 +234,20 @@ def test_inflate_keeps_structural_zeros_only_when_asked():
     assert inflate(-0.0, 0.0, floor=0.0)[1] == 0.0
     _, high = inflate(np.array([1.0]), np.array([2.0]), scale=np.array([10.0]))
     assert high[0] - 2.0 == pytest.approx(10.0 * ROUNDING_MARGIN, rel=1e-3)
+
+
+@settings(max_examples=40, deadline=None)
+@given(arrays(float, (2, 3), elements=finite), box_strategy(12), arrays(float, (4, 2), elements=finite))
+def test_sandwich_bounds_enclose_vertex_products_and_batched_matvec_agrees(p, j_box, q):
+    j_lo, j_hi = j_box[0].reshape(3, 4), j_box[1].reshape(3, 4)
+    low, high = sandwich_bounds(p, j_lo, j_hi, q)
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        j = np.where(rng.integers(0, 2, size=(3, 4)) == 1, j_hi, j_lo)
+        value = p @ j @ q
+        assert np.all(low <= value + 1e-9 * (1 + np.abs(value))) and np.all(value <= high + 1e-9 * (1 + np.abs(value)))
+    # a matrix with a leading axis applies to the vectors of the same index
+    stack = np.stack([p, -p])
+    lo_b, _ = matvec_bounds(stack, j_lo[:, :2].T, j_hi[:, :2].T)
+    for i in range(2):
+        np.testing.assert_allclose(lo_b[i], matvec_bounds(stack[i], j_lo[:, i], j_hi[:, i])[0], atol=1e-12)

@@ -71,6 +71,7 @@ __all__ = [
     "product_bounds",
     "recursion_margin",
     "round_outward",
+    "sandwich_bounds",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -234,8 +235,8 @@ def matvec_bounds(a: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
 
     Parameters
     ----------
-    a : array_like, shape (m, n)
-        Point matrix.
+    a : array_like, shape (m, n) or (..., m, n)
+        Point matrix; a matrix with leading axes is applied to the vectors of the same leading index.
     lower, upper : array_like, shape (..., n)
         Interval vector; leading axes (time, runs) are carried through.
 
@@ -247,7 +248,41 @@ def matvec_bounds(a: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)
     ap, an = pos(a), neg(a)
+    if a.ndim > 2:
+        rows = "...ij,...j->...i"
+        return (
+            np.einsum(rows, ap, lo) - np.einsum(rows, an, hi),
+            np.einsum(rows, ap, hi) - np.einsum(rows, an, lo),
+        )
     return lo @ ap.T - hi @ an.T, hi @ ap.T - lo @ an.T
+
+
+def sandwich_bounds(
+    p: ArrayLike, j_lower: ArrayLike, j_upper: ArrayLike, q: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    r"""Bounds of :math:`PJQ` for point matrices :math:`P, Q` and an interval matrix :math:`J` (round to nearest).
+
+    :func:`matvec_bounds` twice: first :math:`PJ` column by column (exact), then its rows times :math:`Q`
+    (the hull of the interval rows' images, exact for each entry separately).
+
+    Parameters
+    ----------
+    p : array_like, shape (..., r, j)
+        Left point matrix (leading axes allowed).
+    j_lower, j_upper : array_like, shape (..., j, k)
+        Interval matrix.
+    q : array_like, shape (k, c)
+        Right point matrix.
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (..., r, c)
+    """
+    pa = np.asarray(p, dtype=float)
+    jl = np.swapaxes(np.asarray(j_lower, dtype=float), -1, -2)
+    jh = np.swapaxes(np.asarray(j_upper, dtype=float), -1, -2)
+    cols_lo, cols_hi = matvec_bounds(pa[..., None, :, :], jl, jh)  # (..., k, r): the columns of PJ
+    return matvec_bounds(np.asarray(q, dtype=float).T, np.swapaxes(cols_lo, -1, -2), np.swapaxes(cols_hi, -1, -2))
 
 
 def interval_matvec_bounds(

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import AssumptionError
-from ..interval import inflate, interval_matvec_bounds, matvec_bounds, neg, pos
+from ..interval import inflate, interval_matvec_bounds, matvec_bounds, sandwich_bounds
 from ..systems.nonlinear import NonlinearSystem
 from .mixed_monotone import jacobian_bounds, jacobian_decomposition_parts
 
@@ -23,24 +23,6 @@ __all__ = ["ComposedRange"]
 
 FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
-
-
-def _mat_bounds(P: FloatArray, lo: FloatArray, hi: FloatArray) -> BoxPair:
-    """Bounds of ``P @ x`` for x in [lo, hi]; ``P`` may carry leading axes (..., r, c)."""
-    pp, pn = pos(P), neg(P)
-    return (
-        np.einsum("...ij,...j->...i", pp, lo) - np.einsum("...ij,...j->...i", pn, hi),
-        np.einsum("...ij,...j->...i", pp, hi) - np.einsum("...ij,...j->...i", pn, lo),
-    )
-
-
-def _sandwich(P: FloatArray, lo: FloatArray, hi: FloatArray, Q: FloatArray) -> BoxPair:
-    """Bounds of ``P @ J @ Q`` for point ``P`` (may carry leading axes), interval ``J`` and point ``Q``."""
-    pp, pn = pos(P), neg(P)
-    alo = np.einsum("...ij,...jk->...ik", pp, lo) - np.einsum("...ij,...jk->...ik", pn, hi)
-    ahi = np.einsum("...ij,...jk->...ik", pp, hi) - np.einsum("...ij,...jk->...ik", pn, lo)
-    qp, qn = pos(Q), neg(Q)
-    return alo @ qp - ahi @ qn, ahi @ qp - alo @ qn
 
 
 class ComposedRange:
@@ -114,7 +96,7 @@ class ComposedRange:
         """
         xlo, xhi = matvec_bounds(self.Zinv, zlo, zhi)
         jlo, jhi = self._fg_jacobian(xlo, xhi)
-        return _sandwich(Phi, jlo, jhi, self.Zinv)
+        return sandwich_bounds(Phi, jlo, jhi, self.Zinv)
 
     def global_jacobian(self, Phi: FloatArray) -> BoxPair | None:
         r"""Bounds of the Jacobian of :math:`\psi` with respect to z on the whole space.
@@ -131,7 +113,7 @@ class ComposedRange:
         """
         if self.global_fg is None:
             return None
-        return _sandwich(Phi, *self.global_fg, self.Zinv)
+        return sandwich_bounds(Phi, *self.global_fg, self.Zinv)
 
     def _decomposition(
         self, Phi: FloatArray, zlo: FloatArray, zhi: FloatArray, jlo: FloatArray, jhi: FloatArray
@@ -147,7 +129,7 @@ class ComposedRange:
         xlo, xhi = matvec_bounds(self.Zinv, zlo, zhi)
         flo, fhi = self.system.f_range(xlo, xhi)
         glo, ghi = self.system.g_range(xlo, xhi)
-        low, high = _mat_bounds(Phi, np.concatenate([flo, glo], -1), np.concatenate([fhi, ghi], -1))
+        low, high = matvec_bounds(Phi, np.concatenate([flo, glo], -1), np.concatenate([fhi, ghi], -1))
         low, high = inflate(low, high)
         jlo, jhi = self.jacobian(Phi, zlo, zhi)
         if not (np.all(np.isfinite(jlo)) and np.all(np.isfinite(jhi))):

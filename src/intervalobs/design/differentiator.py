@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import BoundsError, DataError, DimensionError
+from ..interval import inflate
 from ..validation import as_time, as_vector
 
 __all__ = [
@@ -284,10 +285,12 @@ def difference_pair_bounds(
     lower, upper : numpy.ndarray, shape (..., p)
     """
     centre = (y_now - y_prev) / h
-    fuzz = 8 * _UNIT_ROUNDOFF * (np.abs(centre) + (np.abs(y_now) + np.abs(y_prev)) / h)
-    radius = (rate + 0.5 * accel * (h + step_tolerance)) * (1 + 1e-12)
-    radius = radius + np.abs(centre) * (step_tolerance / (h - step_tolerance)) * (1 + 1e-12) + fuzz
-    return centre - radius, centre + radius
+    # the radius is a few rounded operations on nonnegative terms: rounded up like every design constant
+    _, radius = inflate(0.0, rate + 0.5 * accel * (h + step_tolerance), floor=0.0)
+    _, radius = inflate(0.0, radius + np.abs(centre) * (step_tolerance / (h - step_tolerance)), floor=0.0)
+    # the centre's own rounding: a difference and a quotient, relative to the measurements' size
+    fuzz_scale = np.abs(centre) + (np.abs(y_now) + np.abs(y_prev)) / h
+    return inflate(centre - radius, centre + radius, margin=8 * _UNIT_ROUNDOFF, scale=fuzz_scale, floor=0.0)
 
 
 def settling_time(t: ArrayLike, error: ArrayLike, bound: ArrayLike) -> float:

@@ -138,7 +138,7 @@ def lipschitz_bound(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
         One bound per leading index.
     """
     bound = np.maximum(np.abs(np.asarray(j_lower, dtype=float)), np.abs(np.asarray(j_upper, dtype=float)))
-    return np.asarray(np.linalg.norm(bound, ord=2, axis=(-2, -1)) * (1 + 1e-12))
+    return inflate(0.0, np.linalg.norm(bound, ord=2, axis=(-2, -1)), floor=0.0)[1]
 
 
 def jacobian_decomposition_parts(j_lower: ArrayLike, j_upper: ArrayLike) -> tuple[BoolArray, FloatArray]:
@@ -333,7 +333,7 @@ class JacobianDecomposition:
     @property
     def lipschitz_width(self) -> float:
         """:math:`\\|W_q\\|_2`."""
-        return float(np.linalg.norm(self.W, ord=2) * (1 + 1e-12))
+        return float(inflate(0.0, np.linalg.norm(self.W, ord=2), floor=0.0)[1])
 
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         r"""Evaluate :math:`q_d(x, y)` (no rounding margin; for analysis and tests).

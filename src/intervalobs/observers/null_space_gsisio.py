@@ -50,11 +50,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design.composed_range import ComposedRange, _mat_bounds, _sandwich
+from ..design.composed_range import ComposedRange
 from ..design.mixed_monotone import jacobian_bounds, width_matrix
 from ..errors import AssumptionError, DimensionError
 from ..inclusion import evaluate_matrix
-from ..interval import inflate, matvec_bounds
+from ..interval import inflate, matvec_bounds, sandwich_bounds
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import check_no_kwargs
@@ -305,7 +305,7 @@ class NullSpaceGSISIO(Observer):
         if h > 0:
             inf = np.full(n, np.inf)
             jg_lo, jg_hi = jacobian_bounds(g_jac, -inf, inf, (p, n), "g_jacobian")
-            self.slope = _sandwich(self.U2.T, jg_lo, jg_hi, self.E_t)  # (r2, h)
+            self.slope = sandwich_bounds(self.U2.T, jg_lo, jg_hi, self.E_t)  # (r2, h)
             mid = 0.5 * (self.slope[0] + self.slope[1])
             candidates: list[FloatArray] = [np.asarray(np.linalg.pinv(mid), dtype=float)]
             for rows in list(combinations(range(r2), h))[:20]:
@@ -315,7 +315,7 @@ class NullSpaceGSISIO(Observer):
                     chosen[:, list(rows)] = np.linalg.inv(block)
                     candidates.append(chosen)
             for candidate in candidates:
-                m_lo, m_hi = _sandwich(candidate, self.slope[0], self.slope[1], np.eye(h))
+                m_lo, m_hi = sandwich_bounds(candidate, self.slope[0], self.slope[1], np.eye(h))
                 inverse = _h_matrix_inverse(m_lo, m_hi)
                 if inverse is not None:
                     self.preconditioners.append(candidate)
@@ -398,7 +398,7 @@ class NullSpaceGSISIO(Observer):
         """Bounds of the preconditioned d-free outputs P U2' g(x_k), stacked over the preconditioners."""
         base = (y - u @ self.system.D.T) @ self.U2
         vlo, vhi = matvec_bounds(self.U2.T, *self.bounds.v)
-        return _mat_bounds(self._p_stack, base - vhi, base - vlo)
+        return matvec_bounds(self._p_stack, base - vhi, base - vlo)
 
     def _correct_t(
         self, a_lo: FloatArray, a_hi: FloatArray, y: FloatArray, u: FloatArray, prior: BoxPair | None, guess: FloatArray
@@ -449,7 +449,7 @@ class NullSpaceGSISIO(Observer):
         t_lo, t_hi = np.maximum(t_lo, g_lo), np.minimum(t_hi, g_hi)
         if prior is not None:
             t_lo, t_hi = np.maximum(t_lo, prior[0]), np.minimum(t_hi, prior[1])
-        m_glob = [_sandwich(P, self.slope[0], self.slope[1], np.eye(h)) for P in self.preconditioners]
+        m_glob = [sandwich_bounds(P, self.slope[0], self.slope[1], np.eye(h)) for P in self.preconditioners]
         for _ in range(self.newton_steps):
             before = (t_lo.copy(), t_hi.copy())
             c = 0.5 * (t_lo + t_hi)
@@ -679,7 +679,7 @@ class NullSpaceGSISIO(Observer):
         for i, ell in enumerate(ells):
             psi_lo, psi_hi = lo[..., i * na : (i + 1) * na], hi[..., i * na : (i + 1) * na]
             known = u @ (self.R @ sysm.B).T + np.einsum("...ij,...j->...i", ell, ydu)
-            vlo, vhi = _mat_bounds(-ell, v_lo, v_hi)
+            vlo, vhi = matvec_bounds(-ell, v_lo, v_hi)
             c_lo, c_hi = inflate(psi_lo + known + rbw[0] + vlo, psi_hi + known + rbw[1] + vhi)
             a_lo, a_hi = np.maximum(a_lo, c_lo), np.minimum(a_hi, c_hi)
         off = len(ells) * na
@@ -718,7 +718,7 @@ class NullSpaceGSISIO(Observer):
             d2_lo = np.full(t_lo.shape, -np.inf)
             d2_hi = np.full(t_lo.shape, np.inf)
             for kap, (c_lo, c_hi) in chi_rows:
-                kv_lo, kv_hi = _mat_bounds(kap, v_lo, v_hi)
+                kv_lo, kv_hi = matvec_bounds(kap, v_lo, v_hi)
                 ky = np.einsum("...ij,...j->...i", kap, ydu)
                 lo_j = t_lo - sbu - c_hi - ky + kv_lo - sw[1]
                 hi_j = t_hi - sbu - c_lo - ky + kv_hi - sw[0]
