@@ -30,14 +30,19 @@ copyright = "2026, the intervalobs developers"
 release = version = intervalobs.__version__
 
 extensions = [
-    "myst_parser",
+    "myst_nb",  # MyST markdown pages (it includes myst_parser) and the notebooks, executed on every build
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "numpydoc",
 ]
-source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build"]
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "jupyter_execute", "**.ipynb_checkpoints"]
+
+# Notebooks (docs/notebooks) are stored without outputs and executed on every build; an error fails it.
+nb_execution_mode = "force"
+nb_execution_raise_on_error = True
+nb_execution_timeout = 600
 root_doc = "index"
 
 # MyST: GitHub-style markdown (the pages are also read on GitHub), anchors for ## headings.
