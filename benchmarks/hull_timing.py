@@ -36,7 +36,7 @@ def main() -> None:
         for name, horizon, options in CASES:
             best = float("inf")
             for _ in range(REPEATS if horizon is not None else 1):
-                estimator = HullEstimator(system, bounds, horizon=horizon, **options)
+                estimator = HullEstimator.design(system, bounds, horizon=horizon, **options)
                 start = time.perf_counter()
                 result = estimator.run(t, sim.y, u)
                 best = min(best, time.perf_counter() - start)

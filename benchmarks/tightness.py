@@ -87,8 +87,8 @@ def ratios() -> dict[str, Any]:
         filtered: dict[str, list[float]] = {}
         for seed in (0, 1, 2):
             sim = record(system, bounds, t, u, kind, seed)
-            hull = HullEstimator(system, bounds, horizon=50).run(t, sim.y, u)
-            filt = HullEstimator(system, bounds, horizon=50, filtered=True).run(t, sim.y, u)
+            hull = HullEstimator.design(system, bounds, horizon=50).run(t, sim.y, u)
+            filt = HullEstimator.design(system, bounds, horizon=50, filtered=True).run(t, sim.y, u)
             ref = mean_width(hull.lower, hull.upper)
             rows.setdefault("hull (predicted, y_0..y_{k-1}): mean width", []).append(ref)
             rows.setdefault("hull (filtered, y_0..y_k): mean width", []).append(mean_width(filt.lower, filt.upper))
@@ -116,8 +116,8 @@ def bank_tradeoff() -> dict[str, Any]:
     """Learned FIR bank on (68), i.i.d. vertex noise: training size and bank size against tightness and cost."""
     system, bounds, t, u = nominal_68()
     sims = [record(system, bounds, t, u, "iid-vertex", seed) for seed in (0, 1, 2)]
-    predicted = [HullEstimator(system, bounds, horizon=50).run(t, sim.y, u) for sim in sims]
-    filtered = [HullEstimator(system, bounds, horizon=50, filtered=True).run(t, sim.y, u) for sim in sims]
+    predicted = [HullEstimator.design(system, bounds, horizon=50).run(t, sim.y, u) for sim in sims]
+    filtered = [HullEstimator.design(system, bounds, horizon=50, filtered=True).run(t, sim.y, u) for sim in sims]
     out: dict[str, Any] = {}
     for window in (10, 20):
         for records in (2, 6, 12):
@@ -149,7 +149,7 @@ def lp_costs() -> dict[str, Any]:
     costs: dict[str, Any] = {}
     widths = {}
     for horizon in (10, 40, 50, None):
-        est = HullEstimator(system, bounds, horizon=horizon)
+        est = HullEstimator.design(system, bounds, horizon=horizon)
         start = time.perf_counter()
         result = est.run(t, sim.y, u)
         elapsed = time.perf_counter() - start
@@ -163,16 +163,18 @@ def lp_costs() -> dict[str, Any]:
         fir = FiniteMemoryObserver.design(system, bounds, window=N)
         costs[f"FIR N={N} design s (total / LPs)"] = [round(time.perf_counter() - start, 4), round(fir.lp_seconds, 4)]
         costs[f"FIR N={N} run us/step (incl. tube fallback)"] = round(1e3 * _timed(fir, t, sim, u), 3)
-    est = HullEstimator(system, bounds, horizon=40, window_boxes=True)
+    est = HullEstimator.design(system, bounds, horizon=40, window_boxes=True)
     start = time.perf_counter()
     est.run(t, sim.y, u)
     costs["hull H=40 window_boxes ms/step"] = round(1e3 * (time.perf_counter() - start) / t.size, 3)
     for kind in ("extreme", "iid-vertex"):  # workers=2: two HiGHS instances in parallel threads (2 cores here)
         noisy = record(system, bounds, t, u, kind, 0)
         for workers in (1, 2):
-            hull = HullEstimator(system, bounds, horizon=40, workers=workers)
+            hull = HullEstimator.design(system, bounds, horizon=40, workers=workers)
             costs[f"hull H=40 workers={workers} ms/step ({kind})"] = _timed(hull, t, noisy, u)
-    costs["hull H=40 filtered ms/step"] = _timed(HullEstimator(system, bounds, horizon=40, filtered=True), t, sim, u)
+    costs["hull H=40 filtered ms/step"] = _timed(
+        HullEstimator.design(system, bounds, horizon=40, filtered=True), t, sim, u
+    )
     costs["scipy linprog, H=40, 6 LPs ms/step"] = round(_linprog_window(system, sim.y, u, 40), 3)
     plain = IntervalObserver(system, bounds, PAPER_GAIN, method="framer")
     costs["interval framer run us/step"] = round(1e3 * _timed(plain, t, sim, u), 3)

@@ -138,7 +138,7 @@ def test_learned_bank_is_between_the_hull_and_the_worst_case_filter(observers: d
     for seed in (5, 6):
         sim = vertex_record(system, bounds, t, u, seed, 1)
         y = sim.y[0]
-        exact = HullEstimator(system, bounds, horizon=None).run(t, y, u)
+        exact = HullEstimator.design(system, bounds, horizon=None).run(t, y, u)
         learned, alone = bank.run(t, y, u), worst.run(t, y, u)
         assert learned.enclosure(sim.x[0]).max_violation == 0.0
         # Never tighter than the exact hull (every sound box contains it), never wider than its own first filter.
@@ -156,13 +156,13 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
     t = np.arange(30, dtype=float)
     u = np.zeros((30, 1))
     sim = simulate(system, bounds, t, noise="extreme", seed=2)
-    hull = HullEstimator(system, bounds, horizon=6)
+    hull = HullEstimator.design(system, bounds, horizon=6)
     boxes = hull.run(t, sim.y, sim.u)
     lp = hull._condensed
     assert lp is not None
     k = 20
     lp.dual_log = []
-    drive, pad = lp.set_window(k, sim.y, u, boxes.lower[k - 6], boxes.upper[k - 6], False)
+    drive, pad = lp.set_window(k, sim.y[k - 6 :], u[k - 6 :], boxes.lower[k - 6], boxes.upper[k - 6], False)
     minima = dict(zip([1.0, -1.0], lp.certified_bounds(99), strict=True))  # min of sign * (x_k - q)
     duals = {(i, sign): dual for i, sign, dual in lp.dual_log}
     for i in range(3):
@@ -217,7 +217,7 @@ def test_filtered_bank_uses_the_current_measurement() -> None:
         est = filtered.run(t, sim.y, u)
         report = est.enclosure(sim.x)
         assert report.max_violation == 0.0 and report.fraction == 1.0
-        exact = HullEstimator(system, bounds, horizon=None, filtered=True).run(t, sim.y[0], u)
+        exact = HullEstimator.design(system, bounds, horizon=None, filtered=True).run(t, sim.y[0], u)
         assert np.all(est.lower[0] <= exact.lower + 1e-7) and np.all(est.upper[0] >= exact.upper - 1e-7)
         widths.append([est.width()[:, 20:].mean(), predicted.run(t, sim.y, u).width()[:, 20:].mean()])
         # step: the state's box is the prediction, internal["filtered_*"] is row k
@@ -243,7 +243,7 @@ def test_learned_bank_with_shared_noise_channels() -> None:
         est = bank.run(t, sim.y, u)
         report = est.enclosure(sim.x)
         assert report.max_violation == 0.0 and report.fraction == 1.0
-        exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y, u)
+        exact = HullEstimator.design(system, bounds, horizon=None).run(t, sim.y, u)
         assert np.all(est.lower <= exact.lower + 1e-7) and np.all(est.upper >= exact.upper - 1e-7)
         fallback = bank.fallback.run(t, sim.y, u)
         assert est.width()[20:].mean() < 0.8 * fallback.width()[20:].mean()

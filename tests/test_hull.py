@@ -41,7 +41,7 @@ def test_hull_encloses_truth_under_extreme_noise(seed: int) -> None:
     u = np.sin(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=seed)
     for filtered in (False, True):
-        est = HullEstimator(system, bounds, horizon=10, filtered=filtered).run(t, sim.y, u)
+        est = HullEstimator.design(system, bounds, horizon=10, filtered=filtered).run(t, sim.y, u)
         report = est.enclosure(sim.x)
         assert report.max_violation == 0.0 and report.fraction == 1.0
 
@@ -51,7 +51,7 @@ def test_hull_continuous_time_sound_with_switching_noise() -> None:
     h = 0.1
     t = np.arange(30) * h
     sim = simulate(system, bounds, t, noise="extreme", seed=5, substeps=10)
-    est = HullEstimator(system, bounds, horizon=8, h=h).run(t, sim.y, sim.u)
+    est = HullEstimator.design(system, bounds, horizon=8, h=h).run(t, sim.y, sim.u)
     assert est.enclosure(sim.x).max_violation == 0.0
 
 
@@ -60,7 +60,7 @@ def test_hull_inside_every_sound_observer(seed: int) -> None:
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=seed)
-    hull = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
+    hull = HullEstimator.design(system, bounds, horizon=None).run(t, sim.y, sim.u)
     observers = {
         "tube": IntervalObserver.design(system, bounds),
         "framer": IntervalObserver.design(system, bounds, method="framer"),
@@ -80,8 +80,8 @@ def test_short_horizon_is_sound_and_contains_the_exact_hull(horizon: int, window
     system, bounds = small_discrete()
     t = np.arange(STEPS, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=7)
-    exact = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
-    windowed = HullEstimator(system, bounds, horizon=horizon, window_boxes=window_boxes).run(t, sim.y, sim.u)
+    exact = HullEstimator.design(system, bounds, horizon=None).run(t, sim.y, sim.u)
+    windowed = HullEstimator.design(system, bounds, horizon=horizon, window_boxes=window_boxes).run(t, sim.y, sim.u)
     assert windowed.enclosure(sim.x).max_violation == 0.0
     tol = SLACK * scale(exact.lower, exact.upper)
     assert np.all(windowed.lower <= exact.lower + tol)
@@ -92,8 +92,8 @@ def test_full_horizon_is_exact_and_certificate_is_tight() -> None:
     system, bounds = small_discrete()
     t = np.arange(25, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=3)
-    full = HullEstimator(system, bounds, horizon=None).run(t, sim.y, sim.u)
-    long_window = HullEstimator(system, bounds, horizon=30).run(t, sim.y, sim.u)
+    full = HullEstimator.design(system, bounds, horizon=None).run(t, sim.y, sim.u)
+    long_window = HullEstimator.design(system, bounds, horizon=30).run(t, sim.y, sim.u)
     np.testing.assert_allclose(full.lower, long_window.lower, atol=1e-7)
     np.testing.assert_allclose(full.upper, long_window.upper, atol=1e-7)
     # The certified bound is outward of the exact optimum by at most the solver's tolerance.
@@ -128,25 +128,48 @@ def test_full_horizon_is_exact_and_certificate_is_tight() -> None:
     assert full.lower[k, 0] >= res.fun - 1e-6
 
 
-def test_run_matches_repeated_step() -> None:
+@pytest.mark.parametrize(
+    ("horizon", "options"),
+    [(4, {}), (4, {"filtered": True}), (4, {"window_boxes": True}), (None, {"filtered": True})],
+    ids=["condensed", "condensed-filtered", "window-lp", "full-history"],
+)
+def test_run_matches_repeated_step(horizon: int | None, options: dict[str, bool]) -> None:
     system, bounds = small_discrete()
     t = np.arange(15, dtype=float)
     u = np.cos(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=2)
-    for filtered in (False, True):
-        est = HullEstimator(system, bounds, horizon=4, filtered=filtered).run(t, sim.y, u)
-        stepper = HullEstimator(system, bounds, horizon=4, filtered=filtered)
-        state = stepper.init()
-        for k in range(t.size):
-            nxt = stepper.step(state, sim.y[k], u[k])
-            lo, hi = (
-                (nxt.internal["filtered_lower"], nxt.internal["filtered_upper"])
-                if filtered
-                else (state.lower, state.upper)
-            )
-            np.testing.assert_allclose(lo, est.lower[k], atol=1e-9)
-            np.testing.assert_allclose(hi, est.upper[k], atol=1e-9)
-            state = nxt
+    est = HullEstimator.design(system, bounds, horizon=horizon, **options).run(t, sim.y, u)
+    stepper = HullEstimator.design(system, bounds, horizon=horizon, **options)
+    assert est.meta["rows"] == stepper.rows == ("filtered" if options.get("filtered") else "predicted")
+    state = stepper.init()
+    rows = [] if stepper.rows == "filtered" else [state]
+    for k in range(t.size - len(rows)):
+        state = stepper.step(state, sim.y[k], u[k])
+        rows.append(state)
+    np.testing.assert_allclose(est.lower, [r.lower for r in rows], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(est.upper, [r.upper for r in rows], rtol=0, atol=1e-12)
+
+
+def test_step_keeps_the_last_horizon_samples_only() -> None:
+    """Time and memory per step do not grow with k: the state holds ``horizon`` rows at every step."""
+    import time
+
+    system, bounds = small_discrete()
+    t = np.arange(1001, dtype=float)
+    u = np.cos(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=5)
+    stepper = HullEstimator.design(system, bounds, horizon=5)
+    state, sizes, seconds = stepper.init(), {}, np.zeros(t.size)
+    for k in range(t.size):
+        clock = time.perf_counter()
+        state = stepper.step(state, sim.y[k], u[k])
+        seconds[k] = time.perf_counter() - clock
+        if k + 1 in (10, 1000):
+            sizes[k + 1] = {key: np.shape(value) for key, value in state.internal.items() if key != "x0"}
+            assert state.internal["start"] == k + 1 - 5
+    assert sizes[10] == sizes[1000] and sizes[10]["y"] == (5, 1) and sizes[10]["box_lo"] == (5, 3)
+    # the median over 50 steps: late steps cost what early ones cost (a record rebuilt every step would not)
+    assert np.median(seconds[950:1000]) < 3.0 * np.median(seconds[10:60])
 
 
 def test_general_noise_matrices_use_noise_variables() -> None:
@@ -157,7 +180,7 @@ def test_general_noise_matrices_use_noise_variables() -> None:
     bounds = Bounds((-np.ones(2), np.ones(2)), w=([-0.1], [0.1]), v=([-0.05, -0.05], [0.05, 0.05]))
     t = np.arange(30, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=4)
-    est = HullEstimator(system, bounds, horizon=6).run(t, sim.y, sim.u)
+    est = HullEstimator.design(system, bounds, horizon=6).run(t, sim.y, sim.u)
     assert est.enclosure(sim.x).max_violation == 0.0
     obs = IntervalObserver.design(system, bounds).run(t, sim.y, sim.u)
     assert np.all(obs.lower <= est.lower + SLACK) and np.all(obs.upper >= est.upper - SLACK)
@@ -166,7 +189,7 @@ def test_general_noise_matrices_use_noise_variables() -> None:
 def test_interval_dA_is_refused() -> None:
     system, bounds = random_system(1, 2, 1, continuous=False, uncertain=True)
     with pytest.raises(AssumptionError, match="hull_lower_bound"):
-        HullEstimator(system, bounds)
+        HullEstimator.design(system, bounds)
 
 
 def test_lower_bound_is_inside_sound_observers_and_not_an_estimate() -> None:
@@ -185,7 +208,7 @@ def test_lower_bound_is_inside_sound_observers_and_not_an_estimate() -> None:
     assert np.all(est.lower[ok] <= bound.lower[ok]) and np.all(est.upper[ok] >= bound.upper[ok])
     # With the true ΔA alone, the inner hull lies inside the (outer, certified) hull of that model.
     alone = hull_lower_bound(uncertain, bounds, t, sim.y, sim.u, samples=0, horizon=10, truth=(sim.dA, sim.x))
-    exact_known = HullEstimator(
+    exact_known = HullEstimator.design(
         LTISystem(system.A + sim.dA, system.C, B=system.B, E=system.E, F=system.F, dt=1.0), bounds, horizon=None
     ).run(t, sim.y, sim.u)
     assert np.all(alone.lower >= exact_known.lower - SLACK) and np.all(alone.upper <= exact_known.upper + SLACK)
@@ -197,9 +220,9 @@ def test_condensed_window_agrees_with_the_sparse_window() -> None:
     t = np.arange(STEPS, dtype=float)
     u = np.sin(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=9)
-    condensed = HullEstimator(system, bounds, horizon=6)
+    condensed = HullEstimator.design(system, bounds, horizon=6)
     assert condensed.meta()["condensed"]
-    sparse_form = HullEstimator(system, bounds, horizon=6)
+    sparse_form = HullEstimator.design(system, bounds, horizon=6)
     sparse_form._condensed = None  # same LP (prior box only), states kept as variables
     a, b = condensed.run(t, sim.y, u), sparse_form.run(t, sim.y, u)
     assert a.enclosure(sim.x).max_violation == 0.0
@@ -217,9 +240,9 @@ def test_condensed_window_agrees_with_the_sparse_window_on_random_systems(seed: 
     t = np.arange(60, dtype=float)
     u = np.sin(0.3 * t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=seed)
-    condensed = HullEstimator(system, bounds, horizon=8)
+    condensed = HullEstimator.design(system, bounds, horizon=8)
     assert condensed.meta()["condensed"]
-    sparse_form = HullEstimator(system, bounds, horizon=8)
+    sparse_form = HullEstimator.design(system, bounds, horizon=8)
     sparse_form._condensed = None
     a, b = condensed.run(t, sim.y, u), sparse_form.run(t, sim.y, u)
     assert a.enclosure(sim.x).max_violation == 0.0
@@ -232,13 +255,13 @@ def test_certificates_one_per_condensed_solve_and_refused_otherwise() -> None:
     t = np.arange(STEPS, dtype=float)
     u = np.sin(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=4)
-    certs = HullEstimator(system, bounds, horizon=6).certificates(t, sim.y, u)
+    certs = HullEstimator.design(system, bounds, horizon=6).certificates(t, sim.y, u)
     assert set(certs) == {(i, s) for i in range(3) for s in (1.0, -1.0)}
     for duals in certs.values():
         assert duals.shape == (STEPS - 1 - 6, 7, 1)  # steps k = 7 … T-1, rows j = 0 … 6
         assert np.all(duals[:, -1] == 0.0)  # predicted hull: y_k is not a row
     with pytest.raises(AssumptionError, match="condensed"):
-        HullEstimator(system, bounds, horizon=None).certificates(t, sim.y, u)
+        HullEstimator.design(system, bounds, horizon=None).certificates(t, sim.y, u)
 
 
 def test_falls_back_to_the_default_threads_when_highs_runs_with_more() -> None:
@@ -259,7 +282,7 @@ system = LTISystem(A, [[0.0, 0.0, 1.0]], B=[[0.0], [0.0], [1.0]], E=0.08 * np.ey
 bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(3), np.ones(3)), v=(-np.ones(1), np.ones(1)))
 t = np.arange(20, dtype=float)
 sim = simulate(system, bounds, t, noise="extreme", seed=1)
-est = HullEstimator(system, bounds, horizon=6)
+est = HullEstimator.design(system, bounds, horizon=6)
 out = est.run(t, sim.y, sim.u)
 print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1], "lower": out.lower.tolist()}))
 """
@@ -269,7 +292,7 @@ print(json.dumps({"threads": est._condensed.solver.getOptionValue("threads")[1],
     system, bounds = small_discrete()
     t = np.arange(20, dtype=float)
     sim = simulate(system, bounds, t, noise="extreme", seed=1)
-    here = HullEstimator(system, bounds, horizon=6).run(t, sim.y, sim.u)
+    here = HullEstimator.design(system, bounds, horizon=6).run(t, sim.y, sim.u)
     np.testing.assert_allclose(np.array(result["lower"]), here.lower, rtol=0, atol=1e-12)
 
 
@@ -278,15 +301,15 @@ def test_parallel_workers_give_the_same_certified_box() -> None:
     t = np.arange(STEPS, dtype=float)
     u = np.sin(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=5)
-    one = HullEstimator(system, bounds, horizon=8).run(t, sim.y, u)
-    two = HullEstimator(system, bounds, horizon=8, workers=2)
+    one = HullEstimator.design(system, bounds, horizon=8).run(t, sim.y, u)
+    two = HullEstimator.design(system, bounds, horizon=8, workers=2)
     both = two.run(t, sim.y, u)
     assert two.meta()["workers"] == 2 and both.enclosure(sim.x).max_violation == 0.0
     np.testing.assert_allclose(both.lower, one.lower, atol=SLACK)
     np.testing.assert_allclose(both.upper, one.upper, atol=SLACK)
     for bad in (0, 1.5, True):
         with pytest.raises(IntervalObserverError, match="workers"):
-            HullEstimator(system, bounds, horizon=8, workers=bad)  # type: ignore[arg-type]
+            HullEstimator.design(system, bounds, horizon=8, workers=bad)  # type: ignore[arg-type]
 
 
 def test_condensed_window_with_a_shared_noise_channel_is_the_window_lp() -> None:
@@ -298,12 +321,12 @@ def test_condensed_window_with_a_shared_noise_channel_is_the_window_lp() -> None
     t = np.arange(STEPS, dtype=float)
     u = np.sin(t)[:, None]
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=3)
-    hull = HullEstimator(system, bounds, horizon=6)
+    hull = HullEstimator.design(system, bounds, horizon=6)
     assert hull.condensed_allowed() and hull.model.G is not None
     est = hull.run(t, sim.y, u)
     assert est.enclosure(sim.x).max_violation == 0.0
     # The sparse form also puts the propagated box of x_k inside the LP: never looser, nearly equal here.
-    sparse_form = HullEstimator(system, bounds, horizon=6)
+    sparse_form = HullEstimator.design(system, bounds, horizon=6)
     sparse_form._condensed = None
     other = sparse_form.run(t, sim.y, u)
     assert np.all(est.lower <= other.lower + SLACK) and np.all(est.upper >= other.upper - SLACK)

@@ -84,7 +84,7 @@ def tightness_reference(
     Estimate or HullLowerBound
     """
     if system.dA is None:
-        return HullEstimator(system, bounds, horizon=horizon, h=h).run(t, y, u)
+        return HullEstimator.design(system, bounds, horizon=horizon, h=h).run(t, y, u)
     size = np.asarray(t).size
     shared = [delta_samples(system, samples, seed)]
     if truth is not None:
@@ -302,7 +302,7 @@ def add_tightness(
         known = LTISystem(
             system.A + np.asarray(truth[0], dtype=float), system.C, B=system.B, E=system.E, F=system.F, dt=system.dt
         )
-        oracle = HullEstimator(known, bounds, horizon=horizon, h=h).run(t, y, u)
+        oracle = HullEstimator.design(known, bounds, horizon=horizon, h=h).run(t, y, u)
         inner = tightness_report(t, estimates, oracle, start=start)
         report["oracle_hull"] = {
             "label": "hull if ΔA were known (= the true ΔA), sound sampled model, predicted: the true hull for "

@@ -206,8 +206,6 @@ class DenseLP:
     def __init__(self) -> None:
         self.solver = new_highs()
         self.inf = float(self.solver.getInfinity())
-        self.solves = 0
-        self.iterations = 0
 
     def load(
         self, matrix: FloatArray, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray
@@ -254,8 +252,6 @@ class DenseLP:
         for r, cost in enumerate(costs):
             self.solver.changeColsCost(self.ncol, self._cols, cost)
             run_highs(self.solver)
-            self.solves += 1
-            self.iterations += int(self.solver.getInfoValue("simplex_iteration_count")[1])
             solution = self.solver.getSolution()
             dual = np.asarray(solution.row_dual)
             if dual.shape != (self.nrow,) or not np.all(np.isfinite(dual)):

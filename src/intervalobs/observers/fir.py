@@ -245,7 +245,7 @@ class FiniteMemoryObserver(Observer):
         worst, elapsed = _worst_case_gains(system, full, window, h)
         if filtered:  # a predicted filter is a filtered one with no weight on y_k
             worst = np.concatenate([worst, np.zeros_like(worst[:, :1])], axis=1)
-        hull = HullEstimator(system, full, horizon=int(window), h=h, filtered=filtered)
+        hull = HullEstimator.design(system, full, horizon=int(window), h=h, filtered=filtered)
         if not hull.condensed_allowed():
             raise AssumptionError(
                 "FiniteMemoryObserver.learn: needs the condensed window LP of HullEstimator "

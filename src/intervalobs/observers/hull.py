@@ -54,7 +54,7 @@ from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from ..validation import as_signal, as_time, as_vector
+from ..validation import as_signal, as_time
 from .base import Observer, ObserverState
 
 __all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
@@ -223,8 +223,10 @@ class _WindowLP:
         self._rows = np.arange(self.nrow, dtype=np.int32)
         self._cost_col = -1
         self._bases: dict[tuple[int, float], Any] = {}
-        self.solves = 0
-        self.iterations = 0
+
+    def forget_bases(self) -> None:
+        """Drop the bases kept for warm starts (the next solves start from scratch)."""
+        self._bases.clear()
 
     def newest_column(self, i: int) -> int:
         """Column of component ``i`` of the newest state ``x_k`` (always the last slot)."""
@@ -251,8 +253,6 @@ class _WindowLP:
         if basis is not None:
             self.solver.setBasis(basis)
         run_highs(self.solver)
-        self.solves += 1
-        self.iterations += int(self.solver.getInfo().simplex_iteration_count)
         ok = self.solver.getModelStatus() == self._status_optimal
         if ok:
             self._bases[(key, sign)] = self.solver.getBasis()
@@ -286,8 +286,8 @@ _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
 """Basis status codes of the bases kept by :class:`_CondensedLP` (``_ZERO``: a nonbasic free row)."""
 
 
-_Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArray, int]
-"""One objective's outcome: optimal?, basic variables, primal values (columns, rows), row duals, pivots."""
+_Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArray]
+"""One objective's outcome: optimal?, basic variables, primal values (columns, rows), row duals."""
 
 
 class _CondensedLP:
@@ -378,8 +378,6 @@ class _CondensedLP:
         """Per key: status codes of the last bases of the ``2n`` objectives, which are optimal (the others
         are not restored), and the window start."""
         self.length, self.start, self.full = H, 0, True
-        self.solves = 0
-        self.iterations = 0
         self.dual_log: list[tuple[int, float, FloatArray]] | None = None
         """When a list, every solve of a full window (``k > H``) appends ``(component, sign, row duals)``
         (see ``HullEstimator.certificates``)."""
@@ -387,9 +385,10 @@ class _CondensedLP:
     def set_window(
         self, k: int, y: FloatArray, u: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray, use_current: bool
     ) -> tuple[FloatArray, FloatArray]:
-        """Bounds for the window ``max(k - H, 0) … k``; returns the drive ``q_L`` and the objective's pad.
+        """Bounds for the window ``s = max(k - H, 0) … k``; returns the drive ``q_L`` and the objective's pad.
 
-        ``prior_*`` bound the window's first state (the box of ``x_0`` while ``k ≤ H``).
+        Row ``i`` of ``y`` and ``u`` is time ``s + i``; ``prior_*`` bound the window's first state (the
+        box of ``x_0`` while ``k ≤ H``).
         """
         m, H, n, p = self.model, self.horizon, self.n, self.p
         L = min(k, H)
@@ -397,7 +396,7 @@ class _CondensedLP:
         self.length, self.start, self.full = L, s, k > H
         eps = float(np.finfo(float).eps)
         drives = np.zeros((H, n))
-        drives[:L] = u[s : s + L] @ m.Gamma.T
+        drives[:L] = u[:L] @ m.Gamma.T
         q = (self.transfer @ drives.ravel()).reshape(H + 1, n)
         growth = np.zeros((H, n))
         growth[:L] = self.e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1])
@@ -410,7 +409,7 @@ class _CondensedLP:
         rows = np.arange(H + 1)
         measured = (rows < L) | ((rows == L) & use_current)
         yt = np.zeros((H + 1, p))
-        yt[measured] = y[s + rows[measured]]
+        yt[measured] = y[rows[measured]]
         centre = q @ m.C.T
         lo = np.where(measured[:, None], yt - m.v_hi - centre - row_pad, -self.inf)
         hi = np.where(measured[:, None], yt - m.v_lo - centre + row_pad, self.inf)
@@ -422,6 +421,10 @@ class _CondensedLP:
             solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
             solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
         return q[L], x_error[L] + rounding[L]
+
+    def forget_bases(self) -> None:
+        """Drop the bases kept for warm starts (the next solves start from scratch)."""
+        self._bases.clear()
 
     def certified_bounds(self, key: int) -> tuple[FloatArray, FloatArray]:
         """Rigorous lower bounds of ``(x_k)_i - (q_L)_i`` and of ``(q_L)_i - (x_k)_i`` for every ``i``.
@@ -453,9 +456,7 @@ class _CondensedLP:
             return [(r, self._solve_one(self.solvers[w], costs[r], starts[r])) for r in range(w, 2 * n, workers)]
 
         groups = [solve_group(0)] if self._pool is None else list(self._pool.map(solve_group, range(workers)))
-        for r, (optimal, basic, value, dual, iterations) in sorted((i for g in groups for i in g), key=lambda i: i[0]):
-            self.solves += 1
-            self.iterations += iterations
+        for r, (optimal, basic, value, dual) in sorted((i for g in groups for i in g), key=lambda i: i[0]):
             if optimal:
                 basics[r], values[r] = basic, value
             if dual.shape != (nrow,) or not np.all(np.isfinite(dual)):
@@ -477,12 +478,11 @@ class _CondensedLP:
         if start is not None and solver.getModelStatus() != self._optimal:
             solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
             run_highs(solver)
-        iterations = int(solver.getInfoValue("simplex_iteration_count")[1])
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
         basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
         value = np.concatenate([solution.col_value, solution.row_value]) if optimal else None
-        return optimal, basic, value, np.asarray(solution.row_dual, dtype=float), iterations
+        return optimal, basic, value, np.asarray(solution.row_dual, dtype=float)
 
     def _keep_bases(self, key: int, values: FloatArray, basics: list[NDArray[np.int64] | None]) -> None:
         """Store the optimal bases as status codes (the nonbasic side read from the solution values)."""
@@ -545,10 +545,12 @@ class _Window:
         first_lo: FloatArray | None,
         first_hi: FloatArray | None,
         window_boxes: bool = False,
+        offset: int = 0,
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Column and row bounds at step ``k``.
 
-        ``boxes_*[τ]`` bound ``x_τ`` for ``τ < k`` (None: free, for inner hulls); ``last_*`` bounds
+        Row ``τ - offset`` of ``y``, ``u`` and ``boxes_*`` is time ``τ``.
+        ``boxes_*`` bound ``x_τ`` for ``τ < k`` (None: free, for inner hulls); ``last_*`` bounds
         ``x_k``; ``first_*`` is the prior of the window's first state when it is time 0 (the ``x_0``
         box) — for a later first state the caller sets the points prior or relies on ``boxes``.
         With ``window_boxes`` False only the first state of the window gets its box (the prior); the
@@ -566,7 +568,7 @@ class _Window:
         xh = np.zeros((S, n))
         past = valid & (times < k)
         if boxes_lo is not None and boxes_hi is not None:
-            xl[past], xh[past] = boxes_lo[times[past]], boxes_hi[times[past]]
+            xl[past], xh[past] = boxes_lo[times[past] - offset], boxes_hi[times[past] - offset]
             if not window_boxes:
                 loose = past.copy()
                 loose[int(np.argmax(past))] = False  # the oldest state keeps its box: the prior
@@ -581,7 +583,7 @@ class _Window:
         col_lo[: S * n], col_hi[: S * n] = xl.ravel(), xh.ravel()
         step_valid = past  # the transition out of each slot's time is in the window iff that time < k
         ut = np.zeros((S, u.shape[-1]))
-        ut[step_valid] = u[times[step_valid]]
+        ut[step_valid] = u[times[step_valid] - offset]
         drive = ut @ m.Gamma.T
         if nq:
             wl = np.where(step_valid[:, None], m.w_lo, 0.0)
@@ -594,7 +596,7 @@ class _Window:
         d_hi = np.where(step_valid[:, None], d_hi, inf)
         measured = valid & ((times < k) | use_current)
         yt = np.zeros((S, p))
-        yt[measured] = y[times[measured]]
+        yt[measured] = y[times[measured] - offset]
         if nv:
             vl = np.where(measured[:, None], m.v_lo, 0.0)
             vh = np.where(measured[:, None], m.v_hi, 0.0)
@@ -614,6 +616,8 @@ class _Window:
 class HullEstimator(Observer):
     r"""The interval hull of the consistent set of an LTI system, by linear programming at each step.
 
+    Build it with :meth:`design` (the constructor takes the same arguments).
+
     Parameters
     ----------
     system : LTISystem
@@ -626,10 +630,10 @@ class HullEstimator(Observer):
     h : float, optional
         Sampling period of a continuous-time system (the sound sampled model is used).
     filtered : bool
-        If False (default, the observer protocol), row ``k`` of :meth:`run` is the hull of ``x_k`` given
-        ``y_0 … y_{k-1}``, comparable with every other observer. If True it also uses ``y_k`` (the
-        "filtered" hull); :meth:`step` then returns the predicted box of ``x_{k+1}`` in ``lower``/``upper``
-        and the filtered box of ``x_k`` in ``internal["filtered_lower"/"filtered_upper"]``.
+        If False (default), row ``k`` of :meth:`run` is the hull of ``x_k`` given ``y_0 … y_{k-1}``
+        (:attr:`rows` ``"predicted"``), comparable with every other observer. If True it also uses
+        ``y_k`` (the "filtered" hull, :attr:`rows` ``"filtered"``): :meth:`step` with ``y_k`` then
+        returns the box of ``x_k`` given ``y_0 … y_k``.
     window_boxes : bool
         Also bound every state inside the window by its earlier box (not only the first one, the
         prior). Slightly tighter for short windows (0.4 % at H = 10 on seed 002's (68), nothing at
@@ -681,6 +685,7 @@ class HullEstimator(Observer):
         self.n, self.p, self.m = system.n, system.p, system.m
         self.horizon = None if horizon is None else int(horizon)
         self.filtered = bool(filtered)
+        self.rows = "filtered" if self.filtered else "predicted"
         self.window_boxes = bool(window_boxes)
         if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
             raise DataError(f"workers: expected a positive integer, got {workers!r}")
@@ -692,7 +697,48 @@ class HullEstimator(Observer):
         if self.condensed_allowed():
             assert self.horizon is not None
             self._condensed = _CondensedLP(self.model, self.horizon, self.workers)
-        self.solves = 0
+
+    @classmethod
+    def design(
+        cls,
+        system: LTISystem,
+        bounds: Bounds,
+        h: float | None = None,
+        *,
+        horizon: int | None = 50,
+        filtered: bool = False,
+        window_boxes: bool = False,
+        workers: int = 1,
+    ) -> HullEstimator:
+        """Build the estimator (there is no gain: the window LP of each step is the estimator).
+
+        Parameters
+        ----------
+        system : LTISystem
+            Discrete- or continuous-time model without ``dA``.
+        bounds : Bounds
+            Boxes of ``x0``, ``w``, ``v``.
+        h : float, optional
+            Sampling period of a continuous-time system.
+        horizon : int or None
+            Window length ``H`` in steps; ``None`` for the full history.
+        filtered : bool
+            Rows of :meth:`run` use ``y_k`` too (class docstring).
+        window_boxes : bool
+            Bound every state of the window by its earlier box.
+        workers : int
+            HiGHS instances solving a step's LPs in parallel threads.
+
+        Returns
+        -------
+        HullEstimator
+
+        Raises
+        ------
+        AssumptionError
+            If the system has an interval ``dA`` (the consistent set is not convex).
+        """
+        return cls(system, bounds, horizon=horizon, h=h, filtered=filtered, window_boxes=window_boxes, workers=workers)
 
     def condensed_allowed(self) -> bool:
         """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ).
@@ -721,6 +767,9 @@ class HullEstimator(Observer):
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: the prior box of ``x_0`` and an empty record.
 
+        Also drops the LP bases kept for warm starts, so that a record started here gives the same
+        boxes whatever the estimator solved before.
+
         Parameters
         ----------
         x0_lower, x0_upper : array_like, optional
@@ -729,160 +778,147 @@ class HullEstimator(Observer):
         Returns
         -------
         ObserverState
+            ``internal`` holds the step ``k``, the prior box ``x0`` and the record a window needs:
+            ``y``, ``u`` and the boxes ``box_lo``/``box_hi`` of the last ``horizon`` samples (all of
+            them for the full history), row ``i`` at time ``start + i``.
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
+        for window in self._windows.values():  # a record's boxes depend on its data only, not on earlier ones
+            window.lp.forget_bases()
+        if self._condensed is not None:
+            self._condensed.forget_bases()
         internal: dict[str, Any] = {
             "k": 0,
             "x0": (lo.copy(), hi.copy()),
-            "y": [],
-            "u": [],
-            "box_lo": [],
-            "box_hi": [],
+            "start": 0,
+            "y": np.zeros((0, self.p)),
+            "u": np.zeros((0, self.m)),
+            "box_lo": np.zeros((0, self.n)),
+            "box_hi": np.zeros((0, self.n)),
         }
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
 
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
-        """Consume ``y_k``, ``u_k`` and return the hull of ``x_{k+1}`` given ``y_0 … y_k``.
+        """Consume ``y_k``, ``u_k``: the hull of ``x_{k+1}`` given ``y_0 … y_k`` (of ``x_k`` when ``filtered``).
+
+        With a finite horizon the state keeps the last ``horizon`` samples only, so a step costs the
+        same time and memory at every ``k``; the given state is not modified.
 
         Parameters
         ----------
         state : ObserverState
-            State at ``t_k`` (from :meth:`init` or a previous step).
+            From :meth:`init` or a previous step.
         y : array_like, shape (p,)
-            Measurement at ``t_k``.
+            Measurement at ``t_k`` (one run: LPs do not batch).
         u : array_like, shape (m,), optional
-            Known input over ``[t_k, t_{k+1})``.
+            Known input at ``t_k``; required when the system has inputs (m > 0).
 
         Returns
         -------
         ObserverState
-            ``internal["filtered_lower"/"filtered_upper"]`` hold the box of ``x_k`` given ``y_0 … y_k``
-            when ``filtered`` is True.
         """
-        yk = as_vector("y", y, self.p)
-        uk = self._input(u, ())
+        return super().step(state, y, u)
+
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
+        if y.ndim != 1:
+            raise DimensionError(f"y: expected one sample of shape ({self.p},) (LPs do not batch), got {y.shape}")
         old = state.internal
-        k = int(old["k"])
-        ys = np.array([*old["y"], yk])
-        us = np.array([*old["u"], uk]).reshape(k + 1, self.m)
-        box_lo = [*old["box_lo"]]
-        box_hi = [*old["box_hi"]]
+        k, start, x0 = int(old["k"]), int(old["start"]), old["x0"]
         lo, hi = state.lower, state.upper
-        internal = {"k": k + 1, "x0": old["x0"], "y": [*old["y"], yk], "u": [*old["u"], uk]}
+        if self.filtered and k > 0:  # state: the filtered box of x_{k-1}; predict x_k from y_0 … y_{k-1}
+            nlo, nhi = self.model.propagate(lo, hi, old["u"][-1])
+            lo, hi = self._hull(k, start, old["y"], old["u"], old["box_lo"], old["box_hi"], nlo, nhi, False, x0)
+        ys, us = np.vstack([old["y"], y]), np.vstack([old["u"], u])
         if self.filtered:
-            flo, fhi = self._hull(k, ys, us, box_lo, box_hi, lo, hi, True, old["x0"])
-            internal.update(filtered_lower=flo, filtered_upper=fhi)
-            lo, hi = flo, fhi
-        box_lo.append(lo)
-        box_hi.append(hi)
-        nlo, nhi = self.model.propagate(lo, hi, uk)
-        plo, phi = self._hull(k + 1, ys, us, box_lo, box_hi, nlo, nhi, False, old["x0"])
-        internal.update(box_lo=box_lo, box_hi=box_hi)
-        return ObserverState(plo, phi, internal=internal)
+            lo, hi = self._hull(k, start, ys, us, old["box_lo"], old["box_hi"], lo, hi, True, x0)
+        box_lo, box_hi = np.vstack([old["box_lo"], lo]), np.vstack([old["box_hi"], hi])
+        if not self.filtered:
+            nlo, nhi = self.model.propagate(lo, hi, u)
+            lo, hi = self._hull(k + 1, start, ys, us, box_lo, box_hi, nlo, nhi, False, x0)
+        drop = 0 if self.horizon is None else max(ys.shape[0] - self.horizon, 0)
+        internal: dict[str, Any] = {
+            "k": k + 1,
+            "x0": x0,
+            "start": start + drop,
+            "y": ys[drop:],
+            "u": us[drop:],
+            "box_lo": box_lo[drop:],
+            "box_hi": box_hi[drop:],
+        }
+        return ObserverState(lo, hi, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Hulls over a whole record (row ``k``: predicted, or filtered when ``filtered`` is True).
+        """Hulls over a whole record: :meth:`init`, then :meth:`step` at every sample (rows as :attr:`rows`).
 
         Parameters
         ----------
         t : array_like, shape (T,)
             Sample times.
         y : array_like, shape (T, p) or (M, T, p)
-            Measurements (a leading axis of runs is processed run by run).
+            Measurements; a leading axis of runs is processed run by run (LPs do not batch).
         u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
+            Known inputs; required when the system has inputs (m > 0).
 
         Returns
         -------
         Estimate
         """
         times, ys, us = self._signals(t, y, u)
-        if ys.ndim == 3:
-            parts = [self._run_one(ys[i], us[i]) for i in range(ys.shape[0])]
-            lower = np.stack([p[0] for p in parts])
-            upper = np.stack([p[1] for p in parts])
-        else:
-            lower, upper = self._run_one(ys, us)
-        return Estimate(times, lower, upper, meta=self.meta())
-
-    def _run_one(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
-        steps = ys.shape[0]
-        x0 = self.bounds.x0
-        lower = np.empty((steps, self.n))
-        upper = np.empty((steps, self.n))
-        box_lo = np.empty((steps, self.n))
-        box_hi = np.empty((steps, self.n))
-        lo, hi = x0[0].copy(), x0[1].copy()
-        for k in range(steps):
-            if k > 0:
-                nlo, nhi = self.model.propagate(box_lo[k - 1], box_hi[k - 1], us[k - 1])
-                lo, hi = self._hull(k, ys, us, box_lo, box_hi, nlo, nhi, False, x0)
-            if self.filtered:
-                lower[k], upper[k] = self._hull(k, ys, us, box_lo, box_hi, lo, hi, True, x0)
-            else:
-                lower[k], upper[k] = lo, hi
-            box_lo[k], box_hi[k] = lower[k], upper[k]
-        return lower, upper
+        if ys.ndim == 2:
+            return self._loop(times, ys, us)[0]
+        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
+        lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
+        return Estimate(times, lower, upper, meta=runs[0].meta)
 
     def _hull(
         self,
         k: int,
+        start: int,
         ys: FloatArray,
         us: FloatArray,
-        box_lo: Any,
-        box_hi: Any,
+        box_lo: FloatArray,
+        box_hi: FloatArray,
         last_lo: FloatArray,
         last_hi: FloatArray,
         use_current: bool,
         x0: tuple[FloatArray, FloatArray],
     ) -> tuple[FloatArray, FloatArray]:
-        """Certified hull of ``x_k`` (``box_*[τ]`` bound ``x_τ`` for ``τ < k``; ``last_*`` bound ``x_k``)."""
+        """Certified hull of ``x_k``.
+
+        Row ``i`` of ``ys``, ``us``, ``box_*`` is time ``start + i`` (``box_*`` bound ``x_τ`` for
+        ``τ < k``); ``last_*`` bound ``x_k``.
+        """
         if k == 0:
             last_lo, last_hi = np.maximum(last_lo, x0[0]), np.minimum(last_hi, x0[1])
             if not use_current:
                 return last_lo, last_hi
         if self._condensed is not None:
-            return self._condensed_hull(k, ys, us, box_lo, box_hi, last_lo, last_hi, use_current)
+            assert self.horizon is not None
+            s = max(k - self.horizon, 0)
+            prior = (box_lo[s - start], box_hi[s - start]) if s < k else (last_lo, last_hi)
+            lp = self._condensed
+            drive, pad = lp.set_window(k, ys[s - start :], us[s - start :], prior[0], prior[1], use_current)
+            low, high = lp.certified_bounds(int(use_current))
+            lower, upper = np.maximum(last_lo, low + drive - pad), np.minimum(last_hi, -high + drive + pad)
+            return self._consistent(k, lower, upper)
         window = self._window(k)
-        lp = window.lp
-        past_lo = np.asarray(box_lo[:k]).reshape(k, self.n) if k else np.zeros((0, self.n))
-        past_hi = np.asarray(box_hi[:k]).reshape(k, self.n) if k else np.zeros((0, self.n))
+        sparse_lp = window.lp
         bounds = window.bounds_at(
-            k, ys, us, past_lo, past_hi, last_lo, last_hi, use_current, x0[0], x0[1], self.window_boxes
+            k, ys, us, box_lo, box_hi, last_lo, last_hi, use_current, x0[0], x0[1], self.window_boxes, start
         )
-        lp.set_bounds(*bounds)
+        sparse_lp.set_bounds(*bounds)
         lower = last_lo.copy()
         upper = last_hi.copy()
         key = 2 * self.n if use_current else 0
         for i in range(self.n):
-            col = lp.newest_column(i)
-            lower[i] = max(lower[i], lp.certified_min(col, 1.0, key + i))
-            upper[i] = min(upper[i], -lp.certified_min(col, -1.0, key + i))
+            col = sparse_lp.newest_column(i)
+            lower[i] = max(lower[i], sparse_lp.certified_min(col, 1.0, key + i))
+            upper[i] = min(upper[i], -sparse_lp.certified_min(col, -1.0, key + i))
         return self._consistent(k, lower, upper)
 
-    def _condensed_hull(
-        self,
-        k: int,
-        ys: FloatArray,
-        us: FloatArray,
-        box_lo: Any,
-        box_hi: Any,
-        last_lo: FloatArray,
-        last_hi: FloatArray,
-        use_current: bool,
-    ) -> tuple[FloatArray, FloatArray]:
-        """The hull of ``x_k`` from the condensed window LP (prior: the box of ``x_{max(k-H, 0)}``)."""
-        lp = self._condensed
-        assert lp is not None and self.horizon is not None
-        s = max(k - self.horizon, 0)
-        prior = (np.asarray(box_lo[s]), np.asarray(box_hi[s])) if s < k else (last_lo, last_hi)
-        drive, pad = lp.set_window(k, ys, us, prior[0], prior[1], use_current)
-        low, high = lp.certified_bounds(int(use_current))
-        return self._consistent(k, np.maximum(last_lo, low + drive - pad), np.minimum(last_hi, -high + drive + pad))
-
-    def _consistent(self, k: int, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Count the step's ``2n`` solves, inflate the box, and refuse an empty one (data contradict the bounds)."""
-        self.solves += 2 * self.n
+    @staticmethod
+    def _consistent(k: int, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Inflate the box, and refuse an empty one (the data contradict the bounds)."""
         lower, upper = inflate(lower, upper)
         if np.any(lower > upper):
             raise DataError(
@@ -922,13 +958,13 @@ class HullEstimator(Observer):
                 "certificates: needs the condensed window LP (finite horizon, box measurement noise, stable Φ, "
                 "window_boxes=False); see condensed_allowed()"
             )
-        _, ys, us = self._signals(t, y, u)
+        times, ys, us = self._signals(t, y, u)
         if ys.ndim != 2:
             raise DimensionError(f"y: expected one record of shape (T, {self.p}), got shape {ys.shape}")
         lp = self._condensed
         lp.dual_log = []
         try:
-            self._run_one(ys, us)
+            self._loop(times, ys, us)
             log = lp.dual_log
         finally:
             lp.dual_log = None
