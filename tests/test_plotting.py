@@ -121,3 +121,13 @@ def test_the_library_never_switches_the_backend_or_shows() -> None:
     calls = ("matplotlib.use(", "switch_backend(", "plt.show(")
     found = [f"{p.relative_to(root)}: {c}" for p in root.rglob("*.py") for c in calls if c in p.read_text()]
     assert found == []
+
+
+def test_plot_psi_labels_the_axes_with_the_campaign_units() -> None:
+    from intervalobs.plotting import plot_psi
+
+    fig = plot_psi([[0.5, 1.0]], [0.1], [1.0, 2.0], "demo", "level (%)", "fault (N·m)")
+    ax = fig.axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) == ("fault (N·m)", "level (%)", "demo")
+    with pytest.raises(DimensionError, match=r"^psi: expected shape \(1, 2\), got \(2,\)"):
+        plot_psi([0.5, 1.0], [0.1], [1.0, 2.0], "demo")

@@ -42,10 +42,8 @@ def test_uncertain_system_gets_a_labelled_lower_bound(tmp_path: Path) -> None:
     system, bounds, t, sim = system_and_data(uncertain=True)
     estimates = {"tube": IntervalObserver.design(system, bounds).run(t, sim.y)}
     summary: dict = {}
-    reference = add_tightness(
+    result = add_tightness(
         summary,
-        tmp_path,
-        True,
         system,
         bounds,
         t,
@@ -56,13 +54,16 @@ def test_uncertain_system_gets_a_labelled_lower_bound(tmp_path: Path) -> None:
         samples=0,
         truth=(sim.dA, sim.x),
     )
-    assert isinstance(reference, HullLowerBound)
+    assert isinstance(result.reference, HullLowerBound)
     report = summary["tightness"]
     assert report["reference"]["kind"] == "lower_bound"
     assert "LOWER BOUND" in format_tightness(report)
     assert report["observers"]["tube"]["ratio"] >= 1.0
     assert "oracle_hull" in report
-    assert (tmp_path / "tightness.png").is_file()
+    # the widths figure's data, drawn by the caller (this module writes no files)
+    assert set(result.widths) == {"tube", "lower bound (no sound estimator below)", "hull if ΔA were known"}
+    assert all(w.shape == (t.size, system.n) for w in result.widths.values())
+    assert not any(tmp_path.iterdir())
 
 
 def test_cli_prints_the_table_from_a_results_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

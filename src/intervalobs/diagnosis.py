@@ -198,6 +198,8 @@ class Campaign:
         checks every magnitude against [0, magnitude_bound] before any task starts.
     describe : dict
         Facts copied into ``psi.json`` (what a level, a magnitude and the indicator mean).
+    level_label, magnitude_label : str
+        Axis labels of the heat maps, with the model's units.
     """
 
     name: str
@@ -208,6 +210,8 @@ class Campaign:
     runs: int = 100
     magnitude_bound: float = math.inf
     describe: dict[str, Any] = field(default_factory=dict)
+    level_label: str = "uncertainty level"
+    magnitude_label: str = "fault magnitude"
 
 
 @dataclass(frozen=True)
@@ -393,7 +397,7 @@ def run_campaign(
         json.dumps({"runs": m, "levels": lv, "magnitudes": mg, "psi": psi, **campaign.describe}, indent=2) + "\n"
     )
     if plots:
-        _heatmaps(result, out, campaign.name)
+        _heatmaps(result, out, campaign)
     return result
 
 
@@ -481,21 +485,10 @@ def _sigint_ignored() -> Iterator[None]:
             signal.signal(signal.SIGINT, previous)
 
 
-def _heatmaps(result: CampaignResult, out: Path, name: str) -> None:
-    import matplotlib.pyplot as plt
+def _heatmaps(result: CampaignResult, out: Path, campaign: Campaign) -> None:
+    from .plotting import plot_psi, save_figure
 
     for s_name, mat in result.psi.items():
-        fig, ax = plt.subplots(figsize=(5.5, 4.2))
-        data = np.array(mat, dtype=float)
-        im = ax.imshow(data, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis", aspect="auto")
-        ax.set_xticks(range(len(result.magnitudes)), [f"{v:g}" for v in result.magnitudes])
-        ax.set_yticks(range(len(result.levels)), [f"{100 * v:g}%" for v in result.levels])
-        ax.set_xlabel("fault magnitude (N·m)")
-        ax.set_ylabel("uncertainty level (% of nominal a, b, c)")
-        for (i, j), v in np.ndenumerate(data):
-            ax.text(j, i, f"{v:.2f}", ha="center", va="center", color="w" if v < 0.6 else "k", fontsize=8)
-        ax.set_title(f"{name}: estimated Ψ̂, scenario {s_name} (M = {result.runs})")
-        fig.colorbar(im, ax=ax, label="Ψ̂")
-        fig.tight_layout()
-        fig.savefig(out / f"psi_scenario{s_name}.png", dpi=110)
-        plt.close(fig)
+        title = f"{campaign.name}: estimated Ψ̂, scenario {s_name} (M = {result.runs})"
+        fig = plot_psi(mat, result.levels, result.magnitudes, title, campaign.level_label, campaign.magnitude_label)
+        save_figure(fig, out / f"psi_scenario{s_name}.png")

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["plot_estimate", "plot_widths", "save_figure"]
+__all__ = ["plot_estimate", "plot_psi", "plot_widths", "save_figure"]
 
 
 def plot_estimate(
@@ -200,6 +200,50 @@ def plot_widths(
     ax.set_xlabel("t")
     ax.set_ylabel("sum of widths")
     ax.legend(fontsize="small")
+    fig.tight_layout()
+    return fig
+
+
+def plot_psi(
+    psi: ArrayLike,
+    levels: Sequence[float],
+    magnitudes: Sequence[float],
+    title: str,
+    level_label: str = "uncertainty level",
+    magnitude_label: str = "fault magnitude",
+) -> Figure:
+    """Heat map of a campaign's Ψ̂ (seed 001, (119)) over uncertainty levels × fault magnitudes.
+
+    Parameters
+    ----------
+    psi : array_like, shape (len(levels), len(magnitudes))
+        Ψ̂ of each cell, in [0, 1] (NaN: not computed).
+    levels, magnitudes : sequence of float
+        The grid (levels are fractions, shown in %).
+    title : str
+        Figure title.
+    level_label, magnitude_label : str
+        Axis labels, with the units of the model (e.g. ``"fault magnitude (N·m)"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    data = np.asarray(psi, dtype=float)
+    if data.shape != (len(levels), len(magnitudes)):
+        raise DimensionError(f"psi: expected shape ({len(levels)}, {len(magnitudes)}), got {data.shape}")
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    im = ax.imshow(data, origin="lower", vmin=0.0, vmax=1.0, cmap="viridis", aspect="auto")
+    ax.set_xticks(range(len(magnitudes)), [f"{v:g}" for v in magnitudes])
+    ax.set_yticks(range(len(levels)), [f"{100 * v:g}%" for v in levels])
+    ax.set_xlabel(magnitude_label)
+    ax.set_ylabel(level_label)
+    for (i, j), v in np.ndenumerate(data):
+        ax.text(j, i, f"{v:.2f}", ha="center", va="center", color="w" if v < 0.6 else "k", fontsize=8)
+    ax.set_title(title)
+    fig.colorbar(im, ax=ax, label="Ψ̂")
     fig.tight_layout()
     return fig
 

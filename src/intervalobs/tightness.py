@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -29,11 +29,31 @@ from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .systems.bounds import Bounds
 from .systems.lti import LTISystem
 
-__all__ = ["add_tightness", "format_tightness", "tightness_reference", "tightness_report"]
+__all__ = ["Tightness", "add_tightness", "format_tightness", "tightness_reference", "tightness_report"]
 
 FloatArray = NDArray[np.float64]
 
 _INSIDE_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Tightness:
+    """What :func:`add_tightness` computed besides the report: the data of the widths figure.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+        The sample times used (the first ``steps`` of the record).
+    reference : Estimate or HullLowerBound
+        The hull (no ``ΔA``) or the lower bound (interval ``ΔA``).
+    widths : dict of str to numpy.ndarray, shape (T, n)
+        Widths of every estimator, of the reference and (with ``ΔA`` and the truth) of the hull if ``ΔA``
+        were known: what :func:`~intervalobs.plotting.plot_widths` draws.
+    """
+
+    t: FloatArray
+    reference: Estimate | HullLowerBound
+    widths: dict[str, FloatArray]
 
 
 def tightness_reference(
@@ -205,8 +225,6 @@ def format_tightness(report: Mapping[str, Any], title: str = "") -> str:
 
 def add_tightness(
     summary: dict[str, Any],
-    out_dir: Path,
-    plots: bool,
     system: LTISystem,
     bounds: Bounds,
     t: ArrayLike,
@@ -221,17 +239,15 @@ def add_tightness(
     steps: int | None = None,
     robust_horizon: int | None = None,
     stride: int = 1,
-) -> Estimate | HullLowerBound:
-    """The hook a reproduction calls before writing its files: ``summary["tightness"]`` and a figure.
+) -> Tightness:
+    """The hook a reproduction calls before writing its files: ``summary["tightness"]`` and the widths.
+
+    It draws nothing: the caller plots :attr:`Tightness.widths` if it wants the figure.
 
     Parameters
     ----------
     summary : dict
         The reproduction's summary (gains the key ``tightness``; ``runtime_s`` gains ``tightness``).
-    out_dir : pathlib.Path
-        Where ``tightness.png`` goes (when ``plots``).
-    plots : bool
-        Write the widths-over-time figure.
     system : LTISystem
         The model.
     bounds : Bounds
@@ -266,8 +282,8 @@ def add_tightness(
 
     Returns
     -------
-    Estimate or HullLowerBound
-        The reference (to store in the trajectories if wanted).
+    Tightness
+        The times used, the reference and the widths of every estimator and reference.
     """
     clock = time.perf_counter()
     cut = slice(None) if steps is None else slice(0, int(steps))
@@ -313,14 +329,9 @@ def add_tightness(
         }
     report["runtime_s"] = time.perf_counter() - clock
     summary["tightness"] = report
-    if plots:
-        from .plotting import plot_widths, save_figure
-
-        name = "hull" if report["reference"]["kind"] == "hull" else "lower bound (no sound estimator below)"
-        widths: dict[str, Any] = {k: e.width() for k, e in estimates.items()}
-        widths[name] = reference.upper - reference.lower
-        if oracle is not None:
-            widths["hull if ΔA were known"] = oracle.width()
-        out_dir.mkdir(parents=True, exist_ok=True)
-        save_figure(plot_widths(t, widths), out_dir / "tightness.png")
-    return reference
+    name = "hull" if report["reference"]["kind"] == "hull" else "lower bound (no sound estimator below)"
+    widths: dict[str, FloatArray] = {k: e.width() for k, e in estimates.items()}
+    widths[name] = reference.upper - reference.lower
+    if oracle is not None:
+        widths["hull if ΔA were known"] = oracle.width()
+    return Tightness(t, reference, widths)

@@ -390,6 +390,8 @@ CAMPAIGN = Campaign(
     magnitudes=(0.25, 0.5, 1.0, 2.0, 5.0),
     runs=100,
     magnitude_bound=FAULT_BOUND,
+    level_label="uncertainty level (% of nominal a, b, c)",
+    magnitude_label="fault magnitude (N·m)",
     describe={
         "level": "relative half-width of the a, b, c intervals (true values uniform in the box)",
         "magnitude": "fault size (N·m) acting for t > 20 s",

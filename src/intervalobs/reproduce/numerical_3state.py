@@ -235,10 +235,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     compared = {name: est68[name] for name in ("zonotopic", "interval", "integrated", "tube")}
     members = [observers68["interval"], observers68["tube"], observers68["zonotopic"]]
     compared["intersection"] = IntersectionObserver.design(sys68, bounds, extra=members).run(t, sim68.y, u)
-    add_tightness(
+    tightness = add_tightness(
         summary,
-        out_dir,
-        plots,
         sys68,
         bounds,
         t,
@@ -252,6 +250,9 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         robust_horizon=ROBUST_HORIZON,
         stride=BOUND_STRIDE,
     )
+    if plots:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         shown68 = {k: (e.lower, e.upper) for k, e in est68.items() if k in ("zonotopic", "interval", "integrated")}

@@ -88,10 +88,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     summary["paper"] = {"note": "our own example: no paper numbers"}
     summary["runtime_s"] = {"design": design_time, "run": run_time}
     compared = {"IntervalObserver": estimate, "IntersectionObserver": intersection.run(t, sim.y, u)}
-    add_tightness(
+    tightness = add_tightness(
         summary,
-        out_dir,
-        plots,
         system,
         bounds,
         t,
@@ -107,6 +105,9 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         stride=BOUND_STRIDE,
         steps=TIGHTNESS_STEPS,
     )
+    if plots:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
     trajectories = {
         "t": t,
         "x": sim.x,

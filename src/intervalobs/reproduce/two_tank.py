@@ -166,10 +166,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     compared = {name: estimates[name] for name in ("zonotopic", "interval", "integrated", "tube")}
     members = [observers["interval"], observers["tube"], observers["zonotopic"]]
     compared["intersection"] = IntersectionObserver.design(system, bounds, extra=members).run(t, sim.y, u)
-    add_tightness(
+    tightness = add_tightness(
         summary,
-        out_dir,
-        plots,
         system,
         bounds,
         t,
@@ -184,6 +182,9 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         stride=BOUND_STRIDE,
         steps=TIGHTNESS_STEPS,
     )
+    if plots:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         sound = {k: (e.lower, e.upper) for k, e in estimates.items() if k in ("zonotopic", "interval", "integrated")}
