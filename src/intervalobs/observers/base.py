@@ -14,7 +14,9 @@ in ``Estimate.meta["rows"]``:
 
 A leading axis of ``y`` and ``u`` holds Monte Carlo runs: ``step`` accepts it from an unbatched state
 (the prior is shared by every run) and carries it without a loop over runs. An observer overrides
-``run`` only with a vectorised evaluation that is measurably faster and gives the same numbers.
+``run`` only to add arguments or results around the loop (``Observer._loop``: per-sample signals,
+per-row vectors of the state), or with a vectorised evaluation that is measurably faster and gives
+the same numbers.
 """
 
 from __future__ import annotations
