@@ -75,7 +75,7 @@ def one_run(case: dict[str, Any], seed: int, vertex: bool) -> dict[str, Any]:
     delta = np.where(rng.integers(0, 2, size=lo.shape) == 1, hi, lo) if vertex else rng.uniform(lo, hi)
     truth = LTISystem(system.A + delta, system.C, B=system.B, E=system.E, F=system.F, dt=system.dt)
     sim = simulate(truth, bounds, t, u=u, noise="extreme", seed=seed, substeps=10)
-    robust = RobustHullEstimator(system, bounds, horizon=case["horizon"], h=h)
+    robust = RobustHullEstimator.design(system, bounds, horizon=case["horizon"], h=h)
     clock = time.perf_counter()
     est = robust.run(t, sim.y, u)
     robust_ms = 1e3 * (time.perf_counter() - clock) / t.size

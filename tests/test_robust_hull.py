@@ -72,8 +72,8 @@ def test_sound_and_never_wider_than_the_interval_observer(seed: int, continuous:
     h = H_CONTINUOUS if continuous else None
     interval = IntervalObserver.design(system, bounds, h=h)
     base = interval.run(t, sim.y, u)
-    alone = RobustHullEstimator(system, bounds, horizon=10, h=h).run(t, sim.y, u)
-    robust = RobustHullEstimator(system, bounds, horizon=10, h=h, fallback=interval).run(t, sim.y, u)
+    alone = RobustHullEstimator.design(system, bounds, horizon=10, h=h).run(t, sim.y, u)
+    robust = RobustHullEstimator.design(system, bounds, horizon=10, h=h, fallback=interval).run(t, sim.y, u)
     assert alone.enclosure(sim.x).max_violation == 0.0
     assert robust.enclosure(sim.x).max_violation == 0.0
     assert np.all(robust.lower >= base.lower) and np.all(robust.upper <= base.upper)
@@ -84,7 +84,7 @@ def test_sound_and_never_wider_than_the_interval_observer(seed: int, continuous:
 def test_identification_keeps_the_true_delta_a_and_stays_sound() -> None:
     system, bounds = random_system(1, continuous=False)
     t, u, sim, delta = record(system, bounds, 1, vertex=True)
-    estimator = RobustHullEstimator(system, bounds, horizon=10, identify=True)
+    estimator = RobustHullEstimator.design(system, bounds, horizon=10, identify=True)
     estimate = estimator.run(t, sim.y, u)
     assert estimate.enclosure(sim.x).max_violation == 0.0
     lo, hi = (np.asarray(b) for b in estimate.meta["delta_box"])
@@ -94,13 +94,18 @@ def test_identification_keeps_the_true_delta_a_and_stays_sound() -> None:
 def test_step_and_run_agree() -> None:
     system, bounds = random_system(2, continuous=False)
     t, u, sim, _ = record(system, bounds, 2, vertex=False)
-    estimator = RobustHullEstimator(system, bounds, horizon=8)
+    estimator = RobustHullEstimator.design(system, bounds, horizon=8)
     estimate = estimator.run(t, sim.y, u)
     state = estimator.init()
     for k in range(STEPS - 1):
         state = estimator.step(state, sim.y[k], u[k])
-        np.testing.assert_allclose(state.lower, estimate.lower[k + 1], rtol=0, atol=1e-9)
-        np.testing.assert_allclose(state.upper, estimate.upper[k + 1], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(state.lower, estimate.lower[k + 1], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(state.upper, estimate.upper[k + 1], rtol=0, atol=1e-12)
+        # the state holds the window only: y, u up to y_k from max(k + 2 - H, 0), boxes up to x_{k+1}
+        rows = min(k + 2, 8)
+        assert state.internal["start"] == k + 2 - rows
+        assert state.internal["y"].shape == (rows - 1, system.p)
+        assert state.internal["box_lo"].shape == (rows, system.n)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -129,7 +134,7 @@ def test_lower_bound_lies_inside_every_sound_box(continuous: bool) -> None:
     system, bounds = random_system(3, continuous)
     t, u, sim, _ = record(system, bounds, 3, vertex=True)
     h = H_CONTINUOUS if continuous else None
-    estimator = RobustHullEstimator(system, bounds, horizon=10, h=h)
+    estimator = RobustHullEstimator.design(system, bounds, horizon=10, h=h)
     estimate = estimator.run(t, sim.y, u)
     interval = IntervalObserver.design(system, bounds, h=h).run(t, sim.y, u)
     steps = np.array([10, 25, 39])
@@ -146,12 +151,12 @@ def test_lower_bound_lies_inside_every_sound_box(continuous: bool) -> None:
 def test_errors_name_the_argument() -> None:
     system, bounds = random_system(0, continuous=True)
     with pytest.raises(DataError, match="h:"):
-        RobustHullEstimator(system, bounds)
+        RobustHullEstimator.design(system, bounds)
     with pytest.raises(DataError, match="horizon"):
-        RobustHullEstimator(system, bounds, horizon=0, h=0.1)
+        RobustHullEstimator.design(system, bounds, horizon=0, h=0.1)
     point = LTISystem(system.A, system.C, dt=1.0)
     with pytest.raises(AssumptionError, match="dA"):
-        RobustHullEstimator(point, bounds)
+        RobustHullEstimator.design(point, bounds)
     t = np.arange(5) * 0.1
     assert system.dA is not None
     with pytest.raises(BoundsError, match="candidates"):

@@ -301,7 +301,7 @@ def add_tightness(
     if system.dA is not None:
         chosen = np.arange(start, t.size, max(int(stride), 1))
         if robust_horizon is not None:
-            robust = RobustHullEstimator(system, bounds, horizon=robust_horizon, h=h)
+            robust = RobustHullEstimator.design(system, bounds, horizon=robust_horizon, h=h)
             clock_run = time.perf_counter()
             estimates["RobustHullEstimator"] = robust.run(t, y, u)
             costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)

@@ -69,7 +69,7 @@ from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from ..validation import as_signal, as_time, as_vector
+from ..validation import as_signal, as_time
 from .base import Observer, ObserverState
 from .hull import HullLowerBound, inner_model
 
@@ -153,6 +153,8 @@ def _delta_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _D
 class RobustHullEstimator(Observer):
     r"""Sound, data-dependent boxes for an LTI system with interval ``ΔA``: window LP with ``ΔA`` shared.
 
+    Build it with :meth:`design` (the constructor takes the same arguments).
+
     Parameters
     ----------
     system : LTISystem
@@ -212,24 +214,63 @@ class RobustHullEstimator(Observer):
         self._lp = DenseLP()
         self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
 
+    @classmethod
+    def design(
+        cls,
+        system: LTISystem,
+        bounds: Bounds,
+        h: float | None = None,
+        *,
+        horizon: int = 40,
+        identify: bool = True,
+        fallback: Observer | None = None,
+    ) -> RobustHullEstimator:
+        """Build the estimator (there is no gain: the window LP of each step is the estimator).
+
+        Parameters
+        ----------
+        system : LTISystem
+            Discrete- or continuous-time model with an interval ``dA``.
+        bounds : Bounds
+            Boxes of ``x0``, ``w``, ``v``.
+        h : float, optional
+            Sampling period of a continuous-time system (required there).
+        horizon : int
+            Window length ``H`` in steps.
+        identify : bool
+            Also bound the uncertain entries of ``ΔA`` at each step (class docstring).
+        fallback : Observer, optional
+            A sound observer whose box the estimate is intersected with.
+
+        Returns
+        -------
+        RobustHullEstimator
+
+        Raises
+        ------
+        AssumptionError
+            If the system has no interval ``dA`` (use :class:`~intervalobs.observers.hull.HullEstimator`).
+        """
+        return cls(system, bounds, horizon=horizon, h=h, identify=identify, fallback=fallback)
+
     # -- the window LP ---------------------------------------------------------------------------
     def _window(
         self, k: int, ys: FloatArray, us: FloatArray, box_lo: FloatArray, box_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Load the LP of the window ``s = max(k - H, 0) … k`` (rows: ``y_s … y_{k-1}``).
 
-        ``box_*[τ]`` bound ``x_τ`` for ``s ≤ τ < k``. Returns the affine maps of the window's states
-        (L + 1, n, ncol), their drives (L + 1, n) and rounding pads (L + 1, n).
+        Row ``i`` of ``ys``, ``us`` and ``box_*`` is time ``s + i`` (``box_*`` bound ``x_τ`` for
+        ``s ≤ τ < k``). Returns the affine maps of the window's states (L + 1, n, ncol), their drives
+        (L + 1, n) and rounding pads (L + 1, n).
         """
         mod, n, nd = self.model, self.n, self.nd
         L = min(k, self.horizon)
-        s = k - L
         d_lo, d_hi = self.delta_box
         d_max = np.maximum(np.abs(d_lo), np.abs(d_hi))[self._rows, self._cols]
         K = np.einsum("l,lij->ij", d_max, np.abs(mod.M))
-        lo, hi = box_lo[s:k], box_hi[s:k]
+        lo, hi = box_lo[:L], box_hi[:L]
         mid, half, big = 0.5 * (lo + hi), 0.5 * (hi - lo), np.maximum(np.abs(lo), np.abs(hi))
-        u_win = us[s:k]
+        u_win = us[:L]
         rho = half @ K.T + big @ mod.R_x.T + np.abs(u_win) @ mod.R_u.T
         e_lo, e_hi = mod.noise_lo - rho, mod.noise_hi + rho
         sens = np.einsum("lab,jb->jal", mod.M, mid) + np.einsum("lab,jb->jal", mod.N, u_win)
@@ -243,7 +284,7 @@ class RobustHullEstimator(Observer):
             + np.abs(drives[1:])
         )
         mag = np.zeros((L + 1, n))
-        mag[0] = np.maximum(np.abs(box_lo[s]), np.abs(box_hi[s]))
+        mag[0] = np.maximum(np.abs(box_lo[0]), np.abs(box_hi[0]))
         abs_phi = np.abs(mod.Phi)
         for j in range(L):
             mag[j + 1] = abs_phi @ mag[j] + growth[j]
@@ -252,19 +293,23 @@ class RobustHullEstimator(Observer):
         row_pad = pads[:L] @ np.abs(mod.C).T
         matrix = np.einsum("pn,jnc->jpc", mod.C, states[:L]).reshape(L * self.p, -1)
         centre = drives[:L] @ mod.C.T
-        row_lo = (ys[s:k] - mod.v_hi - centre - row_pad).ravel()
-        row_hi = (ys[s:k] - mod.v_lo - centre + row_pad).ravel()
-        col_lo = np.concatenate([box_lo[s], e_lo.ravel(), d_lo[self._rows, self._cols]])
-        col_hi = np.concatenate([box_hi[s], e_hi.ravel(), d_hi[self._rows, self._cols]])
+        row_lo = (ys[:L] - mod.v_hi - centre - row_pad).ravel()
+        row_hi = (ys[:L] - mod.v_lo - centre + row_pad).ravel()
+        col_lo = np.concatenate([box_lo[0], e_lo.ravel(), d_lo[self._rows, self._cols]])
+        col_hi = np.concatenate([box_hi[0], e_hi.ravel(), d_hi[self._rows, self._cols]])
         self._lp.load(matrix, col_lo, col_hi, row_lo, row_hi)
         return states, drives, pads
 
     def _box(
-        self, k: int, ys: FloatArray, us: FloatArray, box_lo: FloatArray, box_hi: FloatArray
+        self, k: int, start: int, ys: FloatArray, us: FloatArray, box_lo: FloatArray, box_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Certified box of ``x_k`` from ``y_0 … y_{k-1}``; with ``identify`` the ``δ`` box is updated too."""
+        """Certified box of ``x_k`` from ``y_0 … y_{k-1}``; with ``identify`` the ``δ`` box is updated too.
+
+        Row ``i`` of ``ys``, ``us`` and ``box_*`` is time ``start + i``.
+        """
         n, nd = self.n, self.nd
-        states, drives, pads = self._window(k, ys, us, box_lo, box_hi)
+        first = max(k - self.horizon, 0) - start
+        states, drives, pads = self._window(k, ys[first:], us[first:], box_lo[first:], box_hi[first:])
         objective, drive, pad = states[-1], drives[-1], pads[-1]
         costs = np.concatenate([objective, -objective])
         identify = self.identify and nd > 0 and k > 0
@@ -316,21 +361,29 @@ class RobustHullEstimator(Observer):
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         self.delta_box = (-self.model.radius.copy(), self.model.radius.copy())
         self._extremal = {}
-        inner = None if self.fallback is None else self.fallback.init(lo, hi)
-        internal: dict[str, Any] = {"k": 0, "y": [], "u": [], "box_lo": [lo.copy()], "box_hi": [hi.copy()]}
-        internal["fallback"] = inner
-        internal["delta_box"] = self.delta_box
+        internal: dict[str, Any] = {
+            "k": 0,
+            "start": 0,
+            "y": np.zeros((0, self.p)),
+            "u": np.zeros((0, self.m)),
+            "box_lo": lo[None].copy(),
+            "box_hi": hi[None].copy(),
+            "fallback": None if self.fallback is None else self.fallback.init(lo, hi),
+            "delta_box": self.delta_box,
+        }
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
 
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
         """Consume ``y_k``, ``u_k`` and return the box of ``x_{k+1}`` given ``y_0 … y_k``.
+
+        The state keeps the last ``horizon`` samples only, so a step costs the same at every ``k``.
 
         Parameters
         ----------
         state : ObserverState
             State at ``t_k`` (from :meth:`init` or a previous step).
         y : array_like, shape (p,)
-            Measurement at ``t_k``.
+            Measurement at ``t_k`` (one run: LPs do not batch).
         u : array_like, shape (m,), optional
             Known input over ``[t_k, t_{k+1})``.
 
@@ -339,42 +392,46 @@ class RobustHullEstimator(Observer):
         ObserverState
             ``internal["delta_box"]`` is the identified box of ``ΔA - ΔA_c`` (``ΔA_c`` the box centre).
         """
-        yk = as_vector("y", y, self.p)
-        uk = as_vector("u", self._input(u, ()), self.m)
+        return super().step(state, y, u)
+
+    def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
+        if y.ndim != 1:
+            raise DimensionError(f"y: expected one sample of shape ({self.p},) (LPs do not batch), got {y.shape}")
         old = state.internal
-        k = int(old["k"])
+        k, start = int(old["k"]), int(old["start"])
         self.delta_box = old["delta_box"]
-        ys = np.array([*old["y"], yk])
-        us = np.array([*old["u"], uk]).reshape(k + 1, self.m)
-        lo, hi = self._predict(old["box_lo"][-1], old["box_hi"][-1], uk)
-        low, high = self._box(k + 1, ys, us, np.array(old["box_lo"]), np.array(old["box_hi"]))
+        ys, us = np.vstack([old["y"], y]), np.vstack([old["u"], u])
+        lo, hi = self._predict(old["box_lo"][-1], old["box_hi"][-1], u)
+        low, high = self._box(k + 1, start, ys, us, old["box_lo"], old["box_hi"])
         lo, hi = inflate(np.maximum(lo, low), np.minimum(hi, high))
         inner = None
         if self.fallback is not None:  # the fallback's box is sound as it is: intersect after the inflation
-            inner = self.fallback.step(old["fallback"], yk, uk)
+            inner = self.fallback.step(old["fallback"], y, u)
             lo, hi = np.maximum(lo, inner.lower), np.minimum(hi, inner.upper)
         if np.any(lo > hi):
             raise DataError(f"y: the measurements are inconsistent with the model and its bounds at step {k + 1}")
+        drop = max(k + 2 - self.horizon, 0) - start  # the next window starts at max(k + 2 - H, 0)
         internal = {
             "k": k + 1,
-            "y": [*old["y"], yk],
-            "u": [*old["u"], uk],
-            "box_lo": [*old["box_lo"], lo],
-            "box_hi": [*old["box_hi"], hi],
+            "start": start + drop,
+            "y": ys[drop:],
+            "u": us[drop:],
+            "box_lo": np.vstack([old["box_lo"], lo])[drop:],
+            "box_hi": np.vstack([old["box_hi"], hi])[drop:],
             "fallback": inner,
             "delta_box": self.delta_box,
         }
         return ObserverState(lo, hi, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Boxes over a whole record (row ``k``: given ``y_0 … y_{k-1}``).
+        """Boxes over a whole record: :meth:`init`, then :meth:`step` (row ``k``: given ``y_0 … y_{k-1}``).
 
         Parameters
         ----------
         t : array_like, shape (T,)
             Sample times (uniform with spacing ``h`` in continuous time).
         y : array_like, shape (T, p) or (M, T, p)
-            Measurements (a leading axis of runs is processed run by run).
+            Measurements (a leading axis of runs is processed run by run: LPs do not batch).
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs.
 
@@ -383,23 +440,11 @@ class RobustHullEstimator(Observer):
         Estimate
         """
         times, ys, us = self._signals(t, y, u)  # checks the spacing h (dt in discrete time)
-        if ys.ndim == 3:
-            parts = [self._run_one(times, ys[i], us[i]) for i in range(ys.shape[0])]
-            lower, upper = np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
-        else:
-            lower, upper = self._run_one(times, ys, us)
-        return Estimate(times, lower, upper, meta=self.meta())
-
-    def _run_one(self, times: FloatArray, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
-        steps = ys.shape[0]
-        lower = np.empty((steps, self.n))
-        upper = np.empty((steps, self.n))
-        state = self.init()
-        lower[0], upper[0] = state.lower, state.upper
-        for k in range(steps - 1):
-            state = self.step(state, ys[k], us[k])
-            lower[k + 1], upper[k + 1] = state.lower, state.upper
-        return lower, upper
+        if ys.ndim == 2:
+            return self._loop(times, ys, us)[0]
+        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
+        lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
+        return Estimate(times, lower, upper, meta=runs[0].meta)
 
     def extremal_deltas(self, steps: int) -> FloatArray:
         """The ``ΔA`` of the LP optimum of each bound of the last run: candidates for a lower bound.
