@@ -349,3 +349,17 @@ def test_condensed_window_with_a_shared_noise_channel_is_the_window_lp() -> None
         high = q[i] - linprog(-M[i], A_ub=a_ub, b_ub=b_ub, bounds=box, method="highs").fun
         # At least as tight as this window LP (tighter only where the propagated box of x_{k-1} cuts).
         assert est.lower[k, i] >= low - 1e-7 and est.upper[k, i] <= high + 1e-7
+
+
+@pytest.mark.parametrize("options", [{"horizon": 5, "filtered": True}, {"horizon": 5, "window_boxes": True}], ids=str)
+def test_monte_carlo_runs_equal_separate_estimators(options: dict) -> None:
+    """A run's boxes depend on its data only: ``init`` forgets the warm starts of earlier runs."""
+    system, bounds = small_discrete()
+    t = np.arange(20, dtype=float)
+    u = np.cos(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=2, runs=3)
+    together = HullEstimator.design(system, bounds, **options).run(t, sim.y, np.broadcast_to(u, (3, t.size, 1)))
+    for i in range(3):
+        alone = HullEstimator.design(system, bounds, **options).run(t, sim.y[i], u)
+        np.testing.assert_array_equal(together.lower[i], alone.lower)
+        np.testing.assert_array_equal(together.upper[i], alone.upper)

@@ -131,6 +131,8 @@ class Observer(ABC):
     """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
     rows: Literal["predicted", "filtered"] = "predicted"
     """What row ``k`` of :meth:`run` bounds: ``x(t_k)`` given ``y_0 … y_{k-1}`` or given ``y_0 … y_k``."""
+    batched: bool = True
+    """Whether :meth:`step` takes a leading axis of runs; if not, :meth:`run` loops over the runs one by one."""
     missing_samples: bool = False
     """Whether a measurement may be missing (a row of NaN in ``y``): then the observer only predicts."""
     summary_fields: tuple[str, ...] = ()
@@ -211,7 +213,16 @@ class Observer(ABC):
             observer estimates unknown inputs, are ``[-inf, inf]`` where it has none yet.
         """
         times, ys, us = self._signals(t, y, u)
-        return self._loop(times, ys, us)[0]
+        if self.batched or ys.ndim == 2:
+            return self._loop(times, ys, us)[0]
+        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
+
+        def stacked(name: str) -> FloatArray | None:
+            values = [getattr(r, name) for r in runs]
+            return None if values[0] is None else np.stack(values)
+
+        lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
+        return Estimate(times, lower, upper, stacked("input_lower"), stacked("input_upper"), runs[0].meta)
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.

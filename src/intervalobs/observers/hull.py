@@ -49,7 +49,6 @@ from scipy.linalg import expm
 
 from ..design.certified_lp import dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, DataError, DimensionError
-from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
@@ -225,8 +224,9 @@ class _WindowLP:
         self._bases: dict[tuple[int, float], Any] = {}
 
     def forget_bases(self) -> None:
-        """Drop the bases kept for warm starts (the next solves start from scratch)."""
+        """Drop the bases kept for warm starts and the solver's own (the next solves start from scratch)."""
         self._bases.clear()
+        self.solver.clearSolver()
 
     def newest_column(self, i: int) -> int:
         """Column of component ``i`` of the newest state ``x_k`` (always the last slot)."""
@@ -423,8 +423,10 @@ class _CondensedLP:
         return q[L], x_error[L] + rounding[L]
 
     def forget_bases(self) -> None:
-        """Drop the bases kept for warm starts (the next solves start from scratch)."""
+        """Drop the bases kept for warm starts and the solvers' own (the next solves start from scratch)."""
         self._bases.clear()
+        for solver in self.solvers:
+            solver.clearSolver()
 
     def certified_bounds(self, key: int) -> tuple[FloatArray, FloatArray]:
         """Rigorous lower bounds of ``(x_k)_i - (q_L)_i`` and of ``(q_L)_i - (x_k)_i`` for every ``i``.
@@ -657,6 +659,7 @@ class HullEstimator(Observer):
     """
 
     summary_fields = ("horizon",)
+    batched = False  # one LP per bound and run: a Monte Carlo axis is run after run
 
     h: float
 
@@ -846,29 +849,6 @@ class HullEstimator(Observer):
             "box_hi": box_hi[drop:],
         }
         return ObserverState(lo, hi, internal=internal)
-
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Hulls over a whole record: :meth:`init`, then :meth:`step` at every sample (rows as :attr:`rows`).
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Sample times.
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements; a leading axis of runs is processed run by run (LPs do not batch).
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs; required when the system has inputs (m > 0).
-
-        Returns
-        -------
-        Estimate
-        """
-        times, ys, us = self._signals(t, y, u)
-        if ys.ndim == 2:
-            return self._loop(times, ys, us)[0]
-        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
-        lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
-        return Estimate(times, lower, upper, meta=runs[0].meta)
 
     def _hull(
         self,

@@ -64,7 +64,6 @@ from scipy.linalg import expm, expm_frechet
 
 from ..design.certified_lp import DenseLP, shrink_inward
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
-from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
@@ -179,6 +178,7 @@ class RobustHullEstimator(Observer):
     """
 
     summary_fields = ("horizon", "identify")
+    batched = False  # one LP per bound and run: a Monte Carlo axis is run after run
 
     def __init__(
         self,
@@ -422,29 +422,6 @@ class RobustHullEstimator(Observer):
             "delta_box": self.delta_box,
         }
         return ObserverState(lo, hi, internal=internal)
-
-    def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Boxes over a whole record: :meth:`init`, then :meth:`step` (row ``k``: given ``y_0 … y_{k-1}``).
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Sample times (uniform with spacing ``h`` in continuous time).
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements (a leading axis of runs is processed run by run: LPs do not batch).
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
-
-        Returns
-        -------
-        Estimate
-        """
-        times, ys, us = self._signals(t, y, u)  # checks the spacing h (dt in discrete time)
-        if ys.ndim == 2:
-            return self._loop(times, ys, us)[0]
-        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
-        lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
-        return Estimate(times, lower, upper, meta=runs[0].meta)
 
     def extremal_deltas(self, steps: int) -> FloatArray:
         """The ``ΔA`` of the LP optimum of each bound of the last run: candidates for a lower bound.
