@@ -33,6 +33,7 @@ extensions = [
     "myst_nb",  # MyST markdown pages (it includes myst_parser) and the notebooks, executed on every build
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax shipped with the pages: the math renders without a network
     "sphinx.ext.viewcode",
     "numpydoc",
 ]

@@ -66,7 +66,7 @@ OBSERVERS = {
     "tube": "IntervalObserver.design: the gain with the smallest error tube (default)",
     "framer": "IntervalObserver.design(method='framer'): the classical framer in searched coordinates",
     "intersection": "IntersectionObserver.design: several sound observers intersected, output contraction",
-    "hull": "HullEstimator: the exact interval hull by linear programming (point models; slow)",
+    "hull": "HullEstimator.design: the exact interval hull by linear programming (point models; slow)",
 }
 """Observers ``intervalobs estimate --observer NAME`` can design from a model file."""
 
@@ -413,7 +413,7 @@ def design_observer(model: ModelFile, h: float, observer: str = "tube") -> Obser
     if observer == "intersection":
         return IntersectionObserver.design(model.system, model.bounds, h=period)
     if observer == "hull":
-        return HullEstimator(model.system, model.bounds, h=period)
+        return HullEstimator.design(model.system, model.bounds, h=period)
     raise DataError(f"observer: expected one of {list(OBSERVERS)}, got {observer!r}")
 
 
