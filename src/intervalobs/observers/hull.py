@@ -831,10 +831,10 @@ class HullEstimator(Observer):
         if self.filtered and k > 0:  # state: the filtered box of x_{k-1}; predict x_k from y_0 … y_{k-1}
             nlo, nhi = self.model.propagate(lo, hi, old["u"][-1])
             lo, hi = self._hull(k, start, old["y"], old["u"], old["box_lo"], old["box_hi"], nlo, nhi, False, x0)
-        ys, us = np.vstack([old["y"], y]), np.vstack([old["u"], u])
+        ys, us = np.concatenate([old["y"], y[None]]), np.concatenate([old["u"], u[None]])
         if self.filtered:
             lo, hi = self._hull(k, start, ys, us, old["box_lo"], old["box_hi"], lo, hi, True, x0)
-        box_lo, box_hi = np.vstack([old["box_lo"], lo]), np.vstack([old["box_hi"], hi])
+        box_lo, box_hi = np.concatenate([old["box_lo"], lo[None]]), np.concatenate([old["box_hi"], hi[None]])
         if not self.filtered:
             nlo, nhi = self.model.propagate(lo, hi, u)
             lo, hi = self._hull(k + 1, start, ys, us, box_lo, box_hi, nlo, nhi, False, x0)

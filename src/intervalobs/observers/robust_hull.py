@@ -400,7 +400,7 @@ class RobustHullEstimator(Observer):
         old = state.internal
         k, start = int(old["k"]), int(old["start"])
         self.delta_box = old["delta_box"]
-        ys, us = np.vstack([old["y"], y]), np.vstack([old["u"], u])
+        ys, us = np.concatenate([old["y"], y[None]]), np.concatenate([old["u"], u[None]])
         lo, hi = self._predict(old["box_lo"][-1], old["box_hi"][-1], u)
         low, high = self._box(k + 1, start, ys, us, old["box_lo"], old["box_hi"])
         lo, hi = inflate(np.maximum(lo, low), np.minimum(hi, high))
@@ -416,8 +416,8 @@ class RobustHullEstimator(Observer):
             "start": start + drop,
             "y": ys[drop:],
             "u": us[drop:],
-            "box_lo": np.vstack([old["box_lo"], lo])[drop:],
-            "box_hi": np.vstack([old["box_hi"], hi])[drop:],
+            "box_lo": np.concatenate([old["box_lo"], lo[None]])[drop:],
+            "box_hi": np.concatenate([old["box_hi"], hi[None]])[drop:],
             "fallback": inner,
             "delta_box": self.delta_box,
         }
