@@ -43,6 +43,10 @@ def test_nonlinear_gsisio(tmp_path: Path) -> None:
         for part in ("state", "input"):
             ratio = s["tightness"][example][part]["ratio_norm"]
             assert 1.0 <= ratio < 2.0  # a lower bound (>= 1 by soundness) and the measured gap
+    for part in ("state", "input"):  # against the data-only lower bound the targets are met
+        paper = s["tightness"]["paper_example"][part]
+        assert paper["consistent_hull_inside_ours"]
+        assert 1.0 <= paper["consistent_ratio_norm"] <= paper["target_ratio"] and paper["consistent_target_met_norm"]
     z = np.load(tmp_path / "nonlinear-gsisio" / "trajectories.npz")
     assert np.all(z["d_lower"][0] == -np.inf) and np.all(np.isnan(z["delta_x"]))
     assert np.all(np.isfinite(z["fullrank_delta_x"]))
