@@ -8,6 +8,7 @@ import pytest
 
 from intervalobs import AssumptionError, Bounds, DataError, DesignError, LPVIntervalObserver, LPVIntervalUIO, LPVSystem
 from intervalobs.design.lpv_gains import design_lpv_observer, rotate_bounds
+from intervalobs.simulate import runge_kutta_step
 
 H = 0.02
 SUB = 8
@@ -100,12 +101,12 @@ def simulate(t, runs, seed, fault=None):
             slope = np.where(rng.random(runs) < 0.2, -slope, slope)
             slope = np.where(np.abs(th) > 0.95, -np.sign(th) * RHO, slope)
             d = np.where(rng.random((runs, 4)) < 0.3, -d, d)
-            k1 = rate(x, th, u, d, tt)
-            k2 = rate(x + hs / 2 * k1, th + slope * hs / 2, u, d, tt)
-            k3 = rate(x + hs / 2 * k2, th + slope * hs / 2, u, d, tt)
-            k4 = rate(x + hs * k3, th + slope * hs, u, d, tt)
-            x = x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            th = np.clip(th + slope * hs, -1.0, 1.0)
+
+            def step_rate(s, z, slope=slope, u=u, d=d, tt=tt):  # z = (x, θ) with θ' = slope over the step
+                return np.column_stack([rate(z[:, :4], z[:, 4], u, d, tt), slope])
+
+            z = runge_kutta_step(step_rate, tt, np.column_stack([x, th]), hs)
+            x, th = z[:, :4], np.clip(z[:, 4], -1.0, 1.0)
     return xs, ths, np.sin(t)[:, None]
 
 

@@ -11,6 +11,7 @@ import pytest
 
 from intervalobs.errors import DataError
 from intervalobs.observers.unknown_input import UnknownInputIntervalObserver
+from intervalobs.simulate import runge_kutta_step
 from intervalobs.systems import Bounds, LTISystem
 
 A = np.array([[-1.0, 2.0, 0.0], [-2.0, -1.0, 1.0], [0.0, 0.5, -2.0]])
@@ -47,13 +48,9 @@ def _simulate(seed: int, steps: int, interval: bool) -> dict[str, np.ndarray]:
             def f(tau: float, z: np.ndarray, u: np.ndarray = u) -> np.ndarray:
                 return A @ z + B @ u + D[:, 0] * np.sin(2 * tau) + omega
 
-            k1 = f(s, x)
-            k2 = f(s + dt / 2, x + dt / 2 * k1)
-            k3 = f(s + dt / 2, x + dt / 2 * k2)
-            k4 = f(s + dt, x + dt * k3)
-            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             # g = C(Ax + Dξ + ω): ġ = C(A ẋ + D 2cos 2t)
-            gdot = np.maximum(gdot, np.abs(C @ (A @ k1 + D[:, 0] * 2 * np.cos(2 * s))))
+            gdot = np.maximum(gdot, np.abs(C @ (A @ f(s, x) + D[:, 0] * 2 * np.cos(2 * s))))
+            x = runge_kutta_step(f, s, x, dt)
     y = xs @ C.T + 0.01 * np.sin(t[:, None] + phase)
     return {"t": t, "x": xs, "y": y, "xi": np.sin(2 * t)[:, None], "cmd": cmd, "gdot": gdot}
 
