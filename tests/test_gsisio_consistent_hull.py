@@ -45,7 +45,7 @@ def test_consistent_hull_is_consistent_and_inside_every_sound_box(seed: int) -> 
     assert est.input_lower is not None and est.input_upper is not None
     assert np.all((est.lower <= hull.x_lower) & (hull.x_upper <= est.upper))
     assert np.all((est.input_lower[1:] <= hull.d_lower[1:]) & (hull.d_upper[1:] <= est.input_upper[1:]))
-    tight = ng._tightness(est, known, hull)
+    tight = ng._tightness(est, known, (hull.x_lower, hull.x_upper, hull.d_lower, hull.d_upper))
     for part in ("state", "input"):
         assert tight[part]["consistent_hull_inside_ours"]
         assert 1.0 <= tight[part]["consistent_ratio_norm"] <= tight[part]["ratio_norm"]

@@ -329,9 +329,9 @@ def _consistent_set_inner_hull(
     hull's widths are lower bounds of any sound estimator's widths. Unlike
     :func:`_known_state_inner_hull` it does not use the true :math:`x_k`. The truth stays in the
     population; the others kept are the ``keep`` successors extreme along each of ``directions``
-    directions of the state plane (the angles in :math:`x_1, x_2`; for n > 2 the first two
-    components) and along each input component: the consistent set's extremes are reached by trajectories
-    that stay near its boundary. Fewer kept points only shrink the hull, never make it unsound.
+    directions of the plane of :math:`x_1, x_2` and along each state and input component: the
+    consistent set's extremes are reached by trajectories that stay near its boundary. Fewer kept
+    points only shrink the hull, never make it unsound.
 
     Returns
     -------
@@ -354,7 +354,7 @@ def _consistent_set_inner_hull(
         x_hi[k + 1] = np.maximum(xs.max(axis=0), sim.x[k + 1])
         d_lo[k + 1] = np.minimum(ds.min(axis=0), sim.d[k])
         d_hi[k + 1] = np.maximum(ds.max(axis=0), sim.d[k])
-        scores = np.concatenate([xs @ dirs.T, ds, -ds], axis=1)
+        scores = np.concatenate([xs @ dirs.T, xs, -xs, ds, -ds], axis=1)
         chosen = np.unique(np.argsort(scores, axis=0)[-keep:].ravel())
         pop_x = np.concatenate([sim.x[k + 1 : k + 2], xs[chosen]])
         pop_d = np.concatenate([sim.d[k : k + 1], ds[chosen]])
@@ -372,7 +372,7 @@ def _consistent_set_inner_hull(
 def _tightness(
     est: Estimate,
     inner: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    consistent: ConsistentHull | None = None,
+    consistent: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None,
 ) -> dict[str, Any]:
     """Mean widths (after the transient) over the lower bounds' widths, per component and of the 2-norm.
 
@@ -388,13 +388,13 @@ def _tightness(
         "input": (est.input_lower, est.input_upper, inner[2], inner[3]),
     }
     if consistent is not None:
-        extra = {"state": (consistent.x_lower, consistent.x_upper), "input": (consistent.d_lower, consistent.d_upper)}
+        extra = {"state": consistent[:2], "input": consistent[2:]}
     for name, (lo, hi, ref_lo, ref_hi) in parts.items():
         w = (hi - lo)[..., k, :].reshape(-1, lo.shape[-1])
         refs = {"": (ref_hi - ref_lo)[..., k, :].reshape(-1, lo.shape[-1])}
         if consistent is not None:
             c_lo, c_hi = extra[name]
-            refs["consistent_"] = (c_hi - c_lo)[k]
+            refs["consistent_"] = (c_hi - c_lo)[..., k, :].reshape(-1, lo.shape[-1])
         out[name] = {"mean_width": w.mean(axis=0), "mean_width_norm": float(np.linalg.norm(w, axis=-1).mean())}
         for prefix, r in refs.items():
             ratio_norm = float(np.linalg.norm(w, axis=-1).mean() / np.linalg.norm(r, axis=-1).mean())
@@ -406,7 +406,7 @@ def _tightness(
                 f"{prefix}target_met_norm": bool(ratio_norm <= TARGET_RATIO[name]),
             }
         if consistent is not None:
-            rows = slice(1, None)  # row 0 bounds no input (d_{-1})
+            rows = (..., slice(1, None), slice(None))  # row 0 bounds no input (d_{-1})
             out[name]["consistent_hull_inside_ours"] = bool(
                 np.all(lo[rows] <= c_lo[rows]) and np.all(c_hi[rows] <= hi[rows])
             )
@@ -446,6 +446,8 @@ def _two_hidden_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], 
     x_bound, d_bound = cert.width_bounds(init.internal["z_upper"] - init.internal["z_lower"], steps)
     width_x, width_d = est.width(), est.input_upper - est.input_lower
     inner = [np.stack(parts) for parts in zip(*(_known_state_inner_hull(system, bounds, sm) for sm in sims))]
+    hulls = [_consistent_set_inner_hull(system, bounds, sm) for sm in sims]
+    consistent = [np.stack([getattr(h, key) for h in hulls]) for key in ("x_lower", "x_upper", "d_lower", "d_upper")]
     facts = {
         "system": "examples.gsisio.two_hidden_system: n = 3, q = 3 unknown inputs, rk H = 1 (two hidden), "
         "no Jacobians written (automatic interval forward-mode)",
@@ -463,7 +465,9 @@ def _two_hidden_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], 
         "input_width_below_steady_bound_after_30_steps": bool(np.all(width_d[:, 30:] <= cert.d_width_steady)),
         "max_state_width_after_30_steps": width_x[:, 30:].max(axis=(0, 1)),
         "max_input_width_after_30_steps": width_d[:, 30:].max(axis=(0, 1)),
-        "tightness": _tightness(est, (inner[0], inner[1], inner[2], inner[3])),
+        "tightness": _tightness(
+            est, (inner[0], inner[1], inner[2], inner[3]), (consistent[0], consistent[1], consistent[2], consistent[3])
+        ),
         "runtime_s": {"design": design_time, "run_5_seeds": run_time},
     }
     arrays = {
@@ -538,7 +542,11 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     start = time.perf_counter()
     consistent = _consistent_set_inner_hull(system, bounds, sim)
     consistent_time = time.perf_counter() - start
-    tightness = _tightness(est, _known_state_inner_hull(system, bounds, sim), consistent)
+    tightness = _tightness(
+        est,
+        _known_state_inner_hull(system, bounds, sim),
+        (consistent.x_lower, consistent.x_upper, consistent.d_lower, consistent.d_upper),
+    )
 
     summary = base_summary(
         example=NAME,
