@@ -10,7 +10,7 @@ import pytest
 from scipy.linalg import expm
 
 from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
-from intervalobs.errors import AssumptionError, BoundsError, DataError
+from intervalobs.errors import ArgumentTypeError, AssumptionError, BoundsError, DataError
 from intervalobs.observers.robust_hull import RobustHullEstimator, _delta_model, robust_hull_lower_bound
 
 STEPS = 40
@@ -150,7 +150,7 @@ def test_lower_bound_lies_inside_every_sound_box(continuous: bool) -> None:
 
 def test_errors_name_the_argument() -> None:
     system, bounds = random_system(0, continuous=True)
-    with pytest.raises(DataError, match="h:"):
+    with pytest.raises(ArgumentTypeError, match=r"^h: expected a positive sampling period"):
         RobustHullEstimator.design(system, bounds)
     with pytest.raises(DataError, match="horizon"):
         RobustHullEstimator.design(system, bounds, horizon=0, h=0.1)

@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 from scipy.linalg import block_diag, expm
 
-from intervalobs import AssumptionError, Bounds, BoundsError, IntervalObserver, LTISystem, sampled_model
+from intervalobs import (
+    ArgumentTypeError,
+    AssumptionError,
+    Bounds,
+    IntervalObserver,
+    LTISystem,
+    sampled_model,
+)
 from intervalobs.design.tube import tube_horizon
 from intervalobs.systems.sampling import _nodes
 
@@ -229,7 +236,7 @@ def test_unstable_long_step_is_a_named_error() -> None:
     system = LTISystem([[800.0]], [[1.0]])
     with pytest.raises(AssumptionError, match="Phi, Gamma"):
         sampled_model(system, unit_bounds(1, 1, 1), 1.0)
-    with pytest.raises(BoundsError, match="h: expected a positive step"):
+    with pytest.raises(ArgumentTypeError, match=r"^h: expected a positive step for a continuous-time system, got None"):
         sampled_model(system, unit_bounds(1, 1, 1), None)
 
 

@@ -43,6 +43,10 @@ CASES: dict[str, tuple[Callable[[], Any], type[Exception], str]] = {
     "dt-negative": (lambda: LTISystem([[0.5]], [[1.0]], dt=-1.0), ArgumentError,
                     r"^dt: expected a positive sampling period or None, got -1$"),
     "dt-inf": (lambda: LTISystem([[0.5]], [[1.0]], dt=np.inf), ArgumentError, r"^dt: expected .*, got inf$"),
+    "h-text": (lambda: IntervalObserver.design(spring_mass.system(), spring_mass.bounds(), h="0.1"), ArgumentTypeError,
+               r"^h: expected a positive step for a continuous-time system, got '0.1' \(str\)$"),
+    "h-negative": (lambda: IntervalObserver.design(spring_mass.system(), spring_mass.bounds(), h=-0.1), ArgumentError,
+                   r"^h: expected a positive step for a continuous-time system, got -0.1$"),
     "design-method": (
         lambda: IntervalObserver.design(spring_mass.system(), spring_mass.bounds(), h=0.1, method="bogus"),
         ArgumentError, r"^method: expected one of 'tube', 'framer', got 'bogus'$",

@@ -52,7 +52,7 @@ from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
-from ..validation import as_box, as_choice, as_matrix
+from ..validation import as_box, as_choice, as_matrix, as_positive
 from .base import Observer, ObserverState
 
 if TYPE_CHECKING:
@@ -269,9 +269,7 @@ class HighGainIntervalObserver(Observer):
         self.n, self.p, self.m = system.n, system.p, system.m
         full = bounds.resolve(system)
         self.bounds = full
-        if not (np.isfinite(h) and h > 0):
-            raise BoundsError(f"h: expected a positive step, got {h!r}")
-        self.h = float(h)
+        self.h = as_positive("h", h, "a positive step")
         if not (np.isfinite(input_rate) and input_rate >= 0):
             raise BoundsError(f"input_rate: expected a nonnegative bound of |du/dt|, got {input_rate!r}")
         self.input_rate = float(input_rate)

@@ -53,7 +53,7 @@ from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from ..validation import as_signal, as_time
+from ..validation import as_positive, as_signal, as_time
 from .base import Observer, ObserverState
 
 __all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
@@ -119,8 +119,7 @@ def inner_model(
     """
     a = system.A + delta_a
     if system.continuous:
-        if h is None or not h > 0:
-            raise DataError(f"h: expected a positive sampling period for a continuous-time system, got {h!r}")
+        h = as_positive("h", h, "a positive sampling period for a continuous-time system")
         n, m, nw = system.n, system.m, system.nw
         aug = np.zeros((n + m + nw, n + m + nw))
         aug[:n, :n], aug[:n, n : n + m], aug[:n, n + m :] = a, system.B, system.E

@@ -72,7 +72,7 @@ from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel
-from ..validation import as_array, as_box, as_matrix
+from ..validation import as_array, as_box, as_matrix, as_positive
 from .base import Observer, ObserverState
 
 __all__ = ["IsolationRecord", "LPVIntervalObserver", "LPVIntervalUIO"]
@@ -344,9 +344,7 @@ class LPVIntervalObserver(Observer):
 
     @staticmethod
     def _check_h(h: float) -> float:
-        if not (np.isfinite(h) and h > 0):
-            raise DataError(f"h: expected a positive sampling interval, got {h!r}")
-        return float(h)
+        return as_positive("h", h, "a positive sampling interval")
 
     @classmethod
     def design(

@@ -68,7 +68,7 @@ from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from ..validation import as_signal, as_time
+from ..validation import as_positive, as_signal, as_time
 from .base import Observer, ObserverState
 from .hull import HullLowerBound, inner_model
 
@@ -197,8 +197,8 @@ class RobustHullEstimator(Observer):
             raise AssumptionError("system.dA: expected an interval ΔA (without it, use HullEstimator: exact)")
         if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
             raise DataError(f"horizon: expected a positive integer, got {horizon!r}")
-        if system.continuous and (h is None or not (np.isfinite(h) and h > 0)):
-            raise DataError(f"h: expected a positive sampling period for a continuous-time system, got {h!r}")
+        if system.continuous:
+            as_positive("h", h, "a positive sampling period for a continuous-time system")
         self.system, self.bounds = system, bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
         self.horizon = int(horizon)

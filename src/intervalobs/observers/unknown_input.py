@@ -111,7 +111,7 @@ from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
-from ..validation import as_array, as_box, as_matrix, as_signal, as_vector
+from ..validation import as_array, as_box, as_matrix, as_positive, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState
 
 __all__ = ["UnknownInputIntervalObserver"]
@@ -254,9 +254,7 @@ class UnknownInputIntervalObserver(Observer):
         self.n, self.p, self.m = n, p, system.m
         self.D = as_matrix("D", D, (n, None))
         self.q = self.D.shape[1]
-        if not (np.isfinite(h) and h > 0):
-            raise BoundsError(f"h: expected a positive sampling period, got {h!r}")
-        self.h = float(h)
+        self.h = as_positive("h", h, "a positive sampling period")
         self.step_tolerance = _STEP_TOLERANCE * self.h
         self.decoupling = decoupling
         self.coords = coords

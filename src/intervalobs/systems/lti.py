@@ -147,9 +147,7 @@ class LTISystem:
             if h is not None and not abs(float(h) - self.dt) <= 1e-9 * self.dt:
                 raise BoundsError(f"h: expected None or the system's dt = {self.dt:g} (discrete time), got {h!r}")
             return self.dt
-        if h is None or not (np.isfinite(h) and h > 0):
-            raise BoundsError(f"h: expected a positive step for a continuous-time system, got {h!r}")
-        return float(h)
+        return as_positive("h", h, "a positive step for a continuous-time system")
 
     @classmethod
     def from_control(cls, sys: Any, **kwargs: Any) -> LTISystem:

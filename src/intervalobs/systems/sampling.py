@@ -161,8 +161,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import expm, schur
 
-from ..errors import AssumptionError, BoundsError
+from ..errors import AssumptionError
 from ..interval import inflate
+from ..validation import as_positive
 from .bounds import Bounds
 from .lti import LTISystem
 
@@ -475,9 +476,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         radius = np.abs(system.E) @ w_radius
         step = 1.0
     else:
-        if h is None or not (np.isfinite(h) and h > 0):
-            raise BoundsError(f"h: expected a positive step for a continuous-time system, got {h!r}")
-        step = float(h)
+        step = as_positive("h", h, "a positive step for a continuous-time system")
         size = n + m + nw
         aug = np.zeros((size, size))
         aug[:n, :n], aug[:n, n : n + m], aug[:n, n + m :] = a_mid, system.B, system.E
