@@ -7,6 +7,8 @@ nonnegative: it is the set of :math:`z` with :math:`|z^R - c^R| \le r^R` and
 
 * :func:`cabs` — :math:`\operatorname{cabs}(a) = |a^R| + i|a^I|`;
 * :func:`ctimes` — :math:`M \circ R = \operatorname{cabs}(M)\operatorname{cabs}(R) + 2|M^I||R^I|`;
+* :func:`real_part_radius` — the real part :math:`|M^R|R^R + |M^I|R^I` of :math:`M \circ R` from
+  precomputed magnitudes :math:`|M^R|, |M^I|` (the form observers' hot loops use);
 * :func:`linear_image` — Theorem 2.1: :math:`M(c \pm R) \subseteq (Mc) \pm (M \circ R)`, and the
   bound is the exact rectangular hull of the image (attained at vertices of the box);
 * :func:`delta_operator` — Proposition 2.2: :math:`z = z^c + \Delta(z^r)\sigma`,
@@ -25,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import BoundsError, DimensionError
 
-__all__ = ["cabs", "ctimes", "delta_operator", "linear_image", "real_part_bounds"]
+__all__ = ["cabs", "ctimes", "delta_operator", "linear_image", "real_part_bounds", "real_part_radius"]
 
 ComplexArray = NDArray[np.complex128]
 FloatArray = NDArray[np.float64]
@@ -80,9 +82,29 @@ def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
     if mat.ndim != 2 or rad.shape[-1] != mat.shape[1]:
         raise DimensionError(f"ctimes: expected m (k, n) and r (..., n), got {mat.shape} and {rad.shape}")
     mr, mi = np.abs(mat.real), np.abs(mat.imag)
-    real = rad.real @ mr.T + rad.imag @ mi.T
-    imag = rad.real @ mi.T + rad.imag @ mr.T
-    return real + 1j * imag
+    return real_part_radius(mr, mi, rad.real, rad.imag) + 1j * real_part_radius(mi, mr, rad.real, rad.imag)
+
+
+def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: ArrayLike, r_imag: ArrayLike) -> FloatArray:
+    r"""Real part of :math:`M \circ R`, :math:`|M^R|R^R + |M^I|R^I`, from precomputed magnitudes.
+
+    Seed 004, Theorem 2.1: the real radius of :math:`M(c \pm R)`. (Its imaginary part is the same
+    expression with :math:`|M^R|` and :math:`|M^I|` swapped.) No validation: for hot loops whose
+    magnitudes are computed once.
+
+    Parameters
+    ----------
+    m_real_abs, m_imag_abs : array_like, shape (k, n)
+        :math:`|M^R|` and :math:`|M^I|`.
+    r_real, r_imag : array_like, shape (..., n)
+        Real and imaginary parts of the radius (nonnegative); leading axes are carried through.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., k)
+    """
+    mr, mi = np.asarray(m_real_abs, dtype=float), np.asarray(m_imag_abs, dtype=float)
+    return np.asarray(r_real, dtype=float) @ mr.T + np.asarray(r_imag, dtype=float) @ mi.T
 
 
 def linear_image(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[ComplexArray, ComplexArray]:
