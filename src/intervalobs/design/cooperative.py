@@ -42,6 +42,10 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
+_EIGENVALUE_TOLERANCE = 1e-12
+"""Tolerance of the eigenvalue classifications (on the unit circle or outside; real), relative: it only
+decides which test or basis is tried, and every design result is verified by eigenvalues."""
+
 _GAIN_LIMIT = 1e6
 _PERRON_ITERATIONS = 4
 _RATE_FRACTIONS = (0.25, 0.5, 0.8)
@@ -121,7 +125,7 @@ def is_detectable(model: SampledModel, C: FloatArray) -> bool:
     """
     n = model.Phi.shape[0]
     for lam in np.linalg.eigvals(model.Phi):
-        if abs(lam) >= 1 - 1e-12:
+        if abs(lam) >= 1 - _EIGENVALUE_TOLERANCE:
             pbh = np.vstack([lam * np.eye(n) - model.Phi, C.astype(complex)])
             if np.linalg.matrix_rank(pbh, tol=1e-9 * max(1.0, np.abs(pbh).max())) < n:
                 return False
@@ -148,7 +152,7 @@ def real_modal_basis(a: FloatArray) -> FloatArray | None:
         if used[i]:
             continue
         used[i] = True
-        if abs(vals[i].imag) < 1e-12 * max(1.0, abs(vals[i])):
+        if abs(vals[i].imag) < _EIGENVALUE_TOLERANCE * max(1.0, abs(vals[i])):
             columns.append(vecs[:, i].real)
         else:
             j = int(np.argmin(np.abs(vals - vals[i].conj()) + used * 1e300))

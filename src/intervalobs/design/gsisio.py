@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import DesignError
-from ..interval import neg, pos
+from ..interval import inflate, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_box
@@ -27,6 +27,14 @@ from .mixed_monotone import JacobianDecomposition, jacobian_bounds, lipschitz_bo
 __all__ = ["GSISIODesign", "gsisio_design"]
 
 FloatArray = NDArray[np.float64]
+
+_CERTIFICATE_MARGIN = 1e-9
+"""Relative margin (:func:`~intervalobs.interval.inflate`) on the certified width sequences: they come from
+norms, solves and geometric sums whose rounding is far below it."""
+_CERTIFICATE_FLOOR = 1e-12
+"""Absolute part of that margin (keeps a zero width sequence strictly positive)."""
+_SIGN_TOLERANCE = 1e-12
+"""Entries of T_f, T_g above -1e-12 count as nonnegative in the reported condition (a report, not a pad)."""
 BoxPair = tuple[FloatArray, FloatArray]
 
 
@@ -132,7 +140,8 @@ class GSISIODesign:
         if not ell < 1.0:
             return np.full(steps, np.nan)
         k = np.arange(steps, dtype=float)
-        return (ell**k * delta0 + self.delta_z * (1.0 - ell**k) / (1.0 - ell)) * (1.0 + 1e-9) + 1e-12
+        sequence = ell**k * delta0 + self.delta_z * (1.0 - ell**k) / (1.0 - ell)
+        return inflate(0.0, sequence, _CERTIFICATE_MARGIN, floor=_CERTIFICATE_FLOOR)[1]
 
     def delta_d(self, delta_x: FloatArray, dw: FloatArray, dv: FloatArray) -> FloatArray:
         r"""Lemma 5's input-width bound, corrected to use :math:`\delta^x_k` and :math:`\delta^x_{k-1}`.
@@ -288,7 +297,7 @@ def gsisio_design(
     dv = full.v[1] - full.v[0]
     delta_z = float(np.linalg.norm(T_f @ dw + T_g @ dv))
     comp = float(np.max(np.abs(np.linalg.eigvals(T_f @ dec_f.W + T_g @ dec_g.W))))
-    nonneg = bool(np.all(T_f >= -1e-12) and np.all(T_g >= -1e-12))
+    nonneg = bool(np.all(T_f >= -_SIGN_TOLERANCE) and np.all(T_g >= -_SIGN_TOLERANCE))
     conditions: dict[str, Any] = {
         "(i)": {"holds": bool(script_l <= 1.0), "script_L": script_l, "script_L_paper_formula": script_l_paper},
         "(ii)": _condition_ii(T_f, T_g, L_fd, L_gd),

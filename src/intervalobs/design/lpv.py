@@ -63,6 +63,10 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
+_FAST_TOLERANCE = 1e-12
+"""Largest relative difference a user's vectorised closed form may have from the certified rational form
+(a check that it computes the same entries, not a rounding pad: their bounds come from the certificate)."""
+
 
 def _round_up_nonnegative(x: FloatArray, roundings: int) -> FloatArray:
     """Round up a nonnegative result of ``roundings`` rounded operations; exact zeros stay exact certificates.
@@ -402,15 +406,17 @@ class CertifiedVertexBounds:
         Raises
         ------
         DesignError
-            If it exceeds 1e-12 (then ``fast`` does not compute the certified entries).
+            If it exceeds ``_FAST_TOLERANCE`` (1e-12; then ``fast`` does not compute the certified entries).
         """
         s = np.linspace(self.cell_edges[0], self.cell_edges[-1], points)
         ref = self.vertex_values(s)[list(select)]
         params = [self.vertices[:, k][:, None] for k in range(self.vertices.shape[1])]
         got = np.asarray(fast(*params, s[None]))
         diff = float(np.max(np.abs(got - ref) / (1.0 + np.abs(ref))))
-        if not diff <= 1e-12:
-            raise DesignError(f"fast: expected the certified entries to 1e-12, got a relative difference {diff:.3g}")
+        if not diff <= _FAST_TOLERANCE:
+            raise DesignError(
+                f"fast: expected the certified entries to {_FAST_TOLERANCE:g}, got a relative difference {diff:.3g}"
+            )
         return diff
 
 
@@ -838,7 +844,7 @@ def boundedness_lmi(
         pv = np.asarray(p_var.value, dtype=float)
         pv = 0.5 * (pv + pv.T)
         # make the (2,2) block exactly ≤ 0 (the solver meets it only to its tolerance)
-        gv = max(float(np.asarray(gamma.value)), float(np.linalg.eigvalsh(pv)[-1]) / eps1 * (1 + 1e-12))
+        gv = max(float(np.asarray(gamma.value)), float(inflate(0.0, np.linalg.eigvalsh(pv)[-1] / eps1, floor=0.0)[1]))
         margin = float(np.max(_block_max_eig(pv, q, gv, eps1 + eps2, g, eta)))
         if best is None or margin < best[0]:
             best = (margin, (pv, gv, eps1, solution.status))

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, DesignError, DimensionError
+from ..interval import inflate
 from ..systems.lpv import LPVSystem
 from ..validation import as_matrix
 from .lmi import solve_lmi
@@ -55,6 +56,10 @@ from .lpv import (
 __all__ = ["LPVObserverDesign", "design_lpv_observer", "rotate_bounds", "scheduling_grid"]
 
 FloatArray = NDArray[np.float64]
+
+_STRUCTURE_TOLERANCE = 1e-12
+"""Relative tolerance of the structural checks (equal input columns, zero entries of H): decides which
+structure is used, not a rounding pad (the design is verified afterwards)."""
 
 
 def rotate_bounds(r: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -205,7 +210,7 @@ def _uio_coordinates(system: LPVSystem, points: FloatArray) -> tuple[FloatArray,
     """R with R B_un = H = (I_q; 0) (26) for a constant B_un; returns (R, H)."""
     p, n, q = system.p, system.n, system.q
     bu = system.matrix_at("B_un", points)
-    if not np.allclose(bu, bu[0], rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(bu).max()))):
+    if not np.allclose(bu, bu[0], rtol=0.0, atol=_STRUCTURE_TOLERANCE * max(1.0, float(np.abs(bu).max()))):
         raise AssumptionError("B_un: expected a constant B_un(θ) for the designed UIO (R constant, (26))")
     b1, b2 = bu[0][:p], bu[0][p:]
     u, _, _ = np.linalg.svd(b1)
@@ -215,7 +220,7 @@ def _uio_coordinates(system: LPVSystem, points: FloatArray) -> tuple[FloatArray,
     r = np.zeros((n, n))
     r[:p, :p], r[p:, :p], r[p:, p:] = r11, r21, np.eye(n - p)
     h = r @ bu[0]
-    return r, np.where(np.abs(h) < 1e-12, 0.0, h)
+    return r, np.where(np.abs(h) < _STRUCTURE_TOLERANCE, 0.0, h)
 
 
 def _check_r(r: FloatArray, p: int) -> None:
@@ -391,7 +396,7 @@ def design_lpv_observer(
         for fleft in (fl_left, fu_left):
             fleft[off & (fleft < 0)] = 0.0
         pmat = np.diag(np.concatenate([pld, pud]))
-        gv = max(float(np.asarray(gam.value)), float(pmat.max()) / eps1 * (1 + 1e-12))
+        gv = max(float(np.asarray(gam.value)), float(inflate(0.0, float(pmat.max()) / eps1, floor=0.0)[1]))
         margin = _lmi_margin(pmat, q_scale, gv, eps1 + eps2, fl_left, fu_left, a_r, dl, du, masks)
         if best is None or margin < best[0]:
             best = (margin, (pmat, gv, eps1, solution.status, fl_left, fu_left))

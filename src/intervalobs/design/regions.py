@@ -59,6 +59,10 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+_CONJUGATE_TOLERANCE = 1e-12
+"""Absolute tolerance of the check that disk centres come in conjugate pairs (a check on user data, not a
+rounding pad: the pairing only selects which LMI is solved, and every result is verified)."""
 ComplexArray = NDArray[np.complex128]
 
 _MAX_CONDITION = 1e8
@@ -592,7 +596,7 @@ def place_in_disks(
                 f"disks: expected disks in the left half-plane (Re c + r <= 0), got centre {d.center} radius {d.radius}"
             )
     centres = np.array([d.center for d in region])
-    if not np.allclose(np.sort_complex(centres), np.sort_complex(centres.conj()), atol=1e-12):
+    if not np.allclose(np.sort_complex(centres), np.sort_complex(centres.conj()), atol=_CONJUGATE_TOLERANCE):
         raise AssumptionError(
             "disks: expected disks closed under complex conjugation (a real gain places conjugate pairs)"
         )
@@ -607,7 +611,11 @@ def place_in_disks(
             continue
         done[j] = True
         if not disk.is_real:
-            partner = [i for i in range(n) if not done[i] and abs(region[i].center - disk.center.conjugate()) < 1e-12]
+            partner = [
+                i
+                for i in range(n)
+                if not done[i] and abs(region[i].center - disk.center.conjugate()) < _CONJUGATE_TOLERANCE
+            ]
             if not partner:
                 raise AssumptionError(f"disks: the disk {disk.center} has no conjugate partner")
             done[partner[0]] = True

@@ -40,6 +40,10 @@ __all__ = ["TubeDesign", "design_tube_gain", "tube_horizon", "tube_stability"]
 
 FloatArray = NDArray[np.float64]
 
+_KALMAN_REGULARISATION = 1e-12
+"""Added to the Kalman-type design covariances so they are positive definite (a design choice, not a
+rounding pad: the gain is only a candidate, its tube is computed and verified afterwards)."""
+
 _HORIZON_CONTRACTION = 0.25
 _MAX_HORIZON = 4000
 _SHORT_HORIZON = 256
@@ -199,8 +203,8 @@ def design_tube_gain(
     if not (np.all(np.isfinite(model.noise_radius)) and np.all(np.isfinite(spread))):
         return None
     scale = max(1.0, float(np.max(model.noise_radius)))
-    q = np.diag(np.square(model.noise_radius / scale) + np.square(spread / scale)) + 1e-12 * np.eye(n)
-    r0 = np.diag((np.abs(F) @ v_radius) ** 2) + 1e-12 * np.eye(C.shape[0])
+    q = np.diag(np.square(model.noise_radius / scale) + np.square(spread / scale)) + _KALMAN_REGULARISATION * np.eye(n)
+    r0 = np.diag((np.abs(F) @ v_radius) ** 2) + _KALMAN_REGULARISATION * np.eye(C.shape[0])
     candidates: dict[str, FloatArray] = {}
     for factor in (0.1, 1.0, 10.0):
         gain = _kalman_gain(model, C, q, r0 * factor / scale / scale)

@@ -63,6 +63,10 @@ from .base import Observer, ObserverState
 __all__ = ["NullSpaceGSISIO", "WidthCertificate"]
 
 FloatArray = NDArray[np.float64]
+
+_SINGULAR_TOLERANCE = 1e-12
+"""Relative size below which an inverse entry counts as negative and a determinant as zero (decides which
+preconditioner is tried; the bounds built with the chosen one are sound whatever it is)."""
 BoxPair = tuple[FloatArray, FloatArray]
 
 
@@ -96,7 +100,7 @@ def _h_matrix_inverse(lo: FloatArray, hi: FloatArray) -> FloatArray | None:
     if np.max(np.abs(np.linalg.eigvals(off / diag[:, None]))) >= 1.0 - 1e-9:
         return None
     inverse = np.linalg.inv(np.diag(diag) - off)
-    if np.any(inverse < -1e-12 * np.abs(inverse).max()):
+    if np.any(inverse < -_SINGULAR_TOLERANCE * np.abs(inverse).max()):
         return None
     return np.maximum(inverse, 0.0) * (1.0 + 1e-9)
 
@@ -310,7 +314,7 @@ class NullSpaceGSISIO(Observer):
             candidates: list[FloatArray] = [np.asarray(np.linalg.pinv(mid), dtype=float)]
             for rows in list(combinations(range(r2), h))[:20]:
                 block = mid[list(rows)]
-                if abs(np.linalg.det(block)) > 1e-12 * max(1.0, np.abs(block).max() ** h):
+                if abs(np.linalg.det(block)) > _SINGULAR_TOLERANCE * max(1.0, np.abs(block).max() ** h):
                     chosen = np.zeros((h, r2))
                     chosen[:, list(rows)] = np.linalg.inv(block)
                     candidates.append(chosen)

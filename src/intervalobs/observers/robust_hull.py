@@ -76,6 +76,10 @@ __all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
 
 FloatArray = NDArray[np.float64]
 
+_CANDIDATE_TOLERANCE = 1e-12
+"""Relative tolerance of the check that user ΔA candidates lie in the ΔA box (candidates only seed a
+search for a lower bound; a check on the argument, not a rounding pad)."""
+
 _EPS = float(np.finfo(float).eps)
 _BACKTRACK = (1.0, 0.5, 0.25)
 """Fractions of a sequential-LP step of the lower bound's ΔA search tried in turn."""
@@ -624,7 +628,7 @@ def robust_hull_lower_bound(
             f"candidates: expected shape (S, {n}, {n}) or ({times.size}, S, {n}, {n}), got {cands.shape}"
         )
     finite = np.all(np.isfinite(cands), axis=(2, 3))
-    tol = 1e-12 * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
+    tol = _CANDIDATE_TOLERANCE * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
     outside = (cands < system.dA[0] - tol) | (cands > system.dA[1] + tol)
     if np.any(np.any(outside, axis=(2, 3)) & finite):
         raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")

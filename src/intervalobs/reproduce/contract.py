@@ -169,6 +169,11 @@ def write_reproduction(out_dir: Path, summary: dict[str, Any], trajectories: Map
     np.savez_compressed(out_dir / "trajectories.npz", **arrays)
 
 
+_FRACTION_TOLERANCE = 1e-12
+"""How far a summary's claimed enclosure fraction may differ from the recomputed one (a ratio of counts
+printed to full precision: any larger difference is a different count)."""
+
+
 SUMMARY_KEYS = (
     "example",
     "seed",
@@ -242,7 +247,7 @@ def check_reproduction(folder: Path) -> list[str]:
             )
         if name == "recommended":
             claimed = summary["enclosure"].get("state", {}).get("fraction")
-            if claimed is None or abs(float(claimed) - report.fraction) > 1e-12:
+            if claimed is None or abs(float(claimed) - report.fraction) > _FRACTION_TOLERANCE:
                 problems.append(
                     f"summary.json: state enclosure fraction {claimed}, the trajectories give {report.fraction:.12g}"
                 )
