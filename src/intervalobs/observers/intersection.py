@@ -11,7 +11,7 @@ Three sound operations, each kept only where it pays (measured in docs/benchmark
 * **Output contraction.** :math:`x_k` also lies in :math:`\{x : y_k - Cx \in F[\underline v, \overline v]\}`.
   A forward–backward contractor on each output row (the exact box hull of one row's strip inside a box,
   repeated ``sweeps`` times over the rows) intersects the box with it before the members take their
-  step. Each computed end is padded outward by a relative ``ROUNDING_MARGIN``.
+  step. Each computed end is widened by :func:`~intervalobs.interval.inflate`.
 
 The rows of :meth:`IntersectionObserver.run` are, as for every observer, the boxes of :math:`x_k` given
 :math:`y_0 \dots y_{k-1}`; :meth:`IntersectionObserver.step` also returns the contracted box of
@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import coordinate_candidates
 from ..errors import DataError, DesignError, DimensionError
-from ..interval import ROUNDING_MARGIN, matvec_bounds
+from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
@@ -38,8 +38,6 @@ from .interval_observer import IntervalObserver
 __all__ = ["IntersectionObserver", "output_contraction"]
 
 FloatArray = NDArray[np.float64]
-
-_TINY = float(np.finfo(float).tiny)
 
 
 def output_contraction(
@@ -84,12 +82,11 @@ def output_contraction(
             for j in np.flatnonzero(row):
                 rest_lo = sum_lo - terms_lo[..., j]
                 rest_hi = sum_hi - terms_hi[..., j]
-                pad = ROUNDING_MARGIN * (scale + np.abs(y_lower[..., i]) + np.abs(y_upper[..., i])) + _TINY
-                a = (y_lower[..., i] - rest_hi - pad) / row[j]
-                b = (y_upper[..., i] - rest_lo + pad) / row[j]
+                size = scale + np.abs(y_lower[..., i]) + np.abs(y_upper[..., i])
+                num_lo, num_hi = inflate(y_lower[..., i] - rest_hi, y_upper[..., i] - rest_lo, scale=size)
+                a, b = num_lo / row[j], num_hi / row[j]
                 new_lo, new_hi = np.minimum(a, b), np.maximum(a, b)
-                new_lo = new_lo - ROUNDING_MARGIN * np.abs(new_lo) - _TINY
-                new_hi = new_hi + ROUNDING_MARGIN * np.abs(new_hi) + _TINY
+                new_lo, new_hi = inflate(new_lo, new_lo)[0], inflate(new_hi, new_hi)[1]
                 lo[..., j] = np.maximum(lo[..., j], new_lo)
                 hi[..., j] = np.minimum(hi[..., j], new_hi)
     if np.any(lo > hi):
@@ -247,13 +244,13 @@ class IntersectionObserver(Observer):
         """The framer's z-box intersected with the hull of ``T·[lo, hi]`` (both contain ``T x_k``)."""
         z_c, z_r = member.internal["z_center"], member.internal["z_radius"]
         t_lo, t_hi = matvec_bounds(obs.T, lo, hi)
-        pad = ROUNDING_MARGIN * (np.abs(t_lo) + np.abs(t_hi)) + _TINY
-        z_lo = np.maximum(z_c - z_r, t_lo - pad)
-        z_hi = np.minimum(z_c + z_r, t_hi + pad)
+        t_lo, t_hi = inflate(t_lo, t_hi, scale=np.abs(t_lo) + np.abs(t_hi))
+        z_lo = np.maximum(z_c - z_r, t_lo)
+        z_hi = np.minimum(z_c + z_r, t_hi)
         z_hi = np.maximum(z_hi, z_lo)
         # centre–radius rounding: widen the radius by the rounding of the midpoint
         new_c = 0.5 * (z_lo + z_hi)
-        new_r = 0.5 * (z_hi - z_lo) + ROUNDING_MARGIN * (np.abs(z_lo) + np.abs(z_hi)) + _TINY
+        _, new_r = inflate(0.0, 0.5 * (z_hi - z_lo), scale=np.abs(z_lo) + np.abs(z_hi))
         # keep the member's own numbers where the intersection does not shrink its box
         shrunk = np.any(new_r < z_r, axis=-1, keepdims=True)
         internal = dict(member.internal)
