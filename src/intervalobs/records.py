@@ -60,6 +60,10 @@ __all__ = [
     "write_model",
 ]
 
+_DECIMAL_TIME_ULPS = 8 * np.finfo(float).eps
+"""Relative spacing tolerance of a record's times (a check, not a bound's pad): times written as decimals
+carry the rounding of their last digit, a few ulps of the largest time."""
+
 FloatArray = NDArray[np.float64]
 
 OBSERVERS = {
@@ -372,8 +376,7 @@ def _spacing(table: _CsvTable | _ParquetTable, t: FloatArray, model: ModelFile) 
     steps = np.diff(t)
     expected = model.system.dt if model.system.dt is not None else model.h
     h = float(expected) if expected is not None else float(steps[0])
-    # times written as decimals carry the rounding of their last digit: a few ulps of the largest time
-    tolerance = SPACING_TOLERANCE * h + 8 * np.finfo(float).eps * float(np.max(np.abs(t)))
+    tolerance = SPACING_TOLERANCE * h + _DECIMAL_TIME_ULPS * float(np.max(np.abs(t)))
     off = np.flatnonzero(np.abs(steps - h) > tolerance)
     if off.size:
         k = int(off[0])

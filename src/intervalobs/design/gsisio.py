@@ -28,10 +28,10 @@ __all__ = ["GSISIODesign", "gsisio_design"]
 
 FloatArray = NDArray[np.float64]
 
-_CERTIFICATE_MARGIN = 1e-9
+CERTIFICATE_MARGIN = 1e-9
 """Relative margin (:func:`~intervalobs.interval.inflate`) on the certified width sequences: they come from
 norms, solves and geometric sums whose rounding is far below it."""
-_CERTIFICATE_FLOOR = 1e-12
+CERTIFICATE_FLOOR = 1e-12
 """Absolute part of that margin (keeps a zero width sequence strictly positive)."""
 _SIGN_TOLERANCE = 1e-12
 """Entries of T_f, T_g above -1e-12 count as nonnegative in the reported condition (a report, not a pad)."""
@@ -141,7 +141,7 @@ class GSISIODesign:
             return np.full(steps, np.nan)
         k = np.arange(steps, dtype=float)
         sequence = ell**k * delta0 + self.delta_z * (1.0 - ell**k) / (1.0 - ell)
-        return inflate(0.0, sequence, _CERTIFICATE_MARGIN, floor=_CERTIFICATE_FLOOR)[1]
+        return inflate(0.0, sequence, CERTIFICATE_MARGIN, floor=CERTIFICATE_FLOOR)[1]
 
     def delta_d(self, delta_x: FloatArray, dw: FloatArray, dv: FloatArray) -> FloatArray:
         r"""Lemma 5's input-width bound, corrected to use :math:`\delta^x_k` and :math:`\delta^x_{k-1}`.

@@ -51,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.composed_range import ComposedRange
+from ..design.gsisio import CERTIFICATE_FLOOR, CERTIFICATE_MARGIN
 from ..design.mixed_monotone import jacobian_bounds, width_matrix
 from ..errors import AssumptionError, DimensionError
 from ..inclusion import evaluate_matrix
@@ -68,6 +69,11 @@ _SINGULAR_TOLERANCE = 1e-12
 """Relative size below which an inverse entry counts as negative and a determinant as zero (decides which
 preconditioner is tried; the bounds built with the chosen one are sound whatever it is)."""
 BoxPair = tuple[FloatArray, FloatArray]
+
+
+def _round_up(widths: FloatArray) -> FloatArray:
+    """Nonnegative certified widths rounded up by the certificate margin (norms, solves and geometric sums)."""
+    return inflate(0.0, widths, CERTIFICATE_MARGIN, floor=0.0)[1]
 
 
 def _divide(num: BoxPair, den: BoxPair) -> BoxPair:
@@ -102,7 +108,7 @@ def _h_matrix_inverse(lo: FloatArray, hi: FloatArray) -> FloatArray | None:
     inverse = np.linalg.inv(np.diag(diag) - off)
     if np.any(inverse < -_SINGULAR_TOLERANCE * np.abs(inverse).max()):
         return None
-    return np.maximum(inverse, 0.0) * (1.0 + 1e-9)
+    return _round_up(np.maximum(inverse, 0.0))
 
 
 @dataclass(frozen=True)
@@ -183,7 +189,7 @@ class WidthCertificate:
         if steps > 1:
             stacked = np.concatenate([z[:-1], z[1:, n - n_t :]], axis=-1)
             d[1:] = stacked @ self.d_matrix.T + self.d_offset
-        return x * (1 + 1e-9), d * (1 + 1e-9)
+        return _round_up(x), _round_up(d)
 
     def as_dict(self) -> dict[str, Any]:
         """Numbers for ``summary.json``.
@@ -496,7 +502,7 @@ class NullSpaceGSISIO(Observer):
         jfz = self._range.global_jacobian(np.concatenate([np.zeros((h, n)), P @ self.U2.T], axis=1))
         assert jfz is not None
         W_F = width_matrix(*jfz)[:, :na]
-        omega_t = np.abs(P @ self.U2.T) @ dv + 1e-12
+        omega_t = np.abs(P @ self.U2.T) @ dv + CERTIFICATE_FLOOR
         Gamma = np.vstack([W_a, 2.0 * minv @ W_F @ W_a])
         gamma = np.concatenate([omega_a, 2.0 * minv @ (W_F @ omega_a + omega_t)])
         return Gamma, gamma, W_a, W_F, minv
@@ -600,11 +606,11 @@ class NullSpaceGSISIO(Observer):
             )
             return WidthCertificate(False, cert.reason, Gamma, gamma, radius, W_a, W_F, minv, self.ell_c,
                                     nan_n, nan_n, nan_q, d_matrix, offset, self.Zinv)  # fmt: skip
-        z_steady = np.asarray(np.linalg.solve(np.eye(n) - Gamma, gamma), dtype=float) * (1 + 1e-9)
+        z_steady = _round_up(np.asarray(np.linalg.solve(np.eye(n) - Gamma, gamma), dtype=float))
         x_steady = np.abs(self.Zinv) @ z_steady
         d_steady = D_z @ z_steady + D_t @ z_steady[na:] + offset
         return WidthCertificate(True, "rho(Gamma) < 1", Gamma, gamma, radius, W_a, W_F, minv, self.ell_c,
-                                z_steady, x_steady, d_steady * (1 + 1e-9), d_matrix, offset, self.Zinv)  # fmt: skip
+                                z_steady, x_steady, _round_up(d_steady), d_matrix, offset, self.Zinv)  # fmt: skip
 
     # ---- protocol ----------------------------------------------------------------------------------
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
