@@ -62,7 +62,7 @@ from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
-from ..systems.sampling import sampled_model
+from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_box
 from .base import Observer, ObserverState
 from .hull import HullEstimator
@@ -139,12 +139,7 @@ class FiniteMemoryObserver(Observer):
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
-        if system.continuous:  # the sound sampled model's noise is a box
-            noise = (np.eye(self.n), model.noise_center, model.noise_radius)
-        else:  # x+ = Ax + Bu + Ew exactly: keep the channels (tighter than the box of Ew when E mixes)
-            w_lo, w_hi = self.bounds.w
-            noise = (system.E, 0.5 * (w_lo + w_hi), 0.5 * (w_hi - w_lo))
-        self._setup(model.Phi, model.Gamma, *noise)
+        self._setup(model.Phi, model.Gamma, *_noise_channels(system, self.bounds, model))
         self._model = model
 
     # -- design ----------------------------------------------------------------------------------
@@ -488,10 +483,35 @@ class FiniteMemoryObserver(Observer):
         }
 
 
+def _noise_channels(system: LTISystem, full: ResolvedBounds, model: SampledModel) -> tuple[FloatArray, ...]:
+    """The process noise as ``G η`` with ``η`` in a box: ``(G, centre, radius)``.
+
+    Discrete time: ``G = E`` and the box of ``w`` (noise channels that drive several states keep their
+    structure: a zonotope, tighter than the box of ``E w``); continuous time: ``G = I`` and the box of
+    the sound sampled model.
+    """
+    if system.continuous:
+        return np.eye(system.n), model.noise_center, model.noise_radius
+    w_lo, w_hi = full.w
+    return system.E, 0.5 * (w_lo + w_hi), 0.5 * (w_hi - w_lo)
+
+
+_LP_ATTEMPTS = (("highs", {}), ("highs-ds", {"presolve": False}), ("highs-ipm", {"presolve": False}))
+"""Solver settings tried in turn for a filter LP: HiGHS's default, then dual simplex and interior point
+without presolve (HiGHS's presolve returns status "Not Set" on some large window LPs)."""
+
+_LP_INFEASIBLE = 2
+"""``scipy.optimize.linprog`` status of an infeasible problem."""
+
+
 def _worst_case_gains(
     system: LTISystem, full: ResolvedBounds, window: int, h: float | None
 ) -> tuple[FloatArray, float]:
-    """Weights ``(n, N, p)`` minimising each component's evaluated worst-case error with ``R = 0``, and the LP time."""
+    """Weights ``(n, N, p)`` minimising each component's evaluated worst-case error with ``R = 0``, and the LP time.
+
+    The error's noise term is ``sum_l |D_l G| r`` (per noise channel, as the observer evaluates it), so a
+    noise zonotope is weighed through its generators, not through the box of ``G η``.
+    """
     if system.dA is not None:
         raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
     if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:
@@ -499,22 +519,23 @@ def _worst_case_gains(
     model = sampled_model(system, full, h)
     n, p, nv, big_n = system.n, system.p, system.F.shape[1], int(window)
     phi, c_mat, f_mat = model.Phi, system.C, system.F
-    r = model.noise_radius
+    noise_map, _, r = _noise_channels(system, full, model)
+    ng = noise_map.shape[1]
     vr = full.radius("v")
     powers = [np.eye(n)]
     for _ in range(big_n):
         powers.append(phi @ powers[-1])
-    # H maps k (N p, block j = k_j) to the D row (N n, block l): -(sum_{j>l} (C Φ^{j-1-l})^T k_j).
-    hmat = np.zeros((big_n * n, big_n * p))
+    # H maps k (N p, block j = k_j) to the rows of D_l G (N nG, block l): -(sum_{j>l} (C Φ^{j-1-l} G)^T k_j).
+    hmat = np.zeros((big_n * ng, big_n * p))
     for l_ in range(big_n):
         for j in range(l_ + 1, big_n):
-            hmat[l_ * n : (l_ + 1) * n, j * p : (j + 1) * p] = (c_mat @ powers[j - 1 - l_]).T
+            hmat[l_ * ng : (l_ + 1) * ng, j * p : (j + 1) * p] = (c_mat @ powers[j - 1 - l_] @ noise_map).T
     vmat = np.kron(np.eye(big_n), f_mat.T)  # (N nv, N p)
     gmat = np.hstack([(c_mat @ powers[j]).T for j in range(big_n)])  # (n, N p)
-    nk, ne, nvv = big_n * p, big_n * n, big_n * nv
+    nk, ne, nvv = big_n * p, big_n * ng, big_n * nv
     cost = np.concatenate([np.zeros(nk), np.tile(r, big_n), np.tile(vr, big_n)])
     eye_e, eye_v = np.eye(ne), np.eye(nvv)
-    # t_e >= |phi_i - H k|,  t_v >= |V k|
+    # t_e >= |(Φ^{N-1-l})_i G - H k|,  t_v >= |V k|
     a_ub = np.block(
         [
             [-hmat, -eye_e, np.zeros((ne, nvv))],
@@ -528,13 +549,32 @@ def _worst_case_gains(
     gains = np.zeros((n, big_n, p))
     start = time.perf_counter()
     for i in range(n):
-        phi_row = np.concatenate([powers[big_n - 1 - l_][i] for l_ in range(big_n)])
+        phi_row = np.concatenate([powers[big_n - 1 - l_][i] @ noise_map for l_ in range(big_n)])
         b_ub = np.concatenate([-phi_row, phi_row, np.zeros(2 * nvv)])
-        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=powers[big_n][i], bounds=var_bounds, method="highs")
+        outcomes = []
+        for method, options in _LP_ATTEMPTS:
+            res = linprog(
+                cost,
+                A_ub=a_ub,
+                b_ub=b_ub,
+                A_eq=a_eq,
+                b_eq=powers[big_n][i],
+                bounds=var_bounds,
+                method=method,
+                options=options,
+            )
+            if res.status in (0, _LP_INFEASIBLE):
+                break
+            outcomes.append(f"{method}: status {res.status} ({res.message})")
+        if res.status == _LP_INFEASIBLE:
+            raise DesignError(
+                f"FiniteMemoryObserver: the filter LP of component {i} is infeasible ({res.message}): "
+                f"Φ^N is not a combination of C, CΦ, …, CΦ^(N-1); observe more outputs or raise window={big_n}"
+            )
         if res.status != 0:
             raise DesignError(
-                f"FiniteMemoryObserver.design: LP for component {i} failed ({res.message}); "
-                f"is the pair (Φ, C) observable within window={big_n}?"
+                f"FiniteMemoryObserver: the filter LP of component {i} was not solved by any method "
+                f"({'; '.join(outcomes)}); scale the model or change window={big_n}"
             )
         gains[i] = res.x[:nk].reshape(big_n, p)
     elapsed = time.perf_counter() - start
