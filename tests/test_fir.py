@@ -248,3 +248,51 @@ def test_learned_bank_with_shared_noise_channels() -> None:
         fallback = bank.fallback.run(t, sim.y, u)
         assert est.width()[20:].mean() < 0.8 * fallback.width()[20:].mean()
         assert est.width()[20:].mean() < 1.1 * exact.width()[20:].mean()
+
+
+def test_filter_lp_status_is_retried_or_reported(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A status other than "infeasible" is retried with other methods, then named; never an observability hint."""
+    import intervalobs.observers.fir as fir
+
+    system, bounds = small_discrete()
+    real = fir.linprog
+    calls: list[str] = []
+
+    def first_fails(*args: object, **kwargs: object) -> object:
+        calls.append(str(kwargs["method"]))
+        result = real(*args, **kwargs)
+        if len(calls) == 1:
+            result.status, result.message = 4, "numerical difficulties"
+        return result
+
+    monkeypatch.setattr(fir, "linprog", first_fails)
+    retried = FiniteMemoryObserver.design(system, bounds, window=8)
+    assert calls[:2] == ["highs", "highs-ds"] and retried.meta()["residual"] < 1e-8
+
+    def always_fails(*args: object, **kwargs: object) -> object:
+        result = real(*args, **kwargs)
+        result.status, result.message = 4, "numerical difficulties"
+        return result
+
+    monkeypatch.setattr(fir, "linprog", always_fails)
+    with pytest.raises(IntervalObserverError, match=r"component 0 was not solved.*status 4") as info:
+        FiniteMemoryObserver.design(system, bounds, window=8)
+    assert "observ" not in str(info.value)
+    monkeypatch.setattr(fir, "linprog", real)
+    # Φ^N is not a combination of C Φ^j when a state is never seen: a genuine infeasibility.
+    blind = LTISystem(np.diag([0.5, 0.6, 0.7]), [[1.0, 0.0, 0.0]], E=system.E, F=system.F, dt=1.0)
+    with pytest.raises(IntervalObserverError, match=r"infeasible.*observe more outputs"):
+        FiniteMemoryObserver.design(blind, bounds, window=4)
+
+
+def test_worst_case_filter_weighs_a_noise_zonotope_by_its_generators() -> None:
+    """With E mixing channels, the filter's evaluated radius is at most the one designed for the box of E w."""
+    E = np.array([[0.08, 0.08, 0.02], [0.05, -0.05, 0.0], [0.0, 0.03, -0.03]])
+    system = LTISystem(A68, [[0.0, 0.0, 1.0]], E=E, F=[[0.2]], dt=1.0)
+    bounds = Bounds((-np.ones(3), np.ones(3)), w=(-np.ones(3), np.ones(3)), v=(-np.ones(1), np.ones(1)))
+    boxed = LTISystem(A68, system.C, E=np.diag(np.abs(E).sum(axis=1)), F=system.F, dt=1.0)  # the box of E w
+    zonotope = FiniteMemoryObserver.design(system, bounds, window=12)
+    box_gains = FiniteMemoryObserver.design(boxed, bounds, window=12).K
+    # The box-designed weights evaluated on the zonotope model: never better than the zonotope-designed ones.
+    box_on_zonotope = FiniteMemoryObserver(system, bounds, box_gains, zonotope.fallback)
+    assert np.all(zonotope.radius[:, 0] <= box_on_zonotope.radius[:, 0] * (1 + 1e-9))

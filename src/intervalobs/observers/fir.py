@@ -20,7 +20,7 @@ intersects their boxes. With ``filtered=True`` the weights also multiply :math:`
 weights instead of ``W = N``; :math:`j` runs to :math:`N`). Two ways to fill it:
 
 - :meth:`FiniteMemoryObserver.design`: one set per component, by an LP minimising the worst-case error
-  ``sum |D| |G| r + sum |K F| r_v`` subject to :math:`R = 0` (unbiased in the unknown :math:`x_s`). By
+  ``sum |D G| r + sum |K F| r_v`` (per noise channel) subject to :math:`R = 0` (unbiased in the unknown :math:`x_s`). By
   Smolyak's theorem a linear algorithm attains the radius of information of the window, so for large
   ``N`` the radius approaches the half-width of the exact hull's *worst case*. Its width does not
   depend on the data, so it can never beat the largest hull width (docs/tightness.md).
@@ -496,7 +496,11 @@ def _noise_channels(system: LTISystem, full: ResolvedBounds, model: SampledModel
     return system.E, 0.5 * (w_lo + w_hi), 0.5 * (w_hi - w_lo)
 
 
-_LP_ATTEMPTS = (("highs", {}), ("highs-ds", {"presolve": False}), ("highs-ipm", {"presolve": False}))
+_LP_ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("highs", {}),
+    ("highs-ds", {"presolve": False}),
+    ("highs-ipm", {"presolve": False}),
+)
 """Solver settings tried in turn for a filter LP: HiGHS's default, then dual simplex and interior point
 without presolve (HiGHS's presolve returns status "Not Set" on some large window LPs)."""
 
