@@ -91,6 +91,16 @@ def _check_metzler_hurwitz(name: str, f: FloatArray) -> None:
         )
 
 
+def _measured_inverse(system: LPVSystem) -> FloatArray:
+    """:math:`\\tilde C^{-1}` for :math:`C = (\\tilde C\\ 0)` (9), measured states first."""
+    p = system.p
+    if np.any(system.C[:, p:] != 0.0):
+        raise AssumptionError(
+            f"C: expected the form (C̃ 0) of (9), measured states first, got nonzero columns beyond the first {p}"
+        )
+    return np.asarray(np.linalg.inv(system.C[:, :p]))
+
+
 def _sampled(f: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
     """``expm(F h)`` and ``∫_0^h expm(F s) ds`` (both ≥ 0 for Metzler F; rounding noise clipped)."""
     n = f.shape[0]
@@ -322,11 +332,7 @@ class LPVIntervalObserver(Observer):
         self.design_result: LPVObserverDesign | None = None
         self.system = system
         self.n, self.p, self.m = system.n, system.p, system.m
-        if self.p != self.n:
-            raise AssumptionError(
-                f"C: expected n_y = n_x for a model-specific enclosure, got n_y = {self.p}, n_x = {self.n}; "
-                f"use LPVIntervalObserver.design for unmeasured states"
-            )
+        self.c_inv = _measured_inverse(system)
         self.bounds = None if bounds is None else bounds.resolve(system)
         if self.bounds is not None and (np.any(self.bounds.w[0] != 0) or np.any(self.bounds.w[1] != 0)):
             raise AssumptionError(
@@ -334,13 +340,17 @@ class LPVIntervalObserver(Observer):
                 f"expected zeros, got {self.bounds.w[0].tolist()}, {self.bounds.w[1].tolist()}"
             )
         self.h = self._check_h(h)
+        if self.p != self.n:
+            raise AssumptionError(
+                f"C: expected n_y = n_x for a model-specific enclosure, got n_y = {self.p}, n_x = {self.n}; "
+                f"use LPVIntervalObserver.design for unmeasured states"
+            )
         self.f_lower = as_matrix("f_lower", f_lower, (self.n, self.n))
         self.f_upper = self.f_lower.copy() if f_upper is None else as_matrix("f_upper", f_upper, (self.n, self.n))
         _check_metzler_hurwitz("f_lower", self.f_lower)
         _check_metzler_hurwitz("f_upper", self.f_upper)
         self.e_lower, self.phi_lower = _sampled(self.f_lower, self.h)
         self.e_upper, self.phi_upper = _sampled(self.f_upper, self.h)
-        self.c_inv = np.linalg.inv(system.C)
 
     @staticmethod
     def _check_h(h: float) -> float:
@@ -405,6 +415,7 @@ class LPVIntervalObserver(Observer):
         obs.n, obs.p, obs.m = system.n, system.p, system.m
         obs.h = cls._check_h(h)
         obs.design_result = design
+        obs.c_inv = design.C_tilde_inv
         obs.bounds = bounds.resolve(system)
         obs.generic = _IntervalEnclosure(system, design, theta_rate, obs.h, unknown_input, obs.bounds.w)
         return obs
@@ -435,18 +446,13 @@ class LPVIntervalObserver(Observer):
             return self._advance_generic(z_lower, z_upper, y, u, theta)
         model = self.model
         assert model is not None
-        r = model.r_matrix(y)
-        x_tilde = y @ self.c_inv.T  # (73)
-        ty = x_tilde - np.einsum("mij,mj->mi", r, x_tilde)  # T y = (I - R) C^{-1} y, (36)
-        x_lo, x_hi = inflate(z_lower + ty, z_upper + ty)  # (32), (34)
-        eps_lo = x_tilde - x_lo  # (29) with C invertible
-        eps_hi = x_hi - x_tilde  # (30)
+        x_lo, x_hi, eps_lo, eps_hi = self._state_box(model.r_matrix(y), z_lower, z_upper, y)
         enc = model.step_enclosure(x_lo, x_hi, y, u, self.h)
         b_lo, b_hi = np.minimum(x_lo, enc.flow_lower), np.maximum(x_hi, enc.flow_upper)
-        fl_lo = matvec_bounds(-self.f_lower, enc.rx_lower, enc.rx_upper)[0]
-        fu_hi = matvec_bounds(-self.f_upper, enc.rx_lower, enc.rx_upper)[1]
         a_lo, a_hi = interval_matvec_bounds(enc.da_lower, enc.da_upper, b_lo, b_hi)
         ub_lo, ub_hi = interval_matvec_bounds(enc.db_lower, enc.db_upper, u, u)
+        fl_lo = matvec_bounds(-self.f_lower, enc.rx_lower, enc.rx_upper)[0]
+        fu_hi = matvec_bounds(-self.f_upper, enc.rx_lower, enc.rx_upper)[1]
         psi_lo = enc.rate_lower + fl_lo + a_lo + ub_lo
         psi_hi = enc.rate_upper + fu_hi + a_hi + ub_hi
         extra = self._unknown_input_term(enc.dbun_lower, enc.dbun_upper)
@@ -458,6 +464,38 @@ class LPVIntervalObserver(Observer):
         zl, zu = inflate(zl, zu)
         return x_lo, x_hi, eps_lo, eps_hi, zl, zu
 
+    def _state_box(
+        self, r: FloatArray, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        r"""Box of :math:`x(t_k)` and isolation signals from the bounds of :math:`v = R(\vartheta_k)x` and :math:`y_k`.
+
+        Measured states :math:`x_m = \tilde C^{-1}y` (9) get the paper's box (32),
+        :math:`z_m + (I - R_{11})x_m`, and :math:`\underline\varepsilon = R_{11}x_m - \underline z_m`,
+        :math:`\overline\varepsilon = \overline z_m - R_{11}x_m` (29)–(30) (with :math:`C^\dagger =
+        (\tilde C^{-1}; 0)`; for :math:`C = I` this is (32) with :math:`T = (I - R)C^{-1}`). Unmeasured states:
+        :math:`v_u = R_{21}x_m + R_{22}x_u` gives :math:`x_u = R_{22}^{-1}(v_u - R_{21}x_m)`, whose box over
+        :math:`v_u \in [\underline z_u, \overline z_u]` is the exact hull :func:`matvec_bounds` (:math:`R` is a
+        point matrix at the sample: it depends on measured states only). ``r`` is (n, n) or one per run
+        (M, n, n).
+        """
+        p = self.p
+        x_m = y @ self.c_inv.T
+        r11 = r[..., :p, :p]
+        v_m = np.einsum("...ij,...j->...i", r11, x_m)
+        shape = np.broadcast_shapes(z_lower.shape, (y.shape[0], self.n))
+        x_lo, x_hi = np.empty(shape), np.empty(shape)
+        x_lo[:, :p], x_hi[:, :p] = z_lower[:, :p] + x_m - v_m, z_upper[:, :p] + x_m - v_m  # (32)
+        if p < self.n:
+            r21x = np.einsum("...ij,...j->...i", r[..., p:, :p], x_m)
+            x_lo[:, p:], x_hi[:, p:] = matvec_bounds(
+                np.linalg.inv(r[..., p:, p:]), z_lower[:, p:] - r21x, z_upper[:, p:] - r21x
+            )
+        x_lo, x_hi = inflate(x_lo, x_hi)
+        eps_lo, eps_hi = np.zeros(shape), np.zeros(shape)
+        eps_lo[:, :p] = v_m - z_lower[:, :p]  # (29)
+        eps_hi[:, :p] = z_upper[:, :p] - v_m  # (30)
+        return x_lo, x_hi, eps_lo, eps_hi
+
     def _advance_generic(
         self, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray, theta: FloatArray | None
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -467,13 +505,8 @@ class LPVIntervalObserver(Observer):
             raise DataError(
                 f"theta: expected the measured scheduling vector, shape (..., {self.system.n_theta}), got None"
             )
-        p = self.p
         x_meas = y @ des.C_tilde_inv.T  # measured states, (9)
-        ty = y @ des.T.T
-        x_lo, x_hi = inflate(z_lower + ty, z_upper + ty)  # (32), (34)
-        eps_lo, eps_hi = np.zeros_like(x_lo), np.zeros_like(x_hi)
-        eps_lo[:, :p] = x_meas - x_lo[:, :p]  # (29): C† = (C̃⁻¹; 0)
-        eps_hi[:, :p] = x_hi[:, :p] - x_meas  # (30)
+        x_lo, x_hi, eps_lo, eps_hi = self._state_box(des.R, z_lower, z_upper, y)  # (32), (29)-(30)
         psi_lo, psi_hi, el, pl, eu, pu = gen.step(x_lo, x_hi, x_meas, u, theta)
         zl = np.einsum("mij,mj->mi", el, z_lower) + np.einsum("mij,mj->mi", pl, psi_lo)
         zu = np.einsum("mij,mj->mi", eu, z_upper) + np.einsum("mij,mj->mi", pu, psi_hi)

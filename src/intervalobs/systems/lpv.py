@@ -378,7 +378,7 @@ class SampledLPVModel(ABC):
 
     @abstractmethod
     def r_matrix(self, y: FloatArray) -> FloatArray:
-        """:math:`R(\vartheta_k)` at measured samples.
+        r""":math:`R(\vartheta_k)` at measured samples.
 
         Parameters
         ----------
