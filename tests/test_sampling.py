@@ -12,10 +12,12 @@ from intervalobs import (
     ArgumentTypeError,
     AssumptionError,
     Bounds,
+    DesignError,
     IntervalObserver,
     LTISystem,
     sampled_model,
 )
+from intervalobs.design.cooperative import unstable_vertex
 from intervalobs.design.tube import tube_horizon
 from intervalobs.systems.sampling import _nodes
 
@@ -128,6 +130,54 @@ def robust_box(a: np.ndarray) -> np.ndarray:
 
 OSCILLATING_CASES = [(4, 3), (6, 4), (10, 5)]
 TIGHT_CASES = [(n, seed, False) for n, seed in RANDOM_CASES] + [(n, seed, True) for n, seed in OSCILLATING_CASES]
+
+
+def robust_stability_gain(a: np.ndarray, d: np.ndarray) -> float:
+    """ρ(|Re Λ|⁻¹ |V⁻¹| D |V|): below 1, every A + ΔA with |ΔA| <= D is Hurwitz.
+
+    V⁻¹(A + ΔA)V = Λ + P with |P| <= |V⁻¹|D|V|, and |e^{(Λ+P)t}| <= e^{(Re Λ + |P|)t} (the Dyson majorant of
+    systems/sampling.py, section 2); the Metzler matrix Re Λ + |V⁻¹|D|V| is Hurwitz iff this radius is below 1.
+    """
+    lam, vec = np.linalg.eig(a)
+    gain = np.abs(np.linalg.inv(vec)) @ d @ np.abs(vec) / np.abs(lam.real)[:, None]
+    return float(np.max(np.abs(np.linalg.eigvals(gain))))
+
+
+@pytest.mark.parametrize(
+    ("n", "seed", "oscillating"), TIGHT_CASES, ids=[f"n={n}-seed={s}{'-complex' * o}" for n, s, o in TIGHT_CASES]
+)
+def test_random_boxes_robustly_stable_and_literal_boxes_not(n: int, seed: int, oscillating: bool) -> None:
+    """The tests' ΔA box is certified robustly stable; the issue's ±0.1 %|A| on these dense systems is not:
+    unstable_vertex finds a matrix of that box with an eigenvalue in the right half-plane."""
+    a, _, _ = random_stiff(n, seed, oscillating)
+    assert robust_stability_gain(a, robust_box(a)) < 0.5
+    assert unstable_vertex(a, -robust_box(a), robust_box(a), continuous=True) is None
+    literal = 1e-3 * np.abs(a)
+    found = unstable_vertex(a, -literal, literal, continuous=True)
+    assert found is not None
+    vertex, abscissa = found
+    assert np.all(np.abs(vertex - a) <= literal * (1 + 1e-12))
+    assert abscissa == pytest.approx(np.max(np.linalg.eigvals(vertex).real)) and abscissa > 0
+
+
+@pytest.mark.parametrize("n", [6, 10])
+def test_design_names_an_unstable_box(n: int) -> None:
+    a, e, c = random_stiff(n, dict(RANDOM_CASES)[n])
+    literal = 1e-3 * np.abs(a)
+    system = LTISystem(a, c, E=e, dA=(-literal, literal))
+    for method in ("tube", "framer"):
+        with pytest.raises(
+            DesignError, match=r"^dA: expected a box of stable matrices, got a vertex .* spectral abscissa"
+        ):
+            IntervalObserver.design(system, unit_bounds(n, 2, 1), h=0.1, method=method)
+
+
+def test_unstable_vertex_discrete_time() -> None:
+    a = np.array([[0.9, 0.5], [0.0, 0.5]])
+    box = np.array([[0.0, 0.0], [0.3, 0.0]])
+    vertex, radius = unstable_vertex(a, -box, box, continuous=False)
+    assert radius == pytest.approx(np.max(np.abs(np.linalg.eigvals(vertex)))) and radius >= 1
+    assert unstable_vertex(a, -0.1 * box, 0.1 * box, continuous=False) is None
 
 
 @pytest.mark.parametrize(

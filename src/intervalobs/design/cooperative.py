@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +39,7 @@ __all__ = [
     "framer_matrices",
     "is_detectable",
     "real_modal_basis",
+    "unstable_vertex",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -45,6 +47,9 @@ FloatArray = NDArray[np.float64]
 _EIGENVALUE_TOLERANCE = 1e-12
 """Tolerance of the eigenvalue classifications (on the unit circle or outside; real), relative: it only
 decides which test or basis is tried, and every design result is verified by eigenvalues."""
+
+_VERTEX_ASCENTS = 8
+"""Eigenvalue-following steps of :func:`unstable_vertex` from each eigenvalue (a search, not a bound)."""
 
 _GAIN_LIMIT = 1e6
 _PERRON_ITERATIONS = 4
@@ -130,6 +135,57 @@ def is_detectable(model: SampledModel, C: FloatArray) -> bool:
             if np.linalg.matrix_rank(pbh, tol=1e-9 * max(1.0, np.abs(pbh).max())) < n:
                 return False
     return True
+
+
+def unstable_vertex(
+    a: FloatArray, lower: FloatArray, upper: FloatArray, continuous: bool
+) -> tuple[FloatArray, float] | None:
+    """A vertex of the interval matrix ``[A + lower, A + upper]`` that is not stable, if a search finds one.
+
+    From each eigenvalue ``λ`` of the midpoint matrix (right and left eigenvectors ``v``, ``w``, with
+    ``w v = 1``) the vertex that moves ``λ`` furthest to first order (``ΔA_jl`` at the end of its
+    interval given by the sign of ``Re(ū w_j v_l)``, ``u = 1`` in continuous time and ``λ/|λ|`` in
+    discrete time) is taken; the eigenvalue that has moved most is followed in the same way, a few
+    times; the least stable vertex met is returned. A search, not a proof: ``None`` does not certify a
+    robustly stable box; a vertex that it returns is a matrix of the box whose instability is computed.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (n, n)
+        Nominal matrix.
+    lower, upper : numpy.ndarray, shape (n, n)
+        Elementwise bounds of ``ΔA``.
+    continuous : bool
+        Stability in the Hurwitz sense (spectral abscissa ``< 0``) or the Schur sense (spectral radius ``< 1``).
+
+    Returns
+    -------
+    (numpy.ndarray, float) or None
+        ``A + ΔA`` at the vertex found and its spectral abscissa (continuous) or spectral radius
+        (discrete), when that is ``≥ 0`` (resp. ``≥ 1``); otherwise None.
+    """
+    centre, radius = a + 0.5 * (lower + upper), 0.5 * (upper - lower)
+    limit = 0.0 if continuous else 1.0
+
+    def growth(vals: NDArray[Any]) -> FloatArray:
+        return np.asarray(vals.real if continuous else np.abs(vals))
+
+    worst: tuple[FloatArray, float] | None = None
+    for start in range(centre.shape[0]):
+        matrix, index = centre, start
+        for _ in range(_VERTEX_ASCENTS):
+            vals, vecs = np.linalg.eig(matrix)
+            lam = vals[index]
+            phase = 1.0 if continuous or lam == 0 else np.conj(lam) / abs(lam)
+            slope = np.real(phase * np.outer(np.linalg.inv(vecs)[index], vecs[:, index]))
+            vertex = centre + radius * np.where(slope >= 0, 1.0, -1.0)
+            moved = growth(np.linalg.eigvals(vertex))
+            if moved.max() >= limit and (worst is None or moved.max() > worst[1]):
+                worst = vertex, float(moved.max())
+            if np.array_equal(vertex, matrix):
+                break
+            matrix, index = vertex, int(np.argmax(moved))
+    return worst
 
 
 def real_modal_basis(a: FloatArray) -> FloatArray | None:

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable
+from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable, unstable_vertex
 from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
 from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
@@ -195,7 +195,9 @@ class IntervalObserver(Observer):
         Raises
         ------
         DesignError
-            When ``(A, C)`` is not detectable or no tried gain gives a bounded radius.
+            When ``(A, C)`` is not detectable or no tried gain gives a bounded radius; when then a
+            vertex of the ``dA`` box is found unstable (:func:`~intervalobs.design.cooperative.unstable_vertex`),
+            the message names it and its spectral abscissa (spectral radius in discrete time).
         """
         check_no_kwargs("IntervalObserver.design", options, ("candidates", "method"))
         if not isinstance(system, LTISystem):
@@ -211,6 +213,7 @@ class IntervalObserver(Observer):
             framer = design_framer(model, system.C, system.F, v_radius, options.get("candidates"))
         except DesignError:
             if method == "framer":
+                _refuse_unstable_box(system)
                 raise
         if method == "framer":
             assert framer is not None
@@ -220,6 +223,7 @@ class IntervalObserver(Observer):
         extra = {} if framer is None else {f"framer-{framer.coordinates}": framer.L}
         tube = design_tube_gain(model, system.C, system.F, v_radius, extra)
         if tube is None:
+            _refuse_unstable_box(system)
             raise DesignError(
                 "IntervalObserver.design: no candidate gain gives a bounded error tube; "
                 "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
@@ -388,3 +392,18 @@ class IntervalObserver(Observer):
         if self.design_result is not None:
             info["steady_width"] = (2 * self.design_result.steady_radius).tolist()
         return info
+
+
+def _refuse_unstable_box(system: LTISystem) -> None:
+    """Raise a DesignError naming an unstable matrix of the ``dA`` box, when a search finds one."""
+    if system.dA is None:
+        return
+    found = unstable_vertex(system.A, system.dA[0], system.dA[1], system.continuous)
+    if found is not None:
+        measure = "spectral abscissa" if system.continuous else "spectral radius"
+        limit = 0 if system.continuous else 1
+        raise DesignError(
+            f"dA: expected a box of stable matrices, got a vertex A + ΔA with {measure} {found[1]:.3g} >= {limit}; "
+            "the state can grow without bound there, and so does every interval bound that does not know ΔA: "
+            "reduce dA"
+        )
