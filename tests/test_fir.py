@@ -171,7 +171,7 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
             gains = np.zeros((3, 1, 6, 1))
             gains[:, 0] = sign * duals[(i, sign)].reshape(7, 1)[:6]
             obs = FiniteMemoryObserver(system, bounds, gains, wide_fallback(system, bounds))
-            lo, hi = obs._fir(sim.y[k - 6 : k], u[:6], boxes.lower[k - 6], boxes.upper[k - 6])
+            lo, hi = obs._fir(sim.y[k - 6 : k], u[:6], boxes.lower[k - 6 : k], boxes.upper[k - 6 : k])
             assert abs((lo[i] if sign > 0 else hi[i]) - certified) < 1e-9
 
 

@@ -104,6 +104,9 @@ class FiniteMemoryObserver(Observer):
     """
 
     summary_fields = ("window", "filtered")
+    covers_dA = False
+    """Whether the filters' radii cover an interval ``ΔA`` (:class:`~intervalobs.observers.robust_fir.
+    RobustFiniteMemoryObserver`); a point model is required otherwise."""
 
     h: float
 
@@ -117,7 +120,7 @@ class FiniteMemoryObserver(Observer):
         lp_seconds: float = 0.0,
         filtered: bool = False,
     ) -> None:
-        if system.dA is not None:
+        if system.dA is not None and not self.covers_dA:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
         self.system = system
         self.bounds = bounds.resolve(system)
@@ -300,6 +303,7 @@ class FiniteMemoryObserver(Observer):
         self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
         r_mag = abs_powers[big_n][:, None, :] + np.einsum("ibjp,jpq->ibq", abs_k, abs_c_powers[:weights])
         gamma_d = 4.0 * (big_n + 1) * (n + self.p + noise_map.shape[1] + 2) * _EPS
+        self._d_mats, self._d_mag, self._gamma_d = d_mats, d_mag, gamma_d  # for the ΔA terms of a subclass
         self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
         d_noise = np.einsum("libq,qw->libw", d_mats, noise_map)  # D_l G: the process noise enters as G w_l
         self.offset = np.einsum("libw,w->ib", d_noise, c) - np.einsum("ibjq,q->ib", kf, v_c)
@@ -335,9 +339,11 @@ class FiniteMemoryObserver(Observer):
         return z @ self._window_weights + self._offset_flat, np.abs(z) @ self._pad_weights + self._pad_const
 
     def _bank_box(
-        self, est: FloatArray, pad: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
+        self, est: FloatArray, pad: FloatArray, rows_lo: FloatArray, rows_hi: FloatArray, us: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Intersection of the filters' boxes, given their window terms and a box of ``x_s`` (for ``R x_s``)."""
+        """Intersection of the filters' boxes, given their window terms and boxes ``rows_*`` (..., N, n) of
+        ``x_s … x_{k-1}`` (the first bounds ``R x_s``) with the window's inputs ``us`` (..., N, m)."""
+        prior_lo, prior_hi = rows_lo[..., 0, :], rows_hi[..., 0, :]
         centre, half = 0.5 * (prior_lo + prior_hi), 0.5 * (prior_hi - prior_lo)
         res_c = centre @ self._residual_t
         res_r = half @ self._half_weights + np.abs(centre) @ self._centre_weights
@@ -346,10 +352,10 @@ class FiniteMemoryObserver(Observer):
         return inflate(np.max(low.reshape(shape), axis=-1), np.min(high.reshape(shape), axis=-1))
 
     def _fir(
-        self, ys: FloatArray, us: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
+        self, ys: FloatArray, us: FloatArray, rows_lo: FloatArray, rows_hi: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Box of ``x_k`` from a window ``ys`` (..., W, p), ``us`` (..., N, m) and a box of ``x_s``."""
-        return self._bank_box(*self._window_terms(ys, us), prior_lo, prior_hi)
+        """Box of ``x_k`` from a window ``ys`` (..., W, p), ``us`` (..., N, m) and boxes of ``x_s … x_{k-1}``."""
+        return self._bank_box(*self._window_terms(ys, us), rows_lo, rows_hi, us)
 
     def _predict(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """One-step interval prediction of the own box (Φ box + Γu + noise box), inflated for rounding."""
@@ -366,7 +372,9 @@ class FiniteMemoryObserver(Observer):
             return lower, upper
         y_win = np.stack(ys[-(self.window + self.filtered) :], axis=-2)
         u_win = np.stack([np.broadcast_to(v, (*y_win.shape[:-2], self.m)) for v in us[-self.window :]], axis=-2)
-        f_lo, f_hi = self._fir(y_win, u_win, *rows[0])
+        rows_lo = np.stack([np.broadcast_to(lo, y_win.shape[:-2] + lo.shape[-1:]) for lo, _ in rows], axis=-2)
+        rows_hi = np.stack([np.broadcast_to(hi, y_win.shape[:-2] + hi.shape[-1:]) for _, hi in rows], axis=-2)
+        f_lo, f_hi = self._fir(y_win, u_win, rows_lo, rows_hi)
         return np.maximum(lower, f_lo), np.minimum(upper, f_hi)
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -453,7 +461,11 @@ class FiniteMemoryObserver(Observer):
                 u_win = sliding_window_view(us[..., first - big_n : stop - 1, :], big_n, axis=-2)
                 est, pad = self._window_terms(np.swapaxes(y_win, -1, -2), np.swapaxes(u_win, -1, -2))
             f_lo, f_hi = self._bank_box(
-                est[..., k - first, :], pad[..., k - first, :], lower[..., k - big_n, :], upper[..., k - big_n, :]
+                est[..., k - first, :],
+                pad[..., k - first, :],
+                lower[..., k - big_n : k, :],
+                upper[..., k - big_n : k, :],
+                us[..., k - big_n : k, :],
             )
             lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
             upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
@@ -509,12 +521,14 @@ _LP_INFEASIBLE = 2
 
 
 def _worst_case_gains(
-    system: LTISystem, full: ResolvedBounds, window: int, h: float | None
+    system: LTISystem, full: ResolvedBounds, window: int, h: float | None, extra: Any = 0.0
 ) -> tuple[FloatArray, float]:
     """Weights ``(n, N, p)`` minimising each component's evaluated worst-case error with ``R = 0``, and the LP time.
 
     The error's noise term is ``sum_l |D_l G| r`` (per noise channel, as the observer evaluates it), so a
     noise zonotope is weighed through its generators, not through the box of ``G η``.
+    ``extra`` (n,) is charged like a further noise channel of radius ``extra`` on every state (a per-step
+    error such as ``ΔA x``).
     """
     if system.dA is not None:
         raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
@@ -524,6 +538,8 @@ def _worst_case_gains(
     n, p, nv, big_n = system.n, system.p, system.F.shape[1], int(window)
     phi, c_mat, f_mat = model.Phi, system.C, system.F
     noise_map, _, r = _noise_channels(system, full, model)
+    if np.any(extra):  # identity channels of radius extra
+        noise_map, r = np.hstack([noise_map, np.eye(n)]), np.concatenate([r, np.broadcast_to(extra, (n,))])
     ng = noise_map.shape[1]
     vr = full.radius("v")
     powers = [np.eye(n)]
