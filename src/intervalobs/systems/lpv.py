@@ -296,11 +296,15 @@ def _rows_to_array(rows: Any, count: int, name: str) -> tuple[FloatArray, FloatA
     if isinstance(rows, np.ndarray) and rows.ndim == 3:
         return rows, rows
     wrapped = [[Interval._wrap(e) for e in row] for row in rows]
-    lo = np.array([[np.broadcast_to(e.lower, (count,)) for e in row] for row in wrapped], dtype=float)
-    hi = np.array([[np.broadcast_to(e.upper, (count,)) for e in row] for row in wrapped], dtype=float)
-    if lo.ndim != 3:
+    cols = {len(row) for row in wrapped}
+    if len(cols) != 1:
         raise DimensionError(f"{name}: expected rows of equal length, got ragged rows")
-    return np.moveaxis(lo, -1, 0), np.moveaxis(hi, -1, 0)
+    lo = np.empty((count, len(wrapped), cols.pop()))
+    hi = np.empty_like(lo)
+    for i, row in enumerate(wrapped):
+        for j, e in enumerate(row):
+            lo[:, i, j], hi[:, i, j] = e.lower, e.upper  # assignment broadcasts constant entries
+    return lo, hi
 
 
 def _matrix_at(f: Callable[..., Any], points: FloatArray) -> FloatArray:
