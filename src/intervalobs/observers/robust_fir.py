@@ -199,13 +199,17 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
             Model with an interval ``dA`` whose centre has a stable sampled matrix.
         bounds : Bounds
             Initial-state and noise boxes.
-        window, records, steps, seed, size, filtered
+        window, records, steps, seed : int
             As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`,
             on the centre model ``A + ΔA_c``.
+        size : int, optional
+            As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`.
         h : float, optional
             Sampling period of a continuous-time system.
         fallback : Observer, optional
             Sound observer to intersect with; default :meth:`IntervalObserver.design` of ``system``.
+        filtered : bool
+            As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`.
         state_size : array_like, shape (n,), optional
             State magnitude of the robust worst-case filter (see :meth:`design`).
 
