@@ -75,7 +75,8 @@ def test_printed_tank_gains() -> None:
 def test_infeasible_and_bad_arguments() -> None:
     a = np.diag([1.5, 0.5])  # unstable mode that C does not see: no stabilising gain
     c = np.array([[0.0, 1.0]])
-    with pytest.raises(DesignError, match=r"LMI \(19\): no verified solution|\(19\): expected a negative definite"):
+    # Which check fails first (no solution, P or the Lyapunov block not definite) depends on the solver's last iterate.
+    with pytest.raises(DesignError, match=r"\(19\)"):
         hinf_gain(a, c, np.eye(2), np.eye(1))
     with pytest.raises(DesignError, match="p_structure"):
         hinf_gain(np.eye(2) * 0.5, c, np.eye(2), np.eye(1), p_structure="block")  # type: ignore[arg-type]
