@@ -26,6 +26,7 @@ vertices; ``"extreme"``: bang-bang switching).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,6 +98,19 @@ def _sampled(a_c: FloatArray, b_c: FloatArray, h: float) -> tuple[FloatArray, Fl
     return exact[:n, :n], exact[:n, n:]
 
 
+def _unit_noise_case(
+    name: str,
+    system: LTISystem,
+    x0: tuple[FloatArray, FloatArray],
+    steps: int,
+    known_input: Callable[[FloatArray], FloatArray],
+) -> ScaleCase:
+    """The case of ``system``: noise boxes ``|w|, |v| <= 1``, ``steps`` samples ``dt`` apart, ``u = known_input(t)``."""
+    w, v = np.ones(system.nw), np.ones(system.p)
+    t = float(system.dt or 0.0) * np.arange(steps, dtype=float)  # every case is in discrete time
+    return ScaleCase(name, system, Bounds(x0=x0, w=(-w, w), v=(-v, v)), t, known_input(t))
+
+
 def _staircase(t: FloatArray, m: int, period: float, low: float, high: float) -> FloatArray:
     """A known input: each channel a staircase of levels in ``[low, high]``, shifted per channel."""
     index = (np.asarray(t) // period).astype(int)[:, None] + 3 * np.arange(m)[None, :]
@@ -117,6 +131,7 @@ def tank_cascade(n: int, steps: int = 200) -> ScaleCase:
     Returns
     -------
     ScaleCase
+        The cascade under staircase pump rates in [0, 1].
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 3:
         raise DataError(f"n: expected an integer of at least 3 tanks, got {n!r}")
@@ -149,10 +164,8 @@ def tank_cascade(n: int, steps: int = 200) -> ScaleCase:
         output_names=[f"h{j + 1}_meas" for j in measured],
         input_names=[f"pump{j + 1}" for j in range(m)],
     )
-    box = np.ones(n)
-    bounds = Bounds(x0=(4.0 * box, 6.0 * box), w=(-box, box), v=(-np.ones(measured.size), np.ones(measured.size)))
-    t = np.arange(steps, dtype=float)
-    return ScaleCase(f"tanks-{n}", system, bounds, t, _staircase(t, m, 25.0, 0.0, 1.0))
+    levels = (np.full(n, 4.0), np.full(n, 6.0))
+    return _unit_noise_case(f"tanks-{n}", system, levels, steps, lambda t: _staircase(t, m, 25.0, 0.0, 1.0))
 
 
 def vehicle(steps: int = 200) -> ScaleCase:
@@ -161,11 +174,12 @@ def vehicle(steps: int = 200) -> ScaleCase:
     Parameters
     ----------
     steps : int
-        Record length.
+        Record length (samples 0.05 s apart; 200 make 10 s).
 
     Returns
     -------
     ScaleCase
+        The vehicle under staircase steering and throttle commands of ±0.05.
     """
     # states: lateral offset (m), lateral speed (m/s), heading error (rad), yaw rate (rad/s),
     # speed error (m/s), steering actuator (rad); inputs: steering command, throttle.
@@ -195,10 +209,7 @@ def vehicle(steps: int = 200) -> ScaleCase:
         input_names=["steering_cmd", "throttle"],
     )
     x0 = np.array([0.5, 0.3, 0.05, 0.05, 1.0, 0.02])
-    bounds = Bounds(x0=(-x0, x0), w=(-np.ones(6), np.ones(6)), v=(-np.ones(4), np.ones(4)))
-    t = 0.05 * np.arange(steps, dtype=float)
-    u = _staircase(t, 2, 1.0, -0.05, 0.05)
-    return ScaleCase("vehicle", system, bounds, t, u)
+    return _unit_noise_case("vehicle", system, (-x0, x0), steps, lambda t: _staircase(t, 2, 1.0, -0.05, 0.05))
 
 
 def pedestrian(steps: int = 200) -> ScaleCase:
@@ -207,11 +218,12 @@ def pedestrian(steps: int = 200) -> ScaleCase:
     Parameters
     ----------
     steps : int
-        Record length.
+        Record length (samples 0.1 s apart; 200 make 20 s).
 
     Returns
     -------
     ScaleCase
+        The walker, without known input (``m = 0``).
     """
     h = 0.1
     a = np.array(
@@ -232,9 +244,7 @@ def pedestrian(steps: int = 200) -> ScaleCase:
         output_names=["px_meas", "py_meas"],
     )
     x0 = np.array([1.0, 1.0, 1.5, 1.5])
-    bounds = Bounds(x0=(-x0, x0), w=(-np.ones(10), np.ones(10)), v=(-np.ones(2), np.ones(2)))
-    t = h * np.arange(steps, dtype=float)
-    return ScaleCase("pedestrian", system, bounds, t, np.zeros((steps, 0)))
+    return _unit_noise_case("pedestrian", system, (-x0, x0), steps, lambda t: np.zeros((t.size, 0)))
 
 
 def short_record(steps: int = 20) -> ScaleCase:
@@ -243,18 +253,18 @@ def short_record(steps: int = 20) -> ScaleCase:
     Parameters
     ----------
     steps : int
-        Record length.
+        Record length (samples 1 s apart); the case is about the first 20.
 
     Returns
     -------
     ScaleCase
+        The oscillator driven by the known input ``sin(t/2)``.
     """
     angle = 0.3
     a = 0.97 * np.array([[np.cos(angle), np.sin(angle)], [-np.sin(angle), np.cos(angle)]])
     system = LTISystem(a, np.array([[1.0, 0.0]]), B=np.array([[0.0], [0.1]]), E=0.05 * np.eye(2), F=[[0.1]], dt=1.0)
-    bounds = Bounds(x0=(-5.0 * np.ones(2), 5.0 * np.ones(2)), w=(-np.ones(2), np.ones(2)), v=(-np.ones(1), np.ones(1)))
-    t = np.arange(steps, dtype=float)
-    return ScaleCase("short-record", system, bounds, t, np.sin(0.5 * t)[:, None])
+    prior = 5.0 * np.ones(2)
+    return _unit_noise_case("short-record", system, (-prior, prior), steps, lambda t: np.sin(0.5 * t)[:, None])
 
 
 def cases() -> dict[str, ScaleCase]:
