@@ -528,11 +528,11 @@ def design_uio_coordinates(
     """Gain ``K`` and Metzler coordinates ``T`` (Hypothesis 6) with the smallest state-width bound.
 
     Each candidate places its poles on ``PA - KC`` (``scipy.signal.place_poles``; real, repeated up to
-    ``p`` times, or complex pairs; on ``PA`` and on copies jittered at 1e-13, because the placement branches on
-    rounding when ``PA`` is defective, so that every machine tries the same branches) and maps it onto :func:`metzler_block_form` by ``T = U V⁻¹``; the
-    candidate with the smallest ``sum(ρ_x)`` (:func:`asymptotic_state_width`) wins. Every result is
-    checked after the design: the placed spectrum, ``T N T⁻¹`` equal to the Metzler form to rounding,
-    Hurwitz, ``cond(T) < 1e6``.
+    ``p`` times, or complex pairs; on ``PA`` and on copies jittered at 1e-13, because the placement branches
+    on rounding when ``PA`` is defective, so that every machine tries the same branches) and maps it onto
+    :func:`metzler_block_form` by ``T = U V⁻¹``; the candidate with the smallest ``sum(ρ_x)``
+    (:func:`asymptotic_state_width`) wins. Every result is checked after the design: the placed spectrum,
+    ``T N T⁻¹`` equal to the Metzler form to rounding, Hurwitz, ``cond(T) < 1e6``.
 
     Parameters
     ----------
