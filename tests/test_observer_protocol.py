@@ -21,6 +21,7 @@ from intervalobs.observers import (
     IntervalObserver,
     LPVIntervalObserver,
     Observer,
+    RobustFiniteMemoryObserver,
     ZonotopicObserver,
 )
 from intervalobs.observers.gsisio import GSISIO
@@ -33,6 +34,12 @@ def _discrete() -> tuple[LTISystem, Bounds]:
     A = np.array([[0.6, 0.2], [-0.1, 0.5]])
     system = LTISystem(A, [[1.0, 0.0]], B=[[0.0], [1.0]], dt=1.0)
     return system, Bounds((-np.ones(2), np.ones(2)), w=(-0.1 * np.ones(2), 0.1 * np.ones(2)), v=([-0.05], [0.05]))
+
+
+def _with_dA(system: LTISystem) -> LTISystem:
+    """The same model with every entry of ``A`` uncertain by ±0.02."""
+    box = 0.02 * np.ones((system.n, system.n))
+    return LTISystem(system.A, system.C, B=system.B, dt=system.dt, dA=(-box, box))
 
 
 def _gsisio() -> Observer:
@@ -70,6 +77,7 @@ OBSERVERS: dict[str, Callable[[], Observer]] = {
     ),
     "intersection": lambda: IntersectionObserver.design(spring_mass.system(), spring_mass.bounds(), h=H),
     "fir": lambda: FiniteMemoryObserver.design(*_discrete(), window=6),
+    "robust-fir": lambda: RobustFiniteMemoryObserver.design(_with_dA(_discrete()[0]), _discrete()[1], window=6),
     "hull": lambda: HullEstimator.design(*_discrete(), horizon=4),
     "zonotopic": lambda: ZonotopicObserver.design(*_discrete()),
     "integrated": lambda: IntegratedObserver.design(*_discrete(), fallback="hinf"),
@@ -118,6 +126,7 @@ LTI_DESIGNS: dict[str, Callable[[LTISystem, Bounds, float], Observer]] = {
     "interval-framer": lambda s, b, h: IntervalObserver.design(s, b, h=h, method="framer"),
     "intersection": lambda s, b, h: IntersectionObserver.design(s, b, h=h),
     "fir": lambda s, b, h: FiniteMemoryObserver.design(s, b, window=6, h=h),
+    "robust-fir": lambda s, b, h: RobustFiniteMemoryObserver.design(_with_dA(s), b, window=6, h=h),
     "hull": lambda s, b, h: HullEstimator.design(s, b, horizon=4, h=h),
     "integrated": lambda s, b, h: IntegratedObserver.design(s, b, h=h, fallback="hinf"),
 }

@@ -11,7 +11,8 @@ from scipy.linalg import expm
 
 from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import ArgumentTypeError, AssumptionError, BoundsError, DataError
-from intervalobs.observers.robust_hull import RobustHullEstimator, _delta_model, robust_hull_lower_bound
+from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from intervalobs.systems.sampling import delta_linearisation
 
 STEPS = 40
 H_CONTINUOUS = 0.05
@@ -112,7 +113,7 @@ def test_step_and_run_agree() -> None:
 def test_linearisation_remainder_bounds_the_sampled_matrix(seed: int) -> None:
     """``e^{(A_c + δ)h} = Φ_c + Σ δ_l M_l + R`` with ``|R| ≤ R_x`` for every δ of the box (vertices and inside)."""
     system, bounds = random_system(seed, continuous=True)
-    model = _delta_model(system, bounds, H_CONTINUOUS)
+    model = delta_linearisation(system, bounds, H_CONTINUOUS)
     rng = np.random.default_rng(seed)
     rows = np.array([a for a, _ in model.entries])
     cols = np.array([b for _, b in model.entries])

@@ -33,11 +33,21 @@ from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from .observers.null_space_gsisio import NullSpaceGSISIO
+from .observers.robust_fir import RobustFiniteMemoryObserver
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate, simulate_nonlinear, simulate_sampled
-from .systems import Bounds, LTISystem, ResolvedBounds, SampledModel, SampledSystem, sampled_model
+from .systems import (
+    Bounds,
+    DeltaLinearisation,
+    LTISystem,
+    ResolvedBounds,
+    SampledModel,
+    SampledSystem,
+    delta_linearisation,
+    sampled_model,
+)
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem
 from .tightness import format_tightness, tightness_reference, tightness_report
@@ -52,6 +62,7 @@ __all__ = [
     "Bounds",
     "BoundsError",
     "DataError",
+    "DeltaLinearisation",
     "DesignError",
     "DimensionError",
     "Disk",
@@ -70,6 +81,7 @@ __all__ = [
     "ObserverState",
     "RegionPlacement",
     "ResolvedBounds",
+    "RobustFiniteMemoryObserver",
     "RobustHullEstimator",
     "SampledModel",
     "SampledSystem",
@@ -79,6 +91,7 @@ __all__ = [
     "__version__",
     "cabs",
     "ctimes",
+    "delta_linearisation",
     "format_tightness",
     "hull_lower_bound",
     "interval_matvec_bounds",

@@ -9,6 +9,7 @@ from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .lpv import LPVIntervalObserver, LPVIntervalUIO
 from .null_space_gsisio import NullSpaceGSISIO
+from .robust_fir import RobustFiniteMemoryObserver
 from .robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
@@ -27,6 +28,7 @@ __all__ = [
     "NullSpaceGSISIO",
     "Observer",
     "ObserverState",
+    "RobustFiniteMemoryObserver",
     "RobustHullEstimator",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",

@@ -2,8 +2,9 @@ r"""The FIR bank under an interval :math:`\Delta A`: LP-free, data-dependent box
 
 :class:`~intervalobs.observers.fir.FiniteMemoryObserver` evaluates a bank of linear window filters
 :math:`\hat x_k = \sum_j K_j y_{s+j} + \sum_l M_l u_{s+l} + d` (:math:`s = k - N`) of a point model. Here
-the model is the linearisation of :class:`~intervalobs.observers.robust_hull.RobustHullEstimator`
-around the centre :math:`\Delta A_c` of the box, :math:`\delta = \Delta A - \Delta A_c`:
+the model is the linearisation :func:`~intervalobs.systems.sampling.delta_linearisation` (shared with
+:class:`~intervalobs.observers.robust_hull.RobustHullEstimator`) around the centre :math:`\Delta A_c` of the
+box, :math:`\delta = \Delta A - \Delta A_c`:
 
 .. math::
 
@@ -58,13 +59,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, DataError
-from ..interval import inflate, interval_matvec_bounds
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
+from ..systems.sampling import delta_linearisation
 from .base import Observer
 from .fir import FiniteMemoryObserver, _worst_case_gains
 from .interval_observer import IntervalObserver
-from .robust_hull import _delta_model
 
 __all__ = ["RobustFiniteMemoryObserver"]
 
@@ -112,7 +112,7 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         if system.dA is None:
             raise AssumptionError("system.dA: expected an interval ΔA (without it, use FiniteMemoryObserver)")
         super().__init__(system, bounds, gains, fallback, h=h, lp_seconds=lp_seconds, filtered=filtered)
-        model = _delta_model(system, self.bounds, self.h if system.continuous else None)
+        model = delta_linearisation(system, self.bounds, self.h if system.continuous else None)
         n, m, big_n = self.n, self.m, self.window
         radius = np.array([model.radius[a, b] for a, b in model.entries])  # D_ab of the uncertain entries
         nd = radius.size
@@ -249,11 +249,7 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
 
     def _predict(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """One-step interval prediction through ``Φ ± δΦ``, ``Γ ± δΓ`` and the noise box, inflated."""
-        model = self._model
-        lo, hi = interval_matvec_bounds(model.Phi - model.dPhi, model.Phi + model.dPhi, lower, upper)
-        u_lo, u_hi = interval_matvec_bounds(model.Gamma - model.dGamma, model.Gamma + model.dGamma, u, u)
-        lo, hi = lo + u_lo + model.noise_center, hi + u_hi + model.noise_center
-        return inflate(lo - model.noise_radius, hi + model.noise_radius)
+        return self._model.image(lower, upper, u)
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
@@ -286,7 +282,7 @@ def _robust_gains(
     state_size: ArrayLike | None,
 ) -> tuple[FloatArray, float]:
     """Worst-case weights of the centre model with the ``ΔA`` term ``Σ D_ab |M_ab| x̄`` charged as noise."""
-    model = _delta_model(system, full, h if system.continuous else None)
+    model = delta_linearisation(system, full, h if system.continuous else None)
     if state_size is None:
         size = np.maximum(np.abs(full.x0[0]), np.abs(full.x0[1]))
     else:

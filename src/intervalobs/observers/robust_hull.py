@@ -38,6 +38,8 @@ and the remainder radius :math:`\rho_j = K\,|x_j - \hat x_j|_{\max} + R_x|x_j|_{
   L(|\mathcal A|h, Dh)` (the terms of the exponential series with at least two factors of
   :math:`\mathcal D`, bounded termwise; all terms nonnegative). :math:`K = \sum_{ab} D_{ab}|M_{ab}|`.
 
+  Both cases are :func:`~intervalobs.systems.sampling.delta_linearisation`.
+
 Every state of the true system, with the true :math:`\Delta A`, noise and remainder, is feasible (the
 boxes of :math:`x_j` are the estimator's own, sound by induction), so every bound of the LP is a sound
 bound. Bounds are **certified by weak duality** with the rounding of their evaluation subtracted
@@ -55,19 +57,17 @@ with an optional fallback observer's box (so it is never wider than that observe
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import expm, expm_frechet
 
 from ..design.certified_lp import DenseLP, shrink_inward
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
-from ..interval import inflate, interval_matvec_bounds, matvec_bounds
-from ..systems.bounds import Bounds, ResolvedBounds
+from ..interval import inflate
+from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
-from ..systems.sampling import sampled_model
+from ..systems.sampling import delta_linearisation, sampled_model
 from ..validation import as_positive, as_signal, as_time
 from .base import Observer, ObserverState
 from .hull import HullLowerBound, inner_model
@@ -88,74 +88,6 @@ _TRUST_REGION = 0.2
 of the box width: the linearisation holds near the current ΔA only, and a step across the whole box
 lands where the data exclude ΔA (two-tank, seed 0, ΔA at a vertex: the bound rises from 0.12 / 0.92 /
 0.64 to 0.56 / 1.44 / 1.30 at steps 60 / 180 / 300 with six steps)."""
-_MODEL_PAD = 1e-13
-"""Relative pad on the computed exponentials (their own rounding, ``expm`` is accurate to ~1e-15)."""
-
-
-@dataclass(frozen=True)
-class _DeltaModel:
-    r"""``x+ = Φ_c x + Γ_c u + Σ δ_ab (M_ab x + N_ab u) + R-terms + noise``: the linearisation in ``δ``.
-
-    ``entries`` lists the uncertain entries ``(a, b)`` (radius > 0); ``M[l]``, ``N[l]`` are the derivative
-    matrices of entry ``l``; ``R_x``, ``R_u`` bound the second-order remainder for ``|δ| ≤ radius``.
-    """
-
-    Phi: FloatArray
-    Gamma: FloatArray
-    M: FloatArray
-    N: FloatArray
-    R_x: FloatArray
-    R_u: FloatArray
-    entries: tuple[tuple[int, int], ...]
-    center: FloatArray
-    radius: FloatArray
-    noise_lo: FloatArray
-    noise_hi: FloatArray
-    C: FloatArray
-    v_lo: FloatArray
-    v_hi: FloatArray
-
-
-def _delta_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> _DeltaModel:
-    """The linearisation of the (sampled) model in ``δ = ΔA - ΔA_c`` (module docstring)."""
-    assert system.dA is not None
-    sampled = sampled_model(system, full, h)
-    n, m = system.n, system.m
-    center = 0.5 * (system.dA[0] + system.dA[1])
-    radius = 0.5 * (system.dA[1] - system.dA[0])
-    entries = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(radius > 0), strict=True))
-    nd = len(entries)
-    M = np.zeros((nd, n, n))
-    N = np.zeros((nd, n, m))
-    if system.continuous:
-        assert h is not None
-        size = n + m
-        aug = np.zeros((size, size))
-        aug[:n, :n], aug[:n, n:] = system.A + center, system.B
-        rad = np.zeros((size, size))
-        rad[:n, :n] = radius
-        base = expm(aug * h)
-        phi, gamma = base[:n, :n], base[:n, n:]
-        for index, (a, b) in enumerate(entries):
-            direction = np.zeros((size, size))
-            direction[a, b] = h
-            _, derivative = expm_frechet(aug * h, direction)
-            M[index], N[index] = derivative[:n, :n], derivative[:n, n:]
-        abs_aug = np.abs(aug) * h
-        top = expm(abs_aug + rad * h)
-        _, first = expm_frechet(abs_aug, rad * h)
-        remainder = np.maximum(top - expm(abs_aug) - first, 0.0) + _MODEL_PAD * top
-        R_x, R_u = remainder[:n, :n], remainder[:n, n:]
-    else:
-        phi, gamma = system.A + center, system.B.copy()
-        for index, (a, b) in enumerate(entries):
-            M[index, a, b] = 1.0
-        R_x = _MODEL_PAD * np.abs(phi)
-        R_u = np.zeros((n, m))
-    lo = sampled.noise_center - sampled.noise_radius
-    hi = sampled.noise_center + sampled.noise_radius
-    v_lo, v_hi = matvec_bounds(system.F, full.v[0], full.v[1])
-    return _DeltaModel(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
 
 
 class RobustHullEstimator(Observer):
@@ -214,7 +146,7 @@ class RobustHullEstimator(Observer):
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self.identify = bool(identify)
         self.fallback = fallback
-        self.model = _delta_model(system, self.bounds, h if system.continuous else None)
+        self.model = delta_linearisation(system, self.bounds, h if system.continuous else None)
         self.sampled = sampled_model(system, self.bounds, h if system.continuous else None)
         self.nd = len(self.model.entries)
         self._rows = np.array([a for a, _ in self.model.entries], dtype=int)
@@ -342,17 +274,11 @@ class RobustHullEstimator(Observer):
 
     def _predict(self, lo: FloatArray, hi: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Interval image of the box through one step of the sampled model (discrete time: identified ``ΔA`` box)."""
-        s = self.sampled
-        if self.system.continuous:
-            a_lo, a_hi = s.Phi - s.dPhi, s.Phi + s.dPhi
-            g_lo, g_hi = s.Gamma - s.dGamma, s.Gamma + s.dGamma
-        else:
-            a_lo = self.system.A + self.model.center + self.delta_box[0]
-            a_hi = self.system.A + self.model.center + self.delta_box[1]
-            g_lo = g_hi = self.system.B
-        xl, xh = interval_matvec_bounds(a_lo, a_hi, lo, hi)
-        ul, uh = interval_matvec_bounds(g_lo, g_hi, u, u)
-        return inflate(xl + ul + s.noise_center - s.noise_radius, xh + uh + s.noise_center + s.noise_radius)
+        transition = None
+        if not self.system.continuous:
+            base = self.system.A + self.model.center
+            transition = (base + self.delta_box[0], base + self.delta_box[1])
+        return self.sampled.image(lo, hi, u, transition)
 
     # -- protocol ------------------------------------------------------------------------------
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -621,7 +547,7 @@ def robust_hull_lower_bound(
     n = system.n
     if np.any(np.count_nonzero(system.F, axis=0) > 1):
         raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")
-    linear = _delta_model(system, full, h)
+    linear = delta_linearisation(system, full, h)
     rows_a = np.array([a for a, _ in linear.entries], dtype=int)
     cols_b = np.array([b for _, b in linear.entries], dtype=int)
     da_lo, da_hi = system.dA[0][rows_a, cols_b], system.dA[1][rows_a, cols_b]

@@ -5,10 +5,11 @@ from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from .lti import LTISystem
 from .nonlinear import NonlinearSystem
 from .sampled import SampledSystem
-from .sampling import SampledModel, sampled_model
+from .sampling import DeltaLinearisation, SampledModel, delta_linearisation, sampled_model
 
 __all__ = [
     "Bounds",
+    "DeltaLinearisation",
     "LPVSystem",
     "LTISystem",
     "NonlinearSystem",
@@ -17,5 +18,6 @@ __all__ = [
     "SampledModel",
     "SampledSystem",
     "StepEnclosure",
+    "delta_linearisation",
     "sampled_model",
 ]

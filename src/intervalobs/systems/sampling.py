@@ -159,15 +159,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import expm, schur
+from scipy.linalg import expm, expm_frechet, schur
 
 from ..errors import AssumptionError
-from ..interval import inflate
+from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..validation import as_positive
 from .bounds import Bounds
 from .lti import LTISystem
 
-__all__ = ["SampledModel", "sampled_model"]
+__all__ = ["DeltaLinearisation", "SampledModel", "delta_linearisation", "sampled_model"]
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]
@@ -177,6 +177,9 @@ _NODES_PER_OCTAVE = 8
 _FINEST_NORM_STEP = 1.0 / 16.0
 _EPS = float(np.finfo(float).eps)
 _MAX_EIGENBASIS_CONDITION = 1e8
+_MODEL_PAD = 1e-13
+"""Relative pad on the exponentials of :func:`delta_linearisation` (their own rounding: ``expm`` is accurate
+to ~1e-15)."""
 
 
 @dataclass(frozen=True)
@@ -213,6 +216,40 @@ class SampledModel:
     def uncertain(self) -> bool:
         """True when the transition or input matrix is an interval (not a point) matrix."""
         return bool(np.any(self.dPhi > 0) or np.any(self.dGamma > 0))
+
+    def image(
+        self,
+        lower: FloatArray,
+        upper: FloatArray,
+        u: FloatArray,
+        transition: tuple[FloatArray, FloatArray] | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
+        r"""Box of :math:`x_{k+1}` from a box of :math:`x_k`: one step of the model, rounded outward.
+
+        :math:`(\Phi \pm \delta\Phi)[\underline x, \overline x] + (\Gamma \pm \delta\Gamma)u_k + [c \pm r]`,
+        the products by :func:`~intervalobs.interval.interval_matvec_bounds` (exact ranges), the sum
+        widened by :func:`~intervalobs.interval.inflate`.
+
+        Parameters
+        ----------
+        lower, upper : numpy.ndarray, shape (..., n)
+            Box of :math:`x_k`.
+        u : numpy.ndarray, shape (..., m)
+            Known input over the step.
+        transition : tuple of numpy.ndarray, shape (n, n), optional
+            An interval matrix inside :math:`\Phi \pm \delta\Phi` to use instead (e.g. the transition of
+            a ``ΔA`` box identified from data, in discrete time).
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., n)
+        """
+        a_lo, a_hi = (self.Phi - self.dPhi, self.Phi + self.dPhi) if transition is None else transition
+        x_lo, x_hi = interval_matvec_bounds(a_lo, a_hi, lower, upper)
+        u_lo, u_hi = interval_matvec_bounds(self.Gamma - self.dGamma, self.Gamma + self.dGamma, u, u)
+        return inflate(
+            x_lo + u_lo + self.noise_center - self.noise_radius, x_hi + u_hi + self.noise_center + self.noise_radius
+        )
 
 
 @dataclass(frozen=True)
@@ -507,3 +544,138 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
     radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
     return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step)
+
+
+@dataclass(frozen=True)
+class DeltaLinearisation:
+    r"""The sampled model linearised in :math:`\delta = \Delta A - \Delta A_c` (:func:`delta_linearisation`).
+
+    .. math::
+
+        x_{k+1} = \Phi_c x_k + \Gamma_c u_k + \sum_{l} \delta_{a_lb_l}(M_l x_k + N_l u_k) + \varrho_k + q_k,
+        \qquad |\varrho_k| \le R_x|x_k| + R_u|u_k|,\qquad q_k \in [\text{noise\_lo}, \text{noise\_hi}],
+
+    for every :math:`\delta` with :math:`|\delta| \le` ``radius`` and every noise signal in its box;
+    the measurement is :math:`y_k = Cx_k + \nu_k` with :math:`\nu_k \in [v_{lo}, v_{hi}]`.
+
+    Attributes
+    ----------
+    Phi : numpy.ndarray, shape (n, n)
+        Transition matrix :math:`\Phi_c` of the centre model :math:`A + \Delta A_c`.
+    Gamma : numpy.ndarray, shape (n, m)
+        Input matrix :math:`\Gamma_c` of the centre model.
+    M : numpy.ndarray, shape (n_δ, n, n)
+        Derivative of :math:`\Phi` in the uncertain entry ``entries[l]`` (discrete time: :math:`e_ae_b^\top`).
+    N : numpy.ndarray, shape (n_δ, n, m)
+        Derivative of :math:`\Gamma` in the uncertain entry ``entries[l]`` (discrete time: zero).
+    R_x : numpy.ndarray, shape (n, n)
+        Bound of the second-order remainder's state term (elementwise, nonnegative).
+    R_u : numpy.ndarray, shape (n, m)
+        Bound of the second-order remainder's input term.
+    entries : tuple of tuple of int
+        The uncertain entries ``(a, b)`` of ``ΔA`` (radius > 0), in row-major order.
+    center : numpy.ndarray, shape (n, n)
+        Centre :math:`\Delta A_c` of the box of ``ΔA``.
+    radius : numpy.ndarray, shape (n, n)
+        Radius of the box of ``ΔA``.
+    noise_lo : numpy.ndarray, shape (n,)
+        Lower end of the process-noise box of one step (the sound sampled model's).
+    noise_hi : numpy.ndarray, shape (n,)
+        Upper end of the process-noise box.
+    C : numpy.ndarray, shape (p, n)
+        Output matrix.
+    v_lo : numpy.ndarray, shape (p,)
+        Lower end of the box of the measurement noise :math:`F v`.
+    v_hi : numpy.ndarray, shape (p,)
+        Upper end of the box of :math:`F v`.
+    """
+
+    Phi: FloatArray
+    Gamma: FloatArray
+    M: FloatArray
+    N: FloatArray
+    R_x: FloatArray
+    R_u: FloatArray
+    entries: tuple[tuple[int, int], ...]
+    center: FloatArray
+    radius: FloatArray
+    noise_lo: FloatArray
+    noise_hi: FloatArray
+    C: FloatArray
+    v_lo: FloatArray
+    v_hi: FloatArray
+
+
+def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = None) -> DeltaLinearisation:
+    r"""The sampled model of a system with interval ``ΔA`` as a linear function of :math:`\delta`.
+
+    * **Discrete time**: :math:`\Phi_c = A + \Delta A_c`, :math:`M_{ab} = e_ae_b^\top`, :math:`N = 0`,
+      :math:`R_x` the relative pad ``1e-13`` of :math:`|\Phi_c|`, :math:`R_u = 0`.
+    * **Continuous time** (step ``h``, input held): with :math:`\mathcal A = [[A + \Delta A_c, B], [0, 0]]`
+      and the direction :math:`\mathcal D = [[\delta, 0], [0, 0]]`, :math:`e^{(\mathcal A + \mathcal D)h} =
+      e^{\mathcal A h} + L(\mathcal A h, \mathcal D h) + R` with :math:`L` the Fréchet derivative of the
+      exponential (linear in :math:`\delta`: it gives :math:`M, N`) and :math:`|R| \le e^{(|\mathcal A| +
+      D)h} - e^{|\mathcal A|h} - L(|\mathcal A|h, Dh)` (the terms of the series with at least two factors
+      of :math:`\mathcal D`, bounded termwise; all nonnegative), padded by ``1e-13`` of the largest
+      exponential for the rounding of ``expm``.
+
+    The noise box is the sound sampled model's (:func:`sampled_model`, valid for every ``ΔA`` of the box).
+
+    Parameters
+    ----------
+    system : LTISystem
+        Model with an interval ``dA``.
+    bounds : Bounds
+        Noise boxes (``w`` and ``v`` are used).
+    h : float, optional
+        Step length, required for continuous time; in discrete time ``None`` or ``dt``.
+
+    Returns
+    -------
+    DeltaLinearisation
+
+    Raises
+    ------
+    AssumptionError
+        If the system has no interval ``dA``.
+    """
+    if system.dA is None:
+        raise AssumptionError("system.dA: expected an interval ΔA (a point model needs no linearisation in ΔA)")
+    full = bounds.resolve(system)
+    sampled = sampled_model(system, full, h)
+    n, m = system.n, system.m
+    center = 0.5 * (system.dA[0] + system.dA[1])
+    radius = 0.5 * (system.dA[1] - system.dA[0])
+    entries = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(radius > 0), strict=True))
+    nd = len(entries)
+    M = np.zeros((nd, n, n))
+    N = np.zeros((nd, n, m))
+    if system.continuous:
+        step = sampled.h
+        size = n + m
+        aug = np.zeros((size, size))
+        aug[:n, :n], aug[:n, n:] = system.A + center, system.B
+        rad = np.zeros((size, size))
+        rad[:n, :n] = radius
+        base = expm(aug * step)
+        phi, gamma = base[:n, :n], base[:n, n:]
+        for index, (a, b) in enumerate(entries):
+            direction = np.zeros((size, size))
+            direction[a, b] = step
+            _, derivative = expm_frechet(aug * step, direction)
+            M[index], N[index] = derivative[:n, :n], derivative[:n, n:]
+        abs_aug = np.abs(aug) * step
+        top = expm(abs_aug + rad * step)
+        _, first = expm_frechet(abs_aug, rad * step)
+        remainder = np.maximum(top - expm(abs_aug) - first, 0.0) + _MODEL_PAD * top
+        R_x, R_u = remainder[:n, :n], remainder[:n, n:]
+    else:
+        phi, gamma = system.A + center, system.B.copy()
+        for index, (a, b) in enumerate(entries):
+            M[index, a, b] = 1.0
+        R_x = _MODEL_PAD * np.abs(phi)
+        R_u = np.zeros((n, m))
+    lo = sampled.noise_center - sampled.noise_radius
+    hi = sampled.noise_center + sampled.noise_radius
+    v_lo, v_hi = matvec_bounds(system.F, full.v[0], full.v[1])
+    return DeltaLinearisation(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
