@@ -39,6 +39,7 @@ __all__ = [
     "framer_matrices",
     "is_detectable",
     "real_modal_basis",
+    "real_modal_form",
     "unstable_vertex",
 ]
 
@@ -201,8 +202,27 @@ def real_modal_basis(a: FloatArray) -> FloatArray | None:
     numpy.ndarray or None
         ``T``, or None when ``cond(V) > 1e8`` (a defective or nearly defective ``a``).
     """
+    form = real_modal_form(a)
+    return None if form is None else form[0]
+
+
+def real_modal_form(a: FloatArray) -> tuple[FloatArray, tuple[int, ...]] | None:
+    """:func:`real_modal_basis` and the sizes of the diagonal blocks of ``T a T⁻¹``, in order.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (n, n)
+        Matrix to block-diagonalise.
+
+    Returns
+    -------
+    (numpy.ndarray, tuple of int) or None
+        ``T`` and the block sizes (1 for a real eigenvalue, 2 for a complex pair), or None when
+        ``cond(V) > 1e8``.
+    """
     vals, vecs = np.linalg.eig(a)
     columns: list[FloatArray] = []
+    sizes: list[int] = []
     used = np.zeros(vals.size, dtype=bool)
     for i in np.argsort(-vals.real):
         if used[i]:
@@ -210,14 +230,16 @@ def real_modal_basis(a: FloatArray) -> FloatArray | None:
         used[i] = True
         if abs(vals[i].imag) < _EIGENVALUE_TOLERANCE * max(1.0, abs(vals[i])):
             columns.append(vecs[:, i].real)
+            sizes.append(1)
         else:
             j = int(np.argmin(np.abs(vals - vals[i].conj()) + used * 1e300))
             used[j] = True
             columns += [vecs[:, i].real, vecs[:, i].imag]
+            sizes.append(2)
     v = np.column_stack(columns)
     if np.linalg.cond(v) > 1e8:
         return None
-    return np.asarray(np.linalg.inv(v))
+    return np.asarray(np.linalg.inv(v)), tuple(sizes)
 
 
 def coordinate_candidates(

@@ -22,11 +22,32 @@ error mode of a dense :math:`M` (a stiff model sampled fast: :math:`\rho(M) = 1 
 affordable horizon; in the real modal basis of :math:`M` (:math:`M_z` block diagonal) every mode is its
 own recursion, :math:`|M_z^i| = |M_z|^i` on the 1×1 blocks, so a short :math:`J` cuts nothing. The
 design uses these coordinates for a gain whose identity-coordinate tube is not bounded.
+
+**Block norms.** A slow, lightly damped complex pair :math:`re^{\pm i\theta}` is a 2×2 rotation block
+of :math:`M_z`, and a box does not contract under a rotation: the row sums of :math:`|M_z^i|` are
+:math:`r^i(|\cos i\theta| + |\sin i\theta|)`, so the per-step rate is :math:`\approx r(1 + \theta)`, above
+1 when the pair rotates as fast as it decays. The Euclidean norm of the block contracts exactly by
+:math:`r`. With a partition of :math:`z` into blocks :math:`b` (sizes 1 or 2) and
+:math:`\|X\|_{bc}` the spectral norm of block :math:`(b, c)` of a matrix, the triangle inequality on
+:math:`e_{k+1} = M^\ell e_{k+1-\ell} + \sum_{i<\ell}M^i\eta_{k-i}` gives the same recursion for the vector
+of block norms :math:`\rho_b \ge \|z_b\|_2`,
+
+.. math:: \rho_{k+1} = \|M^{\ell}\|\,\rho_{k+1-\ell} + \sum_{i<\ell}\|M^i\|\,d_{k-i},
+          \qquad d_b \ge \|(T\eta)_b\|_2,\qquad |x_i| \le \sum_b \|(T^{-1})_{i,b}\|_2\,\rho_b,
+
+(the last by Cauchy–Schwarz), with :math:`\|\cdot\|` the matrix of block norms; with blocks of size 1 it
+is the tube above. The :math:`\Delta\Phi` part of :math:`T\eta` is :math:`T\Delta\Phi T^{-1}z`, bounded per
+block column by :math:`\min(\|\,|T|\,\delta\Phi\,|T^{-1}|\,\|_{bc}, \|B\|_{bc})` with
+:math:`B \ge |T\Delta\Phi T^{-1}|` from :meth:`~intervalobs.systems.sampling.SampledModel.dphi_in` (which
+keeps the cancellations of the first-order term in the modal coordinates). For a gain whose tube is
+not bounded in the identity coordinates, the design tries the modal coordinates both as a box and
+with the 2×2 blocks of its complex pairs, and keeps the smaller steady radius.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,9 +55,9 @@ from numpy.typing import NDArray
 from scipy.linalg import solve_discrete_are
 
 from ..systems.sampling import SampledModel
-from .cooperative import real_modal_basis
+from .cooperative import real_modal_form
 
-__all__ = ["TubeDesign", "design_tube_gain", "tube_horizon", "tube_stability"]
+__all__ = ["BlockNorms", "TubeDesign", "design_tube_gain", "tube_horizon", "tube_stability"]
 
 FloatArray = NDArray[np.float64]
 
@@ -47,6 +68,107 @@ rounding pad: the gain is only a candidate, its tube is computed and verified af
 _HORIZON_CONTRACTION = 0.25
 _MAX_HORIZON = 4000
 _SHORT_HORIZON = 256
+_NORM_ROUNDING = 16 * float(np.finfo(float).eps)
+"""Relative upward rounding of a computed 2-norm of a block of size 2 (a few rounded operations each)."""
+
+
+class BlockNorms:
+    """Euclidean norms of the diagonal blocks (sizes 1 or 2, in order) of the tube coordinates ``z``.
+
+    With every block of size 1 each map is the elementwise absolute value (no rounding); a block of size 2
+    is measured by its 2-norm (a matrix block by its spectral norm, from the closed form
+    ``(|(a + d) + i(c - b)| + |(a - d) + i(c + b)|)/2`` of a 2×2 matrix ``[[a, b], [c, d]]``), rounded up
+    by 16 ulps.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        Block sizes, each 1 or 2.
+    """
+
+    def __init__(self, sizes: Sequence[int]) -> None:
+        self.sizes = tuple(int(size) for size in sizes)
+        if any(size not in (1, 2) for size in self.sizes):
+            raise ValueError(f"sizes: expected block sizes 1 or 2, got {self.sizes}")
+        self.count = len(self.sizes)
+        self.n = sum(self.sizes)
+        self.singleton = self.count == self.n
+        # position of each coordinate in a padded layout of 2 slots per block
+        self._slots = np.concatenate([2 * b + np.arange(size) for b, size in enumerate(self.sizes)]).astype(int)
+
+    def _pad(self, x: FloatArray, axis: int) -> FloatArray:
+        shape = list(x.shape)
+        shape[axis] = 2 * self.count
+        out = np.zeros(shape)
+        index: list[slice | NDArray[np.int_]] = [slice(None)] * x.ndim
+        index[axis] = self._slots
+        out[tuple(index)] = x
+        return out
+
+    def vector(self, v: FloatArray) -> FloatArray:
+        """Block norms of vectors along the last axis: shape (..., n) to (..., count).
+
+        Parameters
+        ----------
+        v : numpy.ndarray, shape (..., n)
+            Vectors.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., count)
+        """
+        if self.singleton:
+            return np.abs(v)
+        padded = self._pad(np.asarray(v, dtype=float), -1)
+        return np.asarray(np.hypot(padded[..., 0::2], padded[..., 1::2]) * (1 + _NORM_ROUNDING))
+
+    def rows(self, x: FloatArray) -> FloatArray:
+        """2-norms of the pieces of each column of ``x`` within each block of rows: (n, k) to (count, k).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, shape (n, k)
+            Matrix.
+
+        Returns
+        -------
+        numpy.ndarray, shape (count, k)
+        """
+        return np.asarray(self.vector(np.asarray(x).T).T)
+
+    def cols(self, x: FloatArray) -> FloatArray:
+        """2-norms of the pieces of each row of ``x`` within each block of columns: (k, n) to (k, count).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, shape (k, n)
+            Matrix.
+
+        Returns
+        -------
+        numpy.ndarray, shape (k, count)
+        """
+        return self.vector(np.asarray(x))
+
+    def matrix(self, x: FloatArray) -> FloatArray:
+        """Spectral norms of the blocks of square matrices: shape (..., n, n) to (..., count, count).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, shape (..., n, n)
+            Matrices.
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., count, count)
+        """
+        if self.singleton:
+            return np.abs(x)
+        padded = self._pad(self._pad(np.asarray(x, dtype=float), -1), -2)
+        a, b = padded[..., 0::2, 0::2], padded[..., 0::2, 1::2]
+        c, d = padded[..., 1::2, 0::2], padded[..., 1::2, 1::2]
+        norm = 0.5 * (np.hypot(a + d, c - b) + np.hypot(a - d, c + b))
+        return np.asarray(norm * (1 + _NORM_ROUNDING))
 
 
 @dataclass(frozen=True)
@@ -67,6 +189,8 @@ class TubeDesign:
         Steady-state error radius of ``x`` from the noise alone (zero state magnitude).
     candidate : str
         Which candidate gain (and coordinates) won.
+    blocks : tuple of int
+        Sizes of the blocks of ``z`` whose Euclidean norms the tube bounds (empty: all of size 1, a box).
     """
 
     L: FloatArray
@@ -75,19 +199,23 @@ class TubeDesign:
     gain_radius: float
     steady_radius: FloatArray
     candidate: str
+    blocks: tuple[int, ...] = ()
 
 
-def tube_horizon(m: FloatArray) -> int | None:
+def tube_horizon(m: FloatArray, norms: BlockNorms | None = None) -> int | None:
     """The horizon ``J`` of the tube recursion, or None when ``M`` is not Schur stable.
 
     The smallest ``J`` with ``‖|M^J|‖∞ ≤ 1/4``; when no ``J`` up to 4000 contracts that much (a slow
     error mode), the ``J ≤ 256`` with the smallest per-step rate ``ρ(|M^J|)^(1/J)``, provided it is
-    below 1 (for a block-diagonal ``M`` that rate is ``ρ(M)`` already at ``J = 1``).
+    below 1 (for a block-diagonal ``M`` that rate is ``ρ(M)`` already at ``J = 1``). With block norms,
+    ``|M^J|`` is the matrix of block norms of ``M^J``.
 
     Parameters
     ----------
     m : numpy.ndarray, shape (n, n)
         Error matrix ``M = Φ - LC`` (in the tube's coordinates).
+    norms : BlockNorms, optional
+        Blocks of the tube coordinates (default: every block of size 1).
 
     Returns
     -------
@@ -96,36 +224,85 @@ def tube_horizon(m: FloatArray) -> int | None:
     """
     if np.max(np.abs(np.linalg.eigvals(m))) >= 1:
         return None
+    norms = BlockNorms((1,) * m.shape[0]) if norms is None else norms
     power = np.eye(m.shape[0])
     short = []
     for j in range(1, _MAX_HORIZON + 1):
         power = m @ power
-        if np.abs(power).sum(axis=1).max() <= _HORIZON_CONTRACTION:
+        size = norms.matrix(power)
+        if size.sum(axis=1).max() <= _HORIZON_CONTRACTION:
             return j
         if j <= _SHORT_HORIZON:
-            short.append(np.abs(power))
+            short.append(size)
     rates = [float(np.max(np.abs(np.linalg.eigvals(p)))) ** (1.0 / j) for j, p in enumerate(short, start=1)]
     best = int(np.argmin(rates))
     return best + 1 if rates[best] < 1 else None
 
 
-def abs_powers(m: FloatArray, count: int) -> FloatArray:
-    """``|M^i|`` for ``i = 0 … count-1``, shape (count, n, n)."""
-    out = np.empty((count, *m.shape))
+def abs_powers(m: FloatArray, count: int, norms: BlockNorms | None = None) -> FloatArray:
+    """``|M^i|`` (the block norms of ``M^i`` with ``norms``) for ``i = 0 … count-1``.
+
+    Parameters
+    ----------
+    m : numpy.ndarray, shape (n, n)
+        Matrix.
+    count : int
+        Number of powers.
+    norms : BlockNorms, optional
+        Blocks (default: every block of size 1, elementwise absolute values).
+
+    Returns
+    -------
+    numpy.ndarray, shape (count, nb, nb)
+    """
+    powers = np.empty((count, *m.shape))
     power = np.eye(m.shape[0])
     for i in range(count):
-        out[i] = np.abs(power)
+        powers[i] = power
         power = m @ power
-    return out
+    return np.abs(powers) if norms is None else norms.matrix(powers)
+
+
+def coupling(model: SampledModel, T: FloatArray | None, norms: BlockNorms | None = None) -> FloatArray:
+    """The matrix ``S`` with ``‖(TΔΦx)_b‖ ≤ (S ρ)_b`` for ``x = T⁻¹z``, ``ρ_c ≥ ‖z_c‖`` (module docstring).
+
+    ``S = min(‖|T|δΦ|T⁻¹|‖, ‖B‖)`` blockwise, ``B`` from ``model.dphi_in(T)``; ``δΦ`` itself for the
+    identity.
+
+    Parameters
+    ----------
+    model : SampledModel
+        Sampled interval model.
+    T : numpy.ndarray, shape (n, n) or None
+        Coordinates (None: identity).
+    norms : BlockNorms, optional
+        Blocks (default: every block of size 1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (nb, nb)
+    """
+    n = model.Phi.shape[0]
+    norms = BlockNorms((1,) * n) if norms is None else norms
+    if T is None or (norms.singleton and np.array_equal(T, np.eye(n))):
+        return norms.matrix(model.dPhi)
+    plain = norms.matrix(np.abs(T) @ model.dPhi @ np.abs(np.linalg.inv(T)))
+    return np.asarray(np.minimum(plain, norms.matrix(model.dphi_in(T))))
 
 
 def tube_stability(
-    model: SampledModel, m: FloatArray, disturbance: FloatArray, horizon: int, T: FloatArray | None = None
+    model: SampledModel,
+    m: FloatArray,
+    disturbance: FloatArray,
+    horizon: int,
+    T: FloatArray | None = None,
+    norms: BlockNorms | None = None,
 ) -> tuple[float, FloatArray]:
-    """Gain ``ρ(|M^J| + GδΦ)`` and the steady radius ``(I - |M^J| - GδΦ)⁻¹ G d`` (inf when unstable).
+    """Gain ``ρ(|M^J| + GS)`` and the steady radius ``(I - |M^J| - GS)⁻¹ G d`` (inf when unstable).
 
-    Here ``G = Σ_{i<J} |M^i|``; in coordinates ``z = Te`` every quantity is the z one
-    (``δΦ_z = |T|δΦ|T⁻¹|``, and ``disturbance`` and the steady radius are z radii).
+    Here ``G = Σ_{i<J} |M^i|`` and ``S`` is :func:`coupling` (``δΦ`` in the identity coordinates); in
+    coordinates ``z = Te`` every quantity is the z one, with block norms in place of ``|·|`` when
+    ``norms`` has blocks of size 2 (``disturbance`` and the steady radius are then block norms).
 
     Parameters
     ----------
@@ -133,28 +310,29 @@ def tube_stability(
         Sampled interval model (its ``δΦ``).
     m : numpy.ndarray, shape (n, n)
         Error matrix ``M = Φ - LC``.
-    disturbance : numpy.ndarray, shape (n,)
+    disturbance : numpy.ndarray, shape (nb,)
         Per-step radius ``d⁰`` of the box disturbance entering the error (without the ``δΦ`` term).
     horizon : int
         Tube horizon ``J``.
     T : numpy.ndarray, shape (n, n), optional
         Coordinates of ``m`` and ``disturbance`` (default identity).
+    norms : BlockNorms, optional
+        Blocks of the coordinates (default: every block of size 1).
 
     Returns
     -------
     rho : float
-        Spectral radius of ``|M^J| + GδΦ``.
-    steady_radius : numpy.ndarray, shape (n,)
+        Spectral radius of ``|M^J| + GS``.
+    steady_radius : numpy.ndarray, shape (nb,)
         Steady-state radius bound (``inf`` entries when ``rho ≥ 1``).
     """
-    powers = abs_powers(m, horizon + 1)
+    powers = abs_powers(m, horizon + 1, norms)
     g = powers[:horizon].sum(axis=0)
-    d_phi = model.dPhi if T is None else np.abs(T) @ model.dPhi @ np.abs(np.linalg.inv(T))
-    loop = powers[horizon] + g @ d_phi
+    loop = powers[horizon] + g @ coupling(model, T, norms)
     radius = float(np.max(np.abs(np.linalg.eigvals(loop))))
     if radius >= 1:
-        return radius, np.full(m.shape[0], np.inf)
-    return radius, np.linalg.solve(np.eye(m.shape[0]) - loop, g @ disturbance)
+        return radius, np.full(loop.shape[0], np.inf)
+    return radius, np.linalg.solve(np.eye(loop.shape[0]) - loop, g @ disturbance)
 
 
 def _kalman_gain(model: SampledModel, C: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray | None:
@@ -180,7 +358,8 @@ def design_tube_gain(
     box radii (process noise, plus the ``δΦ`` spread scaled by unit state magnitude), with the
     measurement covariance scaled by 0.1, 1 and 10, and any ``extra`` gains (e.g. framer gains). Each
     runs in the original coordinates, or, when its tube is not bounded there, in the real modal
-    basis of ``Φ - LC`` (see the module docstring).
+    basis of ``Φ - LC``, as a box and in block norms, the smaller steady radius kept (see the module
+    docstring).
 
     Parameters
     ----------
@@ -214,10 +393,16 @@ def design_tube_gain(
     best: TubeDesign | None = None
     for name, gain in candidates.items():
         error = model.Phi - gain @ C
-        found = _tube_in(model, gain, error, np.eye(n), F, v_radius, name)
-        modal = real_modal_basis(error) if found is None else None
-        if modal is not None:
-            found = _tube_in(model, gain, modal @ error @ np.linalg.inv(modal), modal, F, v_radius, f"{name}/modal")
+        found = _tube_in(model, gain, error, np.eye(n), (1,) * n, F, v_radius, name)
+        form = real_modal_form(error) if found is None else None
+        if form is not None:
+            modal, sizes = form
+            m_z = modal @ error @ np.linalg.inv(modal)
+            found = _tube_in(model, gain, m_z, modal, (1,) * n, F, v_radius, f"{name}/modal")
+            if max(sizes) > 1:
+                blocks = _tube_in(model, gain, m_z, modal, sizes, F, v_radius, f"{name}/modal-blocks")
+                if blocks is not None and (found is None or blocks.steady_radius.sum() < found.steady_radius.sum()):
+                    found = blocks
         if found is not None and (best is None or found.steady_radius.sum() < best.steady_radius.sum()):
             best = found
     return best
@@ -228,16 +413,20 @@ def _tube_in(
     gain: FloatArray,
     m_z: FloatArray,
     T: FloatArray,
+    sizes: tuple[int, ...],
     F: FloatArray,
     v_radius: FloatArray,
     name: str,
 ) -> TubeDesign | None:
-    """The tube of ``gain`` in coordinates ``T`` (``m_z = T(Φ - LC)T⁻¹``), or None when it is not bounded."""
-    horizon = tube_horizon(m_z)
+    """The tube of ``gain`` in coordinates ``T`` (``m_z = T(Φ - LC)T⁻¹``) and blocks ``sizes``, or None when
+    it is not bounded."""
+    norms = BlockNorms(sizes)
+    horizon = tube_horizon(m_z, norms)
     if horizon is None:
         return None
-    disturbance = np.abs(T) @ (model.noise_radius + np.abs(gain @ F) @ v_radius)
-    radius, steady = tube_stability(model, m_z, disturbance, horizon, T)
+    disturbance = norms.vector(np.abs(T) @ (model.noise_radius + np.abs(gain @ F) @ v_radius))
+    radius, steady = tube_stability(model, m_z, disturbance, horizon, T, norms)
     if not radius < 1:
         return None
-    return TubeDesign(gain, T, horizon, radius, np.abs(np.linalg.inv(T)) @ steady, name)
+    x_radius = norms.cols(np.abs(np.linalg.inv(T))) @ steady
+    return TubeDesign(gain, T, horizon, radius, x_radius, name, () if norms.singleton else sizes)

@@ -7,13 +7,14 @@ equations are in the class docstring.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable, unstable_vertex
-from ..design.tube import TubeDesign, abs_powers, design_tube_gain, tube_horizon, tube_stability
+from ..design.tube import BlockNorms, TubeDesign, abs_powers, coupling, design_tube_gain, tube_horizon, tube_stability
 from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
@@ -48,6 +49,9 @@ class IntervalObserver(Observer):
         Sampling period; required for a continuous-time system (measurements arrive every ``h``).
     method : {"tube", "framer"}
         Radius propagation (see Notes).
+    blocks : sequence of int, optional
+        Tube only: sizes (1 or 2) of consecutive blocks of ``z`` whose Euclidean norms the tube bounds
+        (default: every block of size 1, a box; 2×2 blocks suit the rotations of a real modal basis).
 
     Raises
     ------
@@ -74,7 +78,11 @@ class IntervalObserver(Observer):
               \ell = \min(k+1, J),\quad d_k = |T|\big(r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
 
     which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain and
-    coordinates.
+    coordinates. Outside the identity coordinates the :math:`\delta\Phi` terms are
+    :math:`\min(|T|\delta\Phi|x_c|, B|z_c|) + S\rho` with :math:`B \ge |T\Delta\Phi T^{-1}|`
+    (:meth:`~intervalobs.systems.sampling.SampledModel.dphi_in`) and :math:`S = \min(|T|\delta\Phi|T^{-1}|, B)`;
+    with ``blocks`` every :math:`|\cdot|` of :math:`z` quantities is a block norm
+    (:class:`~intervalobs.design.tube.BlockNorms`).
 
     ``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
     of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
@@ -101,6 +109,7 @@ class IntervalObserver(Observer):
         T: ArrayLike | None = None,
         h: float | None = None,
         method: str = "tube",
+        blocks: Sequence[int] | None = None,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -121,6 +130,11 @@ class IntervalObserver(Observer):
                 f"T: expected an invertible coordinate change, got cond(T) = {np.linalg.cond(self.T):.3g}"
             )
         self.T_inv = np.linalg.inv(self.T)
+        self.norms = BlockNorms((1,) * self.n if blocks is None or len(blocks) == 0 else blocks)
+        if self.norms.n != self.n or (method == "framer" and not self.norms.singleton):
+            raise DimensionError(
+                f"blocks: expected sizes 1 or 2 summing to n = {self.n} (tube only), got {self.norms.sizes}"
+            )
         width_matrix, self.M = framer_matrices(self.model, system.C, self.L, self.T)
         v_center = self.bounds.centre("v")
         v_radius = self.bounds.radius("v")
@@ -130,11 +144,17 @@ class IntervalObserver(Observer):
         self._TL = self.T @ self.L
         self._TGamma = self.T @ self.model.Gamma
         self._offset = self.T @ (self.model.noise_center - self.L @ F @ v_center)
-        self._radius_input = self._abs_T @ (self.model.noise_radius + np.abs(self.L @ F) @ v_radius)
+        self._radius_input = self.norms.vector(self._abs_T @ (self.model.noise_radius + np.abs(self.L @ F) @ v_radius))
+        self._back = self.norms.cols(self._abs_T_inv)  # x radius = back @ z radius
         self._K_phi = self._abs_T @ self.model.dPhi
         self._K_gamma = self._abs_T @ self.model.dGamma
+        # Outside the identity coordinates: B >= |TΔΦT⁻¹| and the coupling S of the tube (design/tube.py).
+        self._identity = self.norms.singleton and np.array_equal(self.T, np.eye(self.n))
+        if method == "tube" and self._uncertain and not self._identity:
+            self._B_phi = self.norms.matrix(self.model.dphi_in(self.T))
+            self._S_phi = coupling(self.model, self.T, self.norms)
         self._center_recursion = LinearRecursion(self.M)
-        self._radius_cache = np.empty((0, self.n))
+        self._radius_cache = np.empty((0, self.norms.count))
         if method == "framer":
             self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width_matrix))))
             if not self.spectral_radius < 1:
@@ -147,20 +167,22 @@ class IntervalObserver(Observer):
             amplification = max(self._center_recursion.error_factor, self._radius_recursion.error_factor)
             contraction = self.spectral_radius
         else:
-            horizon = tube_horizon(self.M)
+            horizon = tube_horizon(self.M, self.norms)
             if horizon is None:
                 raise DesignError(
                     "L: expected Φ - LC to be Schur stable (and to contract within 4000 steps), "
                     f"got spectral radius {np.max(np.abs(np.linalg.eigvals(self.M))):.6g}"
                 )
             self.horizon = horizon
-            self.spectral_radius, _ = tube_stability(self.model, self.M, self._radius_input, horizon, self.T)
+            self.spectral_radius, _ = tube_stability(
+                self.model, self.M, self._radius_input, horizon, self.T, self.norms
+            )
             if not self.spectral_radius < 1:
                 raise DesignError(
                     f"L: expected a bounded error tube, got ρ(|M^J| + GδΦ) = {self.spectral_radius:.6g} >= 1; "
                     "reduce dA or use IntervalObserver.design"
                 )
-            self._abs_powers = abs_powers(self.M, horizon + 1)
+            self._abs_powers = abs_powers(self.M, horizon + 1, self.norms)
             amplification = self._center_recursion.error_factor
             contraction = float(np.max(np.abs(np.linalg.eigvals(self.M))))
         self.margin = recursion_margin(self.n, amplification, contraction)
@@ -228,7 +250,7 @@ class IntervalObserver(Observer):
                 "IntervalObserver.design: no candidate gain gives a bounded error tube; "
                 "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
             )
-        observer = cls(system, full, tube.L, tube.T, h, method="tube")
+        observer = cls(system, full, tube.L, tube.T, h, method="tube", blocks=tube.blocks)
         observer.design_result = tube
         return observer
 
@@ -247,11 +269,13 @@ class IntervalObserver(Observer):
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         z_c = self.T @ (0.5 * (lo + hi))
-        z_r = self._abs_T @ (0.5 * (hi - lo))
+        z_r = self.norms.vector(self._abs_T @ (0.5 * (hi - lo)))
         internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r}
         if self.method == "tube":
             internal.update(
-                k=0, rho_queue=np.repeat(z_r[None, :], self.horizon, axis=0), d_history=np.zeros((self.horizon, self.n))
+                k=0,
+                rho_queue=np.repeat(z_r[None, :], self.horizon, axis=0),
+                d_history=np.zeros((self.horizon, self.norms.count)),
             )
         lower, upper = self._x_box(z_c, z_r)
         # In coordinates T ≠ I the z-box maps back wider than the prior: report their intersection.
@@ -289,7 +313,7 @@ class IntervalObserver(Observer):
         state = self.init()
         if self.model.uncertain:
             z_c = np.empty((*ys.shape[:-1], self.n))
-            z_r = np.empty_like(z_c)
+            z_r = np.empty((*ys.shape[:-1], self.norms.count))
             internal = state.internal
             for k in range(times.size):
                 z_c[..., k, :], z_r[..., k, :] = internal["z_center"], internal["z_radius"]
@@ -298,7 +322,7 @@ class IntervalObserver(Observer):
         else:
             drive = ys[..., :-1, :] @ self._TL.T + us[..., :-1, :] @ self._TGamma.T + self._offset
             z_c = self._center_recursion(state.internal["z_center"], drive)
-            z_r = np.broadcast_to(self._default_radius(times.size), z_c.shape)
+            z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
         lower, upper = self._x_box(z_c, z_r)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
         return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
@@ -323,7 +347,7 @@ class IntervalObserver(Observer):
         """
         horizon = self.horizon
         d = self._radius_input
-        radii = np.empty((max(steps, horizon + 1), self.n))
+        radii = np.empty((max(steps, horizon + 1), self.norms.count))
         terms = self._abs_powers[:horizon] @ d
         radii[0] = rho0
         radii[1 : horizon + 1] = self._abs_powers[1:] @ rho0 + np.cumsum(terms, axis=0)
@@ -337,10 +361,17 @@ class IntervalObserver(Observer):
     def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
         """Radius of the box of everything unknown that enters one step (in z-coordinates)."""
         radius = self._radius_input
-        if self._uncertain:
+        if not self._uncertain:
+            return np.asarray(radius)
+        if self.method == "framer" or self._identity:
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
-            radius = radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T
-        return np.asarray(radius)
+            return np.asarray(radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T)
+        # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
+        centre = np.minimum(
+            self.norms.vector(np.abs(z_c @ self.T_inv.T) @ self._K_phi.T), self.norms.vector(z_c) @ self._B_phi.T
+        )
+        inputs = self.norms.vector(np.abs(u) @ self._K_gamma.T)
+        return np.asarray(radius + inputs + centre + z_r @ self._S_phi.T)
 
     def _advance(self, internal: dict[str, Any], y: FloatArray, u: FloatArray) -> dict[str, Any]:
         z_c, z_r = internal["z_center"], internal["z_radius"]
@@ -352,10 +383,11 @@ class IntervalObserver(Observer):
         queue, history = internal["rho_queue"], internal["d_history"]
         # A batched y or u (or a batched ΔA disturbance) gives the queues their leading axes.
         lead = np.broadcast_shapes(np.shape(disturbance)[:-1], z_r.shape[:-1], new_c.shape[:-1])
-        disturbance = np.broadcast_to(disturbance, (*lead, self.n))
+        count = self.norms.count
+        disturbance = np.broadcast_to(disturbance, (*lead, count))
         if queue.shape[:-2] != lead:  # the first step of a batch from the shared prior
-            history = np.broadcast_to(history, (*lead, self.horizon, self.n))
-            queue = np.broadcast_to(queue, (*lead, self.horizon, self.n))
+            history = np.broadcast_to(history, (*lead, self.horizon, count))
+            queue = np.broadcast_to(queue, (*lead, self.horizon, count))
         history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
         lag = min(k + 1, self.horizon)
         new_r = queue[..., 0, :] @ self._abs_powers[lag].T + np.einsum(
@@ -366,8 +398,13 @@ class IntervalObserver(Observer):
 
     def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
         x_c = z_c @ self.T_inv.T
-        x_r = z_r @ self._abs_T_inv.T
-        return inflate(x_c - x_r, x_c + x_r, self.margin, scale=(np.abs(z_c) + z_r) @ self._abs_T_inv.T)
+        if self.norms.singleton:
+            x_r = z_r @ self._abs_T_inv.T
+            scale = (np.abs(z_c) + z_r) @ self._abs_T_inv.T
+        else:
+            x_r = z_r @ self._back.T
+            scale = np.abs(z_c) @ self._abs_T_inv.T + x_r
+        return inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale)
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
@@ -376,7 +413,8 @@ class IntervalObserver(Observer):
         -------
         dict
             ``method`` (``"IntervalObserver/<method>"``), ``L``, ``T``, ``spectral_radius``, ``h``,
-            ``transient_s``; ``horizon`` for the tube method; after :meth:`design`, ``steady_width``
+            ``transient_s``; ``horizon`` (and ``blocks`` when not all of size 1) for the tube method;
+            after :meth:`design`, ``steady_width``
             (noise-only steady-state width bound).
         """
         info: dict[str, Any] = {
@@ -389,6 +427,8 @@ class IntervalObserver(Observer):
         }
         if self.method == "tube":
             info["horizon"] = self.horizon
+            if not self.norms.singleton:
+                info["blocks"] = list(self.norms.sizes)
         if self.design_result is not None:
             info["steady_width"] = (2 * self.design_result.steady_radius).tolist()
         return info

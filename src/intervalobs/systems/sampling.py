@@ -124,6 +124,26 @@ with :math:`w = w_c + \operatorname{diag}(w_r)\epsilon(s)`, :math:`|\epsilon| \l
 .. math:: \Big(\int_0^h |e^{As}E|\,ds + \int_0^h |e^{(A+\Delta A)s} - e^{As}|\,ds\,|E|\Big) w_r
           + \delta\Gamma_E|w_c|.
 
+**6. The** :math:`\Delta A` **radius in other coordinates.** An observer that bounds its error in
+coordinates :math:`z = Te` needs :math:`|T\,\Delta\Phi\,T^{-1}|`. The product :math:`|T|\,\delta\Phi\,|T^{-1}|`
+bounds it, but loses the cancellations inside :math:`T K^{jl} T^{-1}` (in the modal basis of a slow,
+lightly damped error mode these are what keeps the ΔA term below the mode's decay).
+:meth:`SampledModel.dphi_in` bounds it directly: the first-order term of section 4 in the new
+coordinates is :math:`\sum_{jl}\Delta A_{jl}\,TK^{jl}T^{-1}`, whose trapezoid sums on the same nodes
+:math:`s_m` (weights :math:`\omega_m`) are :math:`\sum_m \omega_m\,(Te^{A(h-s_m)})_{:,j}\,(e^{As_m}T^{-1})_{l,:}`;
+the quadrature error terms and the remainder :math:`R_2` (section 4, original coordinates; call their
+sum :math:`S`, a bound of :math:`\sum_{jl}D_{jl}|K^{jl} - \tilde K^{jl}| + |R_2|`) enter as
+:math:`|T|\,S\,|T^{-1}|`:
+
+.. math:: |T\,\Delta\Phi\,T^{-1}| \le \sum_{jl} D_{jl}\,\Big|\sum_m \omega_m\,(Te^{A(h-s_m)})_{:,j}
+          (e^{As_m}T^{-1})_{l,:}\Big| + |T|\,S\,|T^{-1}| + \gamma\,|T|\,Z\,|T^{-1}|,
+
+where :math:`Z = \sum_m \omega_m|e^{A(h-s_m)}|\,D\,|e^{As_m}|` and :math:`\gamma = (2n + N + 4)\epsilon_{\mathrm{mach}}`
+covers the rounding of the products and of the :math:`N + 1`-term sums (each computed entry is within
+:math:`\gamma` of the magnitude of its terms). The elementwise minimum with :math:`|T|\,\delta\Phi\,|T^{-1}|`
+is returned. In discrete time :math:`\Delta\Phi = \Delta A` and the box
+:math:`\{T\Delta AT^{-1}\}` has radius exactly :math:`|T|\,D\,|T^{-1}|`.
+
 **Why not interval scaling and squaring.** The verified exponentials of interval matrices
 (Oppenheimer & Michel 1988: Taylor series with a norm remainder; Goldsztejn & Neumaier 2014: scaling
 and squaring of an interval Taylor enclosure; Althoff, Stursberg & Buss 2007 and CORA:
@@ -155,7 +175,7 @@ observers' outputs; the residuals of the Schur form and of the eigenbasis are me
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -202,6 +222,9 @@ class SampledModel:
         Centre and radius of the box that holds the process-noise contribution of one step.
     h : float
         Step length (1.0 for a discrete-time system).
+    first_order : object, optional
+        The first-order data behind :meth:`dphi_in` (set by :func:`sampled_model` for a
+        continuous-time system with interval ``dA``; None otherwise).
     """
 
     Phi: FloatArray
@@ -211,6 +234,7 @@ class SampledModel:
     noise_center: FloatArray
     noise_radius: FloatArray
     h: float
+    first_order: _FirstOrder | None = field(default=None, repr=False, compare=False)
 
     @property
     def uncertain(self) -> bool:
@@ -250,6 +274,52 @@ class SampledModel:
         return inflate(
             x_lo + u_lo + self.noise_center - self.noise_radius, x_hi + u_hi + self.noise_center + self.noise_radius
         )
+
+    def dphi_in(self, T: FloatArray) -> FloatArray:
+        r"""A bound of :math:`|T\,\Delta\Phi\,T^{-1}|` over the :math:`\Delta A` box (module docstring, section 6).
+
+        Never above :math:`|T|\,\delta\Phi\,|T^{-1}|`; below it when the first-order term cancels in
+        the coordinates ``T`` (continuous time).
+
+        Parameters
+        ----------
+        T : numpy.ndarray, shape (n, n)
+            Invertible coordinate change ``z = T x``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, n)
+            Elementwise radius, rounded upward.
+        """
+        t_inv = np.asarray(np.linalg.inv(T), dtype=float)
+        plain = np.abs(T) @ self.dPhi @ np.abs(t_inv)
+        if self.first_order is None:
+            return np.asarray(plain)
+        return np.minimum(plain, self.first_order.radius_in(T, t_inv))
+
+
+@dataclass(frozen=True)
+class _FirstOrder:
+    """The trapezoid data of the first-order ΔΦ term and its slack (module docstring, sections 4 and 6)."""
+
+    weights: FloatArray  # trapezoid weights of the nodes s_j
+    p: FloatArray  # e^{A s_j}, shape (N + 1, n, n)
+    d: FloatArray  # the radius D of ΔA
+    slack: FloatArray  # quadrature error terms + remainder R_2 of δΦ, original coordinates
+
+    def radius_in(self, t: FloatArray, t_inv: FloatArray) -> FloatArray:
+        """``Σ_jl D_jl |T K^jl T⁻¹| + |T|(S + γZ)|T⁻¹|``, rounded upward."""
+        n = t.shape[0]
+        rows, cols = np.nonzero(self.d)
+        weights = self.weights[:, None, None]
+        left = (weights * (t @ self.p[::-1]))[:, :, rows].transpose(2, 1, 0)  # ω_m (T e^{A(h - s_m)})_{:, j}
+        right = (self.p @ t_inv)[:, cols, :].transpose(1, 0, 2)  # (e^{A s_m} T^{-1})_{l, :}
+        first = np.einsum("q,qik->ik", self.d[rows, cols], np.abs(left @ right))
+        magnitude = ((weights * np.abs(self.p[::-1])) @ self.d @ np.abs(self.p)).sum(axis=0)
+        gamma = (2 * n + self.weights.size + 4) * _EPS
+        pad = np.abs(t) @ (self.slack + gamma * magnitude) @ np.abs(t_inv)
+        total = first + pad
+        return np.asarray(inflate(-total, total, floor=0.0)[1])
 
 
 @dataclass(frozen=True)
@@ -351,6 +421,7 @@ class _DecayBounds:
     d_phi: FloatArray | None
     d_inputs: FloatArray | None
     spread_integral: FloatArray | None
+    first_order: _FirstOrder | None
 
 
 def _majorant_terms(
@@ -410,7 +481,7 @@ def _decay_bounds(a: FloatArray, x1: FloatArray, n_noise: int, d: FloatArray | N
     g = np.abs(y[:, :, :n] @ e)  # |e^{As_j} E|
     noise_integral = (0.5 * steps[:, None, None] * (g[:-1] + g[1:])).sum(axis=0) + best[0]
     if d is None:
-        return _DecayBounds(noise_integral, None, None, None)
+        return _DecayBounds(noise_integral, None, None, None, None)
     # First-order ΔA term: Σ_jl D_jl |∫ e^{A(h-s)}_{ij} Y(s)_{lk} ds| by trapezoid sums on the symmetric
     # nodes (mirror index N - j), plus the error term.
     weights = np.zeros(len(nodes))
@@ -418,7 +489,9 @@ def _decay_bounds(a: FloatArray, x1: FloatArray, n_noise: int, d: FloatArray | N
     weights[1:] += 0.5 * steps
     sensitivity = np.einsum("t,tij,tlk->ijlk", weights, y[::-1, :, :n], y)
     first = np.einsum("jl,ijlk->ik", d, np.abs(sensitivity)) + best[1]
-    return _DecayBounds(noise_integral, first[:, :n] + best[2], first[:, n:] + best[3], best[4])
+    slack = best[1][:, :n] + best[2]
+    first_order = _FirstOrder(weights, y[:, :, :n], d, slack) if np.all(np.isfinite(slack)) else None
+    return _DecayBounds(noise_integral, first[:, :n] + best[2], first[:, n:] + best[3], best[4], first_order)
 
 
 def _finite_or_inf(x: FloatArray) -> FloatArray:
@@ -508,6 +581,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         a_rad = 0.5 * (system.dA[1] - system.dA[0])
     if not system.continuous:
         system.sampling_period(h)  # refuses an h other than dt
+        first_order: _FirstOrder | None = None
         phi, gamma, d_phi, d_gamma = a_mid, system.B, a_rad, np.zeros((n, m))
         center = system.E @ w_center
         radius = np.abs(system.E) @ w_radius
@@ -527,6 +601,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         cheap_spread, cheap_noise, cheap_spread_integral = _cheap_bounds(aug, rad, a_mid, a_rad, system.E, step)
         decay = _decay_bounds(a_mid, aug[:n], nw, a_rad if uncertain else None, step)
         noise_integral = np.minimum(cheap_noise, decay.noise_integral)
+        first_order = decay.first_order
         if decay.d_phi is None or decay.d_inputs is None or decay.spread_integral is None:
             spread, spread_integral = np.zeros((n, size)), np.zeros((n, n))
         else:
@@ -543,7 +618,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     d_phi = inflate(-d_phi, d_phi, floor=0.0)[1]
     d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
     radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
-    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step)
+    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order)
 
 
 @dataclass(frozen=True)
