@@ -1,12 +1,15 @@
-"""Tightness under interval ΔA (issue 19): RobustHullEstimator against the certified lower bound.
+"""Tightness under interval ΔA (issue 19): the robust estimators against the certified lower bound.
 
 The three reproductions with a tightness report, their own extreme (bang-bang) noise, seeds 0, 1, 2,
 and the true ΔA at a vertex of its box (as the simulator draws it) and, separately, at a random point
 of the box. For each run: the mean summed width of the RobustHullEstimator (window H), of the
+LP-free RobustFiniteMemoryObserver (``learn``: window N = "fir window", 6 training records,
+intersected with the IntervalObserver; learned once per example, on its own random records), of the
 IntervalObserver (designed) and of the default IntersectionObserver, the lower bound of
 ``robust_hull_lower_bound`` (candidates: the true ΔA and the estimator's extremal ΔA values; computed
 every ``stride`` steps, all means over those steps), the ratios, the enclosure of the truth and the
-costs per step. Settings (steps, first step of the means, windows) are those of the reproductions.
+costs per step (the RobustFiniteMemoryObserver's includes its IntervalObserver). Settings (steps, first
+step of the means, windows) are those of the reproductions.
 
 Run with ``make bench`` or ``python benchmarks/robust_tightness.py``; writes
 benchmarks/robust_tightness.json.
@@ -25,6 +28,7 @@ import numpy as np
 from intervalobs import IntervalObserver, LTISystem, simulate
 from intervalobs.examples import numerical3, spring_mass, two_tank
 from intervalobs.observers.intersection import IntersectionObserver
+from intervalobs.observers.robust_fir import RobustFiniteMemoryObserver
 from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 
 SEEDS = (0, 1, 2)
@@ -44,6 +48,7 @@ def examples() -> dict[str, dict[str, Any]]:
             "start": 20,
             "horizon": 40,
             "stride": 20,
+            "fir window": 10,
         },
         "two-tank": {
             "system": two_tank.system(),
@@ -54,6 +59,7 @@ def examples() -> dict[str, dict[str, Any]]:
             "start": 20,
             "horizon": 120,
             "stride": 40,
+            "fir window": 10,
         },
         "spring-mass-lti": {
             "system": spring_mass.system(),
@@ -64,11 +70,21 @@ def examples() -> dict[str, dict[str, Any]]:
             "start": 100,
             "horizon": 80,
             "stride": 30,
+            "fir window": 60,
         },
     }
 
 
-def one_run(case: dict[str, Any], seed: int, vertex: bool) -> dict[str, Any]:
+def learned_bank(case: dict[str, Any]) -> tuple[RobustFiniteMemoryObserver, float]:
+    """The example's RobustFiniteMemoryObserver and its learning time in s."""
+    system, bounds, h = case["system"], case["bounds"], case["h"]
+    clock = time.perf_counter()
+    fallback = IntervalObserver.design(system, bounds, h=h)
+    bank = RobustFiniteMemoryObserver.learn(system, bounds, window=case["fir window"], h=h, fallback=fallback)
+    return bank, time.perf_counter() - clock
+
+
+def one_run(case: dict[str, Any], seed: int, vertex: bool, bank: RobustFiniteMemoryObserver) -> dict[str, Any]:
     system, bounds, t, u, h = case["system"], case["bounds"], case["t"], case["u"], case["h"]
     lo, hi = system.dA
     rng = np.random.default_rng(1000 + seed)
@@ -105,6 +121,17 @@ def one_run(case: dict[str, Any], seed: int, vertex: bool) -> dict[str, Any]:
     )
     row["lower bound inside"] = inside
     row["RobustHullEstimator ms/step"] = robust_ms
+    clock = time.perf_counter()
+    fir = bank.run(t, sim.y, u)
+    row["RobustFiniteMemoryObserver ms/step"] = 1e3 * (time.perf_counter() - clock) / t.size
+    row["RobustFiniteMemoryObserver"] = width(fir)
+    row["RobustFiniteMemoryObserver ratio"] = row["RobustFiniteMemoryObserver"] / row["lower bound"]
+    row["RobustFiniteMemoryObserver enclosure"] = fir.enclosure(sim.x).fraction
+    row["RobustFiniteMemoryObserver max violation"] = fir.enclosure(sim.x).max_violation
+    row["RobustFiniteMemoryObserver lower bound inside"] = bool(
+        np.all(fir.lower[steps][defined] <= bound.lower[steps][defined])
+        and np.all(fir.upper[steps][defined] >= bound.upper[steps][defined])
+    )
     for name, obs in others.items():
         clock = time.perf_counter()
         other = obs.run(t, sim.y, u)
@@ -122,10 +149,12 @@ def main() -> None:
     for name, case in examples().items():
         if chosen and not any(c in name for c in chosen):
             continue
-        per: dict[str, Any] = {"horizon": case["horizon"], "stride": case["stride"], "start": case["start"]}
+        per: dict[str, Any] = {k: case[k] for k in ("horizon", "stride", "start", "fir window")}
+        bank, per["RobustFiniteMemoryObserver learn s"] = learned_bank(case)
+        per["RobustFiniteMemoryObserver filters per component"] = bank.meta()["bank"]
         for vertex in (True, False):
             key = "ΔA at a vertex" if vertex else "ΔA at a random point"
-            per[key] = {f"seed {seed}": one_run(case, seed, vertex) for seed in SEEDS}
+            per[key] = {f"seed {seed}": one_run(case, seed, vertex, bank) for seed in SEEDS}
             for seed, row in per[key].items():
                 print(name, key, seed, {k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()})
         results[name] = per
