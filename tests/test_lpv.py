@@ -288,6 +288,7 @@ def test_manipulator_reproduction_meets_the_issue(tmp_path):
     import json
 
     from intervalobs.cli import main
+    from paper_notes import misquoted
 
     assert main(["reproduce", "manipulator-lpv", "--out", str(tmp_path)]) == 0
     folder = tmp_path / "manipulator-lpv"
@@ -302,7 +303,17 @@ def test_manipulator_reproduction_meets_the_issue(tmp_path):
     assert s["design"]["lmi_74_exact_lambda_1"]["feasible"] is True
     assert s["design"]["lmi_74_exact_lambda_1"]["fine_points"] == 10000
     assert s["design"]["lmi_74_naive_lambda_1"]["feasible"] is False
-    for png in ("scenario1_isolation.png", "scenario4_isolation.png", "scenario1_state_bounds.png"):
+    # only the joint angles measured: sound velocity bounds in every scenario, isolation by the hypothesis bank
+    angles = s["angles_only"]
+    assert angles["C_B_un_max_abs"] == 0.0
+    for name, isolated in (("1", []), ("2", [1]), ("3", [2]), ("4", [1, 2])):
+        sa = angles["scenarios"][name]
+        assert sa["state_enclosure"] == {"fraction": 1.0, "max_violation": 0.0}
+        assert max(sa["velocity_width_max"]) < 0.05
+        assert sa["false_alarm"] is False and sa["isolated"] == isolated and sa["success"] is True
+        assert all(20.0 < t_det < 20.1 for t_det in sa["detection_time_s"])
+    assert misquoted("manipulator-lpv", s)[0] == []
+    for png in ("scenario1_isolation.png", "scenario4_isolation.png", "scenario1_state_bounds.png", "angles_only.png"):
         assert (folder / png).exists()
 
 
