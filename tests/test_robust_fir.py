@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, IntervalObserver, LTISystem
+from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import AssumptionError, DataError
 from intervalobs.observers.fir import FiniteMemoryObserver
 from intervalobs.observers.robust_fir import RobustFiniteMemoryObserver
@@ -63,6 +63,24 @@ def test_step_and_run_agree() -> None:
         state = robust.step(state, sim.y[k], u[k])
         np.testing.assert_allclose(state.lower, estimate.lower[k + 1], rtol=0, atol=1e-12)
         np.testing.assert_allclose(state.upper, estimate.upper[k + 1], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_a_model_without_inputs(continuous: bool) -> None:
+    """m = 0 (no known input): sound at a vertex of the ΔA box and never wider than the IntervalObserver."""
+    system, bounds = random_system(2, continuous)
+    free = LTISystem(system.A, system.C, E=system.E, dt=system.dt, dA=system.dA)
+    assert free.dA is not None
+    vertex = np.where(np.random.default_rng(5).integers(0, 2, size=system.A.shape) == 1, free.dA[1], free.dA[0])
+    t = np.arange(STEPS) * (H_CONTINUOUS if continuous else 1.0)
+    truth = LTISystem(system.A + vertex, system.C, E=system.E, dt=system.dt)
+    sim = simulate(truth, bounds, t, noise="extreme", seed=5)
+    h = H_CONTINUOUS if continuous else None
+    interval = IntervalObserver.design(free, bounds, h=h)
+    robust = RobustFiniteMemoryObserver.learn(free, bounds, window=5, records=1, steps=20, h=h, fallback=interval)
+    estimate, base = robust.run(t, sim.y), interval.run(t, sim.y)
+    assert estimate.enclosure(sim.x).max_violation == 0.0
+    assert np.all(estimate.lower >= base.lower) and np.all(estimate.upper <= base.upper)
 
 
 def test_a_point_box_gives_the_point_model_bank() -> None:

@@ -53,15 +53,25 @@ def test_uncertain_system_gets_a_labelled_lower_bound(tmp_path: Path) -> None:
         horizon=10,
         samples=0,
         truth=(sim.dA, sim.x),
+        fir_window=5,
     )
     assert isinstance(result.reference, HullLowerBound)
     report = summary["tightness"]
     assert report["reference"]["kind"] == "lower_bound"
     assert "LOWER BOUND" in format_tightness(report)
     assert report["observers"]["tube"]["ratio"] >= 1.0
+    fir = report["observers"]["RobustFiniteMemoryObserver"]
+    assert fir["enclosure"] == report["observers"]["tube"]["enclosure"] == 1.0
+    assert fir["reference_inside"] and fir["ratio"] >= 1.0 and fir["ms_per_step"] > 0 and fir["learn_s"] > 0
+    assert fir["mean_width"] <= report["observers"]["tube"]["mean_width"]  # intersected with IntervalObserver
     assert "oracle_hull" in report
     # the widths figure's data, drawn by the caller (this module writes no files)
-    assert set(result.widths) == {"tube", "lower bound (no sound estimator below)", "hull if ΔA were known"}
+    assert set(result.widths) == {
+        "tube",
+        "RobustFiniteMemoryObserver",
+        "lower bound (no sound estimator below)",
+        "hull if ΔA were known",
+    }
     assert all(w.shape == (t.size, system.n) for w in result.widths.values())
     assert not any(tmp_path.iterdir())
 

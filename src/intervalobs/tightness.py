@@ -5,8 +5,10 @@ HullEstimator`) for a model without :math:`\Delta A`, and otherwise the **lower 
 :func:`~intervalobs.observers.robust_hull.robust_hull_lower_bound` (consistent states of fixed
 :math:`\Delta A` candidates over the full history, improved by sequential LP), which no sound
 estimator can beat. For a model with :math:`\Delta A`, :func:`add_tightness` also runs the
-data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` and reports it next to
-the observers, with the cost per step of each estimator that was timed. For each observer the report
+data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` (window LP) and its
+LP-free counterpart :class:`~intervalobs.observers.robust_fir.RobustFiniteMemoryObserver` (learned
+filter bank) and reports them next to the observers, with the cost per step of each estimator that was
+timed and, given the truth, the enclosure of every estimator. For each observer the report
 gives the mean over the steps
 :math:`k \ge` ``start`` of the summed widths :math:`\sum_i (\overline{x}_{k,i} - \underline{x}_{k,i})`
 and its ratio to the reference's (≥ 1 for every sound observer: a ratio below 1 is a bug in one of the
@@ -25,6 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .estimate import Estimate
 from .observers.hull import HullEstimator, HullLowerBound, delta_samples
+from .observers.interval_observer import IntervalObserver
+from .observers.robust_fir import RobustFiniteMemoryObserver
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .systems.bounds import Bounds
 from .systems.lti import LTISystem
@@ -239,6 +243,7 @@ def add_tightness(
     steps: int | None = None,
     robust_horizon: int | None = None,
     stride: int = 1,
+    fir_window: int | None = None,
 ) -> Tightness:
     """The hook a reproduction calls before writing its files: ``summary["tightness"]`` and the widths.
 
@@ -279,6 +284,12 @@ def add_tightness(
     stride : int
         With interval ``ΔA``: the lower bound is computed every ``stride`` steps from ``start`` (its LPs
         span the whole history); the means are over those steps.
+    fir_window : int, optional
+        With interval ``ΔA``: also run :meth:`RobustFiniteMemoryObserver.learn
+        <intervalobs.observers.robust_fir.RobustFiniteMemoryObserver.learn>` with this window, intersected
+        with :meth:`IntervalObserver.design <intervalobs.observers.interval_observer.IntervalObserver.design>`
+        of the model (reported as ``"RobustFiniteMemoryObserver"``, timed per step with its
+        IntervalObserver; ``learn_s`` is its design time).
 
     Returns
     -------
@@ -296,6 +307,7 @@ def add_tightness(
         k: Estimate(e.t[cut], e.lower[..., cut, :], e.upper[..., cut, :], meta=e.meta) for k, e in estimates.items()
     }
     costs: dict[str, float] = {}
+    learn_s: float | None = None
     candidates = None
     chosen = None
     if system.dA is not None:
@@ -306,6 +318,14 @@ def add_tightness(
             estimates["RobustHullEstimator"] = robust.run(t, y, u)
             costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
             candidates = robust.extremal_deltas(t.size)
+        if fir_window is not None:
+            clock_learn = time.perf_counter()
+            fallback = IntervalObserver.design(system, bounds, h=h)
+            bank = RobustFiniteMemoryObserver.learn(system, bounds, window=fir_window, h=h, fallback=fallback)
+            learn_s = time.perf_counter() - clock_learn
+            clock_run = time.perf_counter()
+            estimates["RobustFiniteMemoryObserver"] = bank.run(t, y, u)
+            costs["RobustFiniteMemoryObserver"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
     clock_bound = time.perf_counter()
     reference = tightness_reference(
         system, bounds, t, y, u, h=h, horizon=horizon, samples=samples, truth=truth, candidates=candidates, steps=chosen
@@ -313,6 +333,11 @@ def add_tightness(
     reference_s = time.perf_counter() - clock_bound
     report = tightness_report(t, estimates, reference, start=start, costs=costs)
     report["reference"]["runtime_s"] = reference_s
+    if learn_s is not None:
+        report["observers"]["RobustFiniteMemoryObserver"]["learn_s"] = learn_s
+    if truth is not None:
+        for key, est in estimates.items():
+            report["observers"][key]["enclosure"] = est.enclosure(truth[1]).fraction
     oracle = None
     if system.dA is not None and truth is not None:
         known = LTISystem(

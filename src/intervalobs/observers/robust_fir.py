@@ -123,7 +123,9 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         q_x = np.einsum("flq,eqr->lrfe", d_flat, model.M)  # D_l M_ab: (N, n, F, n_δ)
         q_u = np.einsum("flq,eqr->lrfe", d_flat, model.N)  # D_l N_ab: (N, m, F, n_δ)
         # centre terms: (x̂_0 … x̂_{N-1}, u_0 … u_{N-1}) @ weights -> (F n_δ), one product per step
-        self._centre_weights_dA = np.concatenate([q_x.reshape(big_n * n, -1), q_u.reshape(big_n * m, -1)])
+        self._centre_weights_dA = np.concatenate(
+            [q_x.reshape(big_n * n, filters * nd), q_u.reshape(big_n * m, filters * nd)]
+        )
         self._entry_radius = radius
         gamma = self._gamma_d + (big_n * (3 * n + 2 * m) + nd + n + 8) * _EPS
         spread_x = np.einsum("e,eqr->qr", radius, np.abs(model.M))  # Σ D_ab |M_ab|

@@ -49,6 +49,8 @@ from .contract import Example, base_summary, write_reproduction
 NAME = "numerical-3state"
 ROBUST_HORIZON = 40
 """Window of the RobustHullEstimator in the tightness report (steps)."""
+FIR_WINDOW = 10
+"""Window of the learned RobustFiniteMemoryObserver in the tightness report (as benchmarks/robust_tightness.py)."""
 BOUND_STRIDE = 45
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 SEED_FILE = "002_a6311576c67046f0.txt"
@@ -249,6 +251,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         truth=(sim68.dA, sim68.x),
         robust_horizon=ROBUST_HORIZON,
         stride=BOUND_STRIDE,
+        fir_window=FIR_WINDOW,
     )
     if plots:
         out_dir.mkdir(parents=True, exist_ok=True)

@@ -21,6 +21,8 @@ from .contract import Example, base_summary, write_reproduction
 NAME = "spring-mass-lti"
 ROBUST_HORIZON = 40
 """Window of the RobustHullEstimator in the tightness report (steps)."""
+FIR_WINDOW = 60
+"""Window of the learned RobustFiniteMemoryObserver in the tightness report (as benchmarks/robust_tightness.py)."""
 BOUND_STRIDE = 50
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 TIGHTNESS_STEPS = 250
@@ -103,6 +105,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         truth=(sim.dA, sim.x),
         robust_horizon=ROBUST_HORIZON,
         stride=BOUND_STRIDE,
+        fir_window=FIR_WINDOW,
         steps=TIGHTNESS_STEPS,
     )
     if plots:

@@ -46,6 +46,8 @@ TIGHTNESS_STEPS = 400
 NAME = "two-tank"
 ROBUST_HORIZON = 60
 """Window of the RobustHullEstimator in the tightness report (steps)."""
+FIR_WINDOW = 10
+"""Window of the learned RobustFiniteMemoryObserver in the tightness report (as benchmarks/robust_tightness.py)."""
 BOUND_STRIDE = 95
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 MONTE_CARLO_RUNS = 20
@@ -180,6 +182,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         truth=(sim.dA, sim.x),
         robust_horizon=ROBUST_HORIZON,
         stride=BOUND_STRIDE,
+        fir_window=FIR_WINDOW,
         steps=TIGHTNESS_STEPS,
     )
     if plots:
