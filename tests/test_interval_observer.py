@@ -165,3 +165,20 @@ def test_first_box_is_never_wider_than_the_prior_in_any_coordinates():
     assert est.enclosure(sim.x).max_violation == 0.0
     state = obs.step(state, sim.y[0, 0])
     np.testing.assert_allclose(state.upper, est.upper[0, 1], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed,n,p,continuous,uncertain", [c for c in CASES if c[2] * c[1] <= 16][:6])
+def test_refined_gain_is_never_looser_than_the_winning_candidate(monkeypatch, seed, n, p, continuous, uncertain):
+    """The local refinement of the tube gain: no state's verified steady radius above the unrefined winner's."""
+    from intervalobs.design import tube
+    from intervalobs.systems.sampling import sampled_model
+
+    system, bounds = random_system(seed, n, p, continuous, uncertain)
+    model = sampled_model(system, bounds.resolve(system), 0.05 if continuous else None)
+    v_radius = bounds.resolve(system).radius("v")
+    refined = tube.design_tube_gain(model, system.C, system.F, v_radius)
+    monkeypatch.setattr(tube, "_REFINE_MAX_ENTRIES", 0)
+    plain = tube.design_tube_gain(model, system.C, system.F, v_radius)
+    assert refined is not None and plain is not None
+    assert np.all(refined.steady_radius <= plain.steady_radius)
+    assert refined.candidate in (plain.candidate, f"{plain.candidate}+refined")

@@ -68,6 +68,12 @@ rounding pad: the gain is only a candidate, its tube is computed and verified af
 _HORIZON_CONTRACTION = 0.25
 _MAX_HORIZON = 4000
 _SHORT_HORIZON = 256
+_REFINE_MAX_ENTRIES = 16
+"""Gains with more entries are not refined (the pattern search costs a few evaluations per entry and level)."""
+_REFINE_LEVELS = 9
+_REFINE_SIGNIFICANT = 1e-9
+"""A refinement step must lower the score by this relative amount (far above its rounding): the search
+then takes the same path on any machine."""
 _NORM_ROUNDING = 16 * float(np.finfo(float).eps)
 """Relative upward rounding of a computed 2-norm of a block of size 2 (a few rounded operations each)."""
 
@@ -225,18 +231,31 @@ def tube_horizon(m: FloatArray, norms: BlockNorms | None = None) -> int | None:
     if np.max(np.abs(np.linalg.eigvals(m))) >= 1:
         return None
     norms = BlockNorms((1,) * m.shape[0]) if norms is None else norms
-    power = np.eye(m.shape[0])
-    short = []
-    for j in range(1, _MAX_HORIZON + 1):
-        power = m @ power
-        size = norms.matrix(power)
-        if size.sum(axis=1).max() <= _HORIZON_CONTRACTION:
-            return j
-        if j <= _SHORT_HORIZON:
-            short.append(size)
+    signed = _powers(m, _SHORT_HORIZON + 1)[1:]  # M^1 … M^256, then 256 more at a time
+    chunk = signed[-1]
+    short = norms.matrix(signed)
+    block, offset = short, 0
+    while offset < _MAX_HORIZON:
+        hit = np.flatnonzero(block.sum(axis=-1).max(axis=-1) <= _HORIZON_CONTRACTION)
+        if hit.size and offset + hit[0] + 1 <= _MAX_HORIZON:
+            return int(offset + hit[0] + 1)
+        signed, offset = signed @ chunk, offset + _SHORT_HORIZON
+        block = norms.matrix(signed)
     rates = [float(np.max(np.abs(np.linalg.eigvals(p)))) ** (1.0 / j) for j, p in enumerate(short, start=1)]
     best = int(np.argmin(rates))
     return best + 1 if rates[best] < 1 else None
+
+
+def _powers(m: FloatArray, count: int) -> FloatArray:
+    """``M^i`` for ``i = 0 … count-1`` by doubling (log2(count) batched products), shape (count, n, n)."""
+    powers = np.empty((count, *m.shape))
+    powers[0] = np.eye(m.shape[0])
+    filled, step = 1, m  # step = M^filled: the next block is M^i M^filled, i < filled
+    while filled < count:
+        size = min(filled, count - filled)
+        powers[filled : filled + size] = powers[:size] @ step
+        filled, step = filled + size, step @ step
+    return powers
 
 
 def abs_powers(m: FloatArray, count: int, norms: BlockNorms | None = None) -> FloatArray:
@@ -255,11 +274,7 @@ def abs_powers(m: FloatArray, count: int, norms: BlockNorms | None = None) -> Fl
     -------
     numpy.ndarray, shape (count, nb, nb)
     """
-    powers = np.empty((count, *m.shape))
-    power = np.eye(m.shape[0])
-    for i in range(count):
-        powers[i] = power
-        power = m @ power
+    powers = _powers(m, count)
     return np.abs(powers) if norms is None else norms.matrix(powers)
 
 
@@ -326,9 +341,14 @@ def tube_stability(
     steady_radius : numpy.ndarray, shape (nb,)
         Steady-state radius bound (``inf`` entries when ``rho ≥ 1``).
     """
-    powers = abs_powers(m, horizon + 1, norms)
+    return _loop_and_steady(abs_powers(m, horizon + 1, norms), coupling(model, T, norms), disturbance)
+
+
+def _loop_and_steady(powers: FloatArray, coupling: FloatArray, disturbance: FloatArray) -> tuple[float, FloatArray]:
+    """``ρ(|M^J| + GS)`` and ``(I - |M^J| - GS)⁻¹ G d`` from ``powers = |M^i|``, ``i = 0 … J``."""
+    horizon = powers.shape[0] - 1
     g = powers[:horizon].sum(axis=0)
-    loop = powers[horizon] + g @ coupling(model, T, norms)
+    loop = powers[horizon] + g @ coupling
     radius = float(np.max(np.abs(np.linalg.eigvals(loop))))
     if radius >= 1:
         return radius, np.full(loop.shape[0], np.inf)
@@ -359,7 +379,9 @@ def design_tube_gain(
     measurement covariance scaled by 0.1, 1 and 10, and any ``extra`` gains (e.g. framer gains). Each
     runs in the original coordinates, or, when its tube is not bounded there, in the real modal
     basis of ``Φ - LC``, as a box and in block norms, the smaller steady radius kept (see the module
-    docstring).
+    docstring). A winner in the original coordinates is then refined locally (a pattern search on its
+    entries, at most 16) for a smaller steady radius sum with no state's steady radius larger; the
+    refined gain replaces it only when its verified tube is never wider in any state.
 
     Parameters
     ----------
@@ -405,7 +427,64 @@ def design_tube_gain(
                     found = blocks
         if found is not None and (best is None or found.steady_radius.sum() < best.steady_radius.sum()):
             best = found
-    return best
+    refined = None if best is None else _refined(model, C, F, v_radius, best)
+    return best if refined is None else refined
+
+
+def _refined(
+    model: SampledModel, C: FloatArray, F: FloatArray, v_radius: FloatArray, start: TubeDesign
+) -> TubeDesign | None:
+    """A local refinement of the winning identity-coordinate gain, or None when it finds nothing better.
+
+    A pattern search on the entries of ``L`` (steps ``±δ·max|L|``, ``δ`` halved from 1/4 to 1/1024
+    whenever no step helps) minimises the steady radius sum at the winner's horizon, with every state's
+    steady radius at most the winner's; a step is taken only when it lowers the sum by more than a relative
+    ``1e-9``, so rounding does not steer the search. The result is verified by :func:`_tube_in` and kept only
+    when its verified steady radius is nowhere above the winner's and smaller in sum. The Kalman-type
+    candidates minimise a variance, not this box bound, so the refinement typically gains several per cent.
+    """
+    n = model.Phi.shape[0]
+    if start.L.size > _REFINE_MAX_ENTRIES or start.blocks or not np.array_equal(start.T, np.eye(n)):
+        return None
+    limit = start.steady_radius
+
+    def score(gain: FloatArray) -> float:
+        steady = _steady_estimate(model, gain, C, F, v_radius, start.horizon)
+        return float(steady.sum()) if steady is not None and np.all(steady <= limit) else np.inf
+
+    gain, best = start.L.copy(), score(start.L)
+    scale = float(np.max(np.abs(start.L)))
+    for level in range(_REFINE_LEVELS):
+        step = scale * 0.25 * 0.5**level
+        improved = True
+        while improved:
+            improved = False
+            for index in np.ndindex(gain.shape):
+                for sign in (1.0, -1.0):
+                    trial = gain.copy()
+                    trial[index] += sign * step
+                    value = score(trial)
+                    if value < best * (1 - _REFINE_SIGNIFICANT):
+                        gain, best, improved = trial, value, True
+                        break
+    if best >= score(start.L):
+        return None
+    found = _tube_in(model, gain, model.Phi - gain @ C, np.eye(n), (1,) * n, F, v_radius, f"{start.candidate}+refined")
+    if found is None or np.any(found.steady_radius > limit) or found.steady_radius.sum() >= limit.sum():
+        return None
+    return found
+
+
+def _steady_estimate(
+    model: SampledModel, gain: FloatArray, C: FloatArray, F: FloatArray, v_radius: FloatArray, horizon: int
+) -> FloatArray | None:
+    """The identity-coordinate steady radius of :func:`tube_stability` at a given horizon, None when unbounded."""
+    m = model.Phi - gain @ C
+    if np.max(np.abs(np.linalg.eigvals(m))) >= 1:
+        return None
+    disturbance = model.noise_radius + np.abs(gain @ F) @ v_radius
+    radius, steady = _loop_and_steady(abs_powers(m, horizon + 1), model.dPhi, disturbance)
+    return steady if radius < 1 else None
 
 
 def _tube_in(
