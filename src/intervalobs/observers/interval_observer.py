@@ -79,8 +79,9 @@ class IntervalObserver(Observer):
 
     which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain and
     coordinates. Outside the identity coordinates the :math:`\delta\Phi` terms are
-    :math:`\min(|T|\delta\Phi|x_c|, B|z_c|) + S\rho` with :math:`B \ge |T\Delta\Phi T^{-1}|`
-    (:meth:`~intervalobs.systems.sampling.SampledModel.dphi_in`) and :math:`S = \min(|T|\delta\Phi|T^{-1}|, B)`;
+    :math:`\min(|T|\delta\Phi|x_c|, S|z_c|) + S\rho` with :math:`S = \min(|T|\delta\Phi|T^{-1}|, B)` and
+    :math:`B \ge |T\Delta\Phi T^{-1}|` (:meth:`~intervalobs.systems.sampling.SampledModel.dphi_in`): each
+    block column of :math:`T\Delta\Phi T^{-1}z` is bounded by either;
     with ``blocks`` every :math:`|\cdot|` of :math:`z` quantities is a block norm
     (:class:`~intervalobs.design.tube.BlockNorms`).
 
@@ -148,10 +149,9 @@ class IntervalObserver(Observer):
         self._back = self.norms.cols(self._abs_T_inv)  # x radius = back @ z radius
         self._K_phi = self._abs_T @ self.model.dPhi
         self._K_gamma = self._abs_T @ self.model.dGamma
-        # Outside the identity coordinates: B >= |TΔΦT⁻¹| and the coupling S of the tube (design/tube.py).
+        # Outside the identity coordinates: the coupling S >= blockwise |TΔΦT⁻¹| of the tube (design/tube.py).
         self._identity = self.norms.singleton and np.array_equal(self.T, np.eye(self.n))
         if method == "tube" and self._uncertain and not self._identity:
-            self._B_phi = self.norms.matrix(self.model.dphi_in(self.T))
             self._S_phi = coupling(self.model, self.T, self.norms)
         self._center_recursion = LinearRecursion(self.M)
         self._radius_cache = np.empty((0, self.norms.count))
@@ -368,7 +368,7 @@ class IntervalObserver(Observer):
             return np.asarray(radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T)
         # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
         centre = np.minimum(
-            self.norms.vector(np.abs(z_c @ self.T_inv.T) @ self._K_phi.T), self.norms.vector(z_c) @ self._B_phi.T
+            self.norms.vector(np.abs(z_c @ self.T_inv.T) @ self._K_phi.T), self.norms.vector(z_c) @ self._S_phi.T
         )
         inputs = self.norms.vector(np.abs(u) @ self._K_gamma.T)
         return np.asarray(radius + inputs + centre + z_r @ self._S_phi.T)
