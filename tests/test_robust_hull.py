@@ -162,3 +162,35 @@ def test_errors_name_the_argument() -> None:
     assert system.dA is not None
     with pytest.raises(BoundsError, match="candidates"):
         robust_hull_lower_bound(system, bounds, t, np.zeros((5, system.p)), h=0.1, candidates=[2 * system.dA[1] + 1])
+
+
+FAST = {(0, False, True), (1, True, False)}
+"""The McCormick cases of the default suite (its sparse LPs cost 10-100 times the split LP's); the others are slow."""
+
+
+@pytest.mark.parametrize(
+    ("seed", "continuous", "vertex"),
+    [pytest.param(*case, marks=() if case in FAST else pytest.mark.slow) for case in CASES],
+    ids=[f"seed{s}-{'ct' if c else 'dt'}-{'vertex' if v else 'random'}" for s, c, v in CASES],
+)
+def test_mccormick_sound_and_inside_the_split_window(seed: int, continuous: bool, vertex: bool) -> None:
+    """The McCormick LP's set lies inside the split LP's: its boxes are sound and never wider."""
+    system, bounds = random_system(seed, continuous)
+    t, u, sim, _ = record(system, bounds, seed, vertex)
+    steps = 40 if (seed, continuous, vertex) not in FAST else 12
+    t, u, y, x = t[:steps], u[:steps], sim.y[:steps], sim.x[:steps]
+    h = H_CONTINUOUS if continuous else None
+    horizon = 10 if steps == 40 else 4
+    interval = IntervalObserver.design(system, bounds, h=h)
+    base = interval.run(t, y, u)
+    split = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h).run(t, y, u)
+    alone = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, mccormick=True).run(t, y, u)
+    robust = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, mccormick=True, fallback=interval)
+    both = robust.run(t, y, u)
+    assert alone.meta["mccormick"] is True
+    assert alone.enclosure(x).max_violation == 0.0
+    assert both.enclosure(x).max_violation == 0.0
+    assert np.all(both.lower >= base.lower) and np.all(both.upper <= base.upper)
+    # Certified bounds sit within HiGHS's tolerances (1e-9, times column magnitudes ≤ 1e3) of the LP optimum.
+    assert np.all(alone.lower >= split.lower - 1e-6) and np.all(alone.upper <= split.upper + 1e-6)
+    assert np.mean(alone.width()[horizon:]) < np.mean(split.width()[horizon:])

@@ -197,7 +197,9 @@ def dual_bounds(lp: LinearProgram, costs: FloatArray, duals: FloatArray) -> Floa
 
 
 class DenseLP:
-    """A dense LP ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi`` solved by HiGHS; bounds by weak duality.
+    """An LP ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi`` solved by HiGHS; bounds by weak duality.
+
+    ``A`` is dense, or sparse (CSC) for a model with few nonzeros.
 
     A new model is passed with :meth:`load` (the last basis is kept when the sizes agree); :meth:`minima`
     solves several objectives in turn.
@@ -208,22 +210,32 @@ class DenseLP:
         self.inf = float(self.solver.getInfinity())
 
     def load(
-        self, matrix: FloatArray, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray
+        self,
+        matrix: FloatArray | sparse.csc_matrix,
+        col_lo: FloatArray,
+        col_hi: FloatArray,
+        row_lo: FloatArray,
+        row_hi: FloatArray,
     ) -> None:
         """Pass a new model.
 
         Parameters
         ----------
-        matrix : numpy.ndarray, shape (rows, cols)
+        matrix : numpy.ndarray or scipy.sparse.csc_matrix, shape (rows, cols)
             ``A``.
         col_lo, col_hi : numpy.ndarray, shape (cols,)
             Variable bounds (finite).
         row_lo, row_hi : numpy.ndarray, shape (rows,)
             Row bounds (may be infinite).
         """
-        self.matrix_t = np.ascontiguousarray(matrix.T)
-        self.abs_matrix_t = np.abs(self.matrix_t)
-        self.col_nnz = matrix.shape[0]
+        if isinstance(matrix, sparse.csc_matrix):
+            self.matrix_t: Any = matrix.T.tocsr()
+            self.abs_matrix_t: Any = abs(self.matrix_t)
+            self.col_nnz = int(np.max(np.diff(matrix.indptr), initial=0))
+        else:
+            self.matrix_t = np.ascontiguousarray(matrix.T)
+            self.abs_matrix_t = np.abs(self.matrix_t)
+            self.col_nnz = matrix.shape[0]
         self.nrow, self.ncol = matrix.shape
         self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
         self.solver.passModel(highs_model(matrix, col_lo, col_hi, row_lo, row_hi, self.inf))
