@@ -91,8 +91,9 @@ def test_a_point_box_gives_the_point_model_bank() -> None:
     degenerate = LTISystem(system.A, system.C, B=system.B, E=system.E, dt=1.0, dA=(zero, zero))
     t, u, sim, _ = record(system, bounds, 0, vertex=True)
     fallback = IntervalObserver.design(point, bounds)
-    learned = FiniteMemoryObserver.learn(point, bounds, window=5, records=1, steps=20, fallback=fallback)
-    robust = RobustFiniteMemoryObserver(degenerate, bounds, learned.K, fallback)
+    gains = FiniteMemoryObserver.learn(point, bounds, window=5, records=1, steps=20, fallback=fallback).K
+    learned = FiniteMemoryObserver(point, bounds, gains, fallback)  # the full windows' bank only, like robust
+    robust = RobustFiniteMemoryObserver(degenerate, bounds, gains, fallback)
     np.testing.assert_allclose(robust.run(t, sim.y, u).lower, learned.run(t, sim.y, u).lower, rtol=0, atol=1e-12)
     np.testing.assert_allclose(robust.run(t, sim.y, u).upper, learned.run(t, sim.y, u).upper, rtol=0, atol=1e-12)
 

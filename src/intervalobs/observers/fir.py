@@ -41,14 +41,21 @@ per entry, with a factor 4 to spare), and that error times the magnitudes of the
 input and the prior box is added to the radius. The rounding of the online sums is bounded by
 :math:`\gamma\,(\sum|K_j||y| + \sum|M_l||u| + |d|)` with :math:`\gamma = (2W + 8)\,\varepsilon`
 (``W`` weights); the result is intersected with a sound fallback observer
-(default: the tube :class:`IntervalObserver`), which alone gives the first ``N`` boxes, and with
+(default: the tube :class:`IntervalObserver`), and with
 the one-step interval prediction of the previous own box (:math:`\Phi` box, plus the input and the
 noise box, inflated). An intersection of sound boxes is sound.
+
+**The first rows** (``k < N``) have no full window. They use filters of their own on the growing
+window :math:`y_0 \dots y_{k-1}` (``… y_k`` when filtered), with :math:`s = 0` in the equations above
+(``L = k`` steps instead of ``N``): the box of :math:`x_0` bounds :math:`R x_0`, and the same rounding
+argument holds with ``N`` replaced by ``L``. :meth:`FiniteMemoryObserver.learn` fills them with the
+certificates of the window hull's first steps, whose windows start at the prior of :math:`x_0`.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -101,6 +108,11 @@ class FiniteMemoryObserver(Observer):
     filtered : bool
         Whether the last weight multiplies :math:`y_k` (rows of :meth:`run` are then filtered boxes,
         like :class:`~intervalobs.observers.hull.HullEstimator` with ``filtered=True``).
+    first : sequence of array_like
+        Banks of the first rows, before a full window exists (growing windows from the prior): entry ``j``,
+        shape (n, B_j, j + 1, p), weighs ``y_0 … y_j`` for row ``j + 1`` (row ``j`` when filtered), with the
+        box of :math:`x_0` in place of that of :math:`x_s`; at most ``N - 1`` entries (``N`` when filtered).
+        Rows without one come from the fallback and the prediction.
     """
 
     summary_fields = ("window", "filtered")
@@ -119,6 +131,7 @@ class FiniteMemoryObserver(Observer):
         h: float | None = None,
         lp_seconds: float = 0.0,
         filtered: bool = False,
+        first: Sequence[ArrayLike] = (),
     ) -> None:
         if system.dA is not None and not self.covers_dA:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
@@ -142,8 +155,31 @@ class FiniteMemoryObserver(Observer):
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
-        self._setup(model.Phi, model.Gamma, *_noise_channels(system, self.bounds, model))
+        noise = _noise_channels(system, self.bounds, model)
+        output = (system.C, system.F, self.bounds.centre("v"), self.bounds.radius("v"))
+        self._bank = _FilterBank(k, self.window, model.Phi, model.Gamma, noise, output)
+        self.residual, self.radius, self.M, self.offset = (
+            self._bank.residual,
+            self._bank.radius,
+            self._bank.M,
+            self._bank.offset,
+        )
         self._model = model
+        if len(first) > self.window - 1 + self.filtered or (first and self.covers_dA):
+            raise DataError(
+                f"first: expected at most {self.window - 1 + self.filtered} banks of the first rows"
+                f"{' (none under ΔA)' if self.covers_dA else ''}, got {len(first)}"
+            )
+        self._first = []
+        for j, entry in enumerate(first):  # entry j: row j + 1 - filtered, j + 1 weights on y_0 … y_j
+            gains_j = np.asarray(entry, dtype=float)
+            if gains_j.ndim != 4 or gains_j.shape[::2] != (self.n, j + 1) or gains_j.shape[3] != self.p:
+                raise DataError(
+                    f"first[{j}]: expected shape (n={self.n}, B, {j + 1}, p={self.p}), got {np.shape(entry)}"
+                )
+            if gains_j.shape[1] < 1 or not np.all(np.isfinite(gains_j)):
+                raise DataError(f"first[{j}]: expected at least one filter per component, finite values")
+            self._first.append(_FilterBank(gains_j, j + 1 - self.filtered, model.Phi, model.Gamma, noise, output))
 
     # -- design ----------------------------------------------------------------------------------
     @classmethod
@@ -194,6 +230,7 @@ class FiniteMemoryObserver(Observer):
         h: float | None = None,
         fallback: Observer | None = None,
         filtered: bool = False,
+        first_records: int = 30,
     ) -> FiniteMemoryObserver:
         """A bank: the worst-case filter plus the exact window hull's certificates on simulated records.
 
@@ -202,6 +239,9 @@ class FiniteMemoryObserver(Observer):
         window hull of every step is solved by :class:`~intervalobs.observers.hull.HullEstimator`
         and its duality certificate becomes a filter of the bank. Every filter is sound on every
         record; the bank is as tight as the LP on records whose optimal certificates it holds.
+        The first ``N - 1`` rows (``N`` when filtered) get banks of their own: the certificates of the
+        hull's growing windows from the prior of :math:`x_0` (rows ``k ≤ N``), and the zero filter (the
+        prior's open-loop image), so a short record is tight from its start.
 
         Parameters
         ----------
@@ -227,6 +267,10 @@ class FiniteMemoryObserver(Observer):
         filtered : bool
             Learn filters that also use :math:`y_k` (certificates of the filtered window hull; the
             worst-case filter gets a zero weight on :math:`y_k`): rows are filtered boxes.
+        first_records : int
+            Number of further short training records (``window + 1`` samples) for the banks of the first rows
+            (growing windows from the prior of :math:`x_0`); those banks also take the first rows of the
+            ``records``. 0 leaves them to those alone.
 
         Returns
         -------
@@ -234,7 +278,7 @@ class FiniteMemoryObserver(Observer):
             ``meta()["bank"]`` is the number of filters per component.
         """
         least_steps = int(window) + 2 if isinstance(window, (int, np.integer)) else 2  # one full window at least
-        checks = [("records", records, 1), ("steps", steps, least_steps)]
+        checks = [("records", records, 1), ("steps", steps, least_steps), ("first_records", first_records, 0)]
         checks += [("size", size, 1)] if size is not None else []
         for name, value, least in checks:
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
@@ -253,103 +297,44 @@ class FiniteMemoryObserver(Observer):
         t = np.arange(int(steps)) * period
         # A stream of its own: training records never coincide with a user's simulate(..., seed=...).
         rng = np.random.default_rng([int(seed), 0xF1B])
+        last = int(filtered)
         bank: list[list[FloatArray]] = [[] for _ in range(system.n)]
+        # first[j][i]: certificates of component i for row j + 1 - last (j + 1 weights, windows from x_0)
+        first: list[list[list[FloatArray]]] = [[[] for _ in range(system.n)] for _ in range(int(window) - 1 + last)]
         start = time.perf_counter()
-        for record in range(int(records)):
-            noise = _training_noise(system, full, t.size, record, rng)
-            sim = simulate(system, full, t, noise=noise, seed=int(rng.integers(2**31)))
-            for (i, sign), duals in hull.certificates(t, sim.y, sim.u).items():
-                bank[i].append(sign * duals[:, : int(window) + bool(filtered), :])
+        # Short records (window + 1 samples) for the first rows only: i.i.d. vertex or switching noise, both from
+        # a vertex of the x_0 box (the prior's faces are what the first rows' certificates depend on).
+        short = np.random.default_rng([int(seed), 0xF1B, 1])
+        for record in range(int(records) + int(first_records)):
+            if record < records:
+                noise, own, times = _training_noise(system, full, t.size, record, rng), rng, t
+            else:
+                noise, own, times = ("vertex", "extreme")[record % 2], short, t[: int(window) + 1]
+            sim = simulate(system, full, times, noise=noise, seed=int(own.integers(2**31)))
+            for key, duals in hull.certificates(times, sim.y, sim.u, first_rows=True).items():
+                i, sign, *length = key  # length: the steps of a window from x_0 (first rows)
+                weights = length[0] + last if length else int(window) + last
+                if weights <= len(first) or not length:  # (row N from x_0 is left to the full bank)
+                    (first[weights - 1] if length else bank)[i].append(sign * duals[:, :weights, :])
         elapsed += time.perf_counter() - start
-        members = []
-        for i, found in enumerate(bank):
-            unique = np.unique(np.concatenate(found), axis=0)
-            if size is not None:
-                unique = unique[np.sort(rng.permutation(unique.shape[0])[: int(size) - 1])]
-            members.append(np.concatenate([worst[i][None], unique]))
-        count = max(m.shape[0] for m in members)
-        # Components with fewer filters repeat their worst-case filter (a duplicate changes nothing).
-        gains = np.stack(
-            [np.concatenate([m, np.repeat(worst[i][None], count - m.shape[0], 0)]) for i, m in enumerate(members)]
-        )
+        gains = _assemble(bank, worst, size, rng)
+        # Rows before the window is full: the certificates, and the zero filter (the prior's open-loop image).
+        early = [_assemble(found, np.zeros((system.n, j + 1, system.p)), size, rng) for j, found in enumerate(first)]
         if fallback is None:
             fallback = IntervalObserver.design(system, full, h=h)
-        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered)
-
-    def _setup(self, phi: FloatArray, gamma: FloatArray, noise_map: FloatArray, c: FloatArray, r: FloatArray) -> None:
-        """Evaluate ``D_l``, ``R``, ``M_l``, ``d`` and the sound radius of every filter from its weights."""
-        n, big_n, k = self.n, self.window, self.K
-        weights = k.shape[2]  # N, or N + 1 when y_k is used
-        c_mat, f_mat = self.system.C, self.system.F
-        v_c = self.bounds.centre("v")
-        v_r = self.bounds.radius("v")
-        powers, abs_powers = [np.eye(n)], [np.eye(n)]
-        for _ in range(big_n):
-            powers.append(phi @ powers[-1])
-            abs_powers.append(np.abs(phi) @ abs_powers[-1])
-        c_powers = np.stack([c_mat @ power for power in powers])  # (N + 1, p, n)
-        abs_c_powers = np.stack([np.abs(c_mat) @ power for power in abs_powers])
-        abs_k = np.abs(k)
-        # Magnitudes bounding the rounding of D_l and R (module docstring): γ_D times these.
-        d_mag = np.empty((big_n, n, k.shape[1], n))
-        # D_l = Φ^{N-1-l} - Σ_{j>l} K_j C Φ^{j-1-l}, per component i and filter b: shape (N, n, B, n).
-        d_mats = np.empty((big_n, n, k.shape[1], n))
-        for l_ in range(big_n):
-            d_mats[l_] = powers[big_n - 1 - l_][:, None, :]
-            d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: weights - 1 - l_])
-            d_mag[l_] = abs_powers[big_n - 1 - l_][:, None, :]
-            d_mag[l_] += np.einsum("ibjp,jpq->ibq", abs_k[:, :, l_ + 1 :, :], abs_c_powers[: weights - 1 - l_])
-        kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
-        self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
-        r_mag = abs_powers[big_n][:, None, :] + np.einsum("ibjp,jpq->ibq", abs_k, abs_c_powers[:weights])
-        gamma_d = 4.0 * (big_n + 1) * (n + self.p + noise_map.shape[1] + 2) * _EPS
-        self._d_mats, self._d_mag, self._gamma_d = d_mats, d_mag, gamma_d  # for the ΔA terms of a subclass
-        self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (N, n, B, m)
-        d_noise = np.einsum("libq,qw->libw", d_mats, noise_map)  # D_l G: the process noise enters as G w_l
-        self.offset = np.einsum("libw,w->ib", d_noise, c) - np.einsum("ibjq,q->ib", kf, v_c)
-        radius = np.einsum("libw,w->ib", np.abs(d_noise), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
-        noise_mag = np.einsum("libq,qw->libw", d_mag, np.abs(noise_map))
-        radius += gamma_d * np.einsum("libw,w->ib", noise_mag, r + np.abs(c))  # rounding of D_l G (noise, d)
-        # Upward rounding of the evaluation itself (sums of N (n + nv) nonnegative terms).
-        terms = weights * (n + f_mat.shape[1])
-        self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
-        self._gamma = (2 * weights + 8) * _EPS
-        # One matrix for a whole window z = (y_s … y_{s+W-1}, u_s … u_{s+N-1}) → every filter's estimate.
-        rows = n * k.shape[1]
-        window_weights = [k.reshape(rows, -1), np.moveaxis(self.M, 0, 2).reshape(rows, -1)]
-        self._window_weights = np.concatenate(window_weights, axis=1).T  # (W p + N m, n B)
-        # pad = |z| @ pad_weights + pad_const: rounding of the sums, and of M_l = D_l Γ times |u|.
-        input_mag = gamma_d * np.moveaxis(np.einsum("libq,qm->libm", d_mag, np.abs(gamma)), 0, 2).reshape(rows, -1)
-        self._pad_weights = self._gamma * np.abs(self._window_weights)
-        self._pad_weights[k.shape[2] * self.p :] += input_mag.T
-        self._pad_const = (self._gamma * np.abs(self.offset) + self.radius).ravel()
-        self._offset_flat = self.offset.ravel()
-        # R x_s ∈ R c ± (|R| r + rounding of c, r, both products and of R itself): half @ A + |c| @ B.
-        gamma_res = (2 * n + 8) * _EPS
-        abs_residual, residual_mag = np.abs(self.residual).reshape(rows, n).T, gamma_d * r_mag.reshape(rows, n).T
-        self._residual_t = self.residual.reshape(rows, n).T  # (n, n B)
-        self._half_weights = (1 + gamma_res) * abs_residual + residual_mag
-        self._centre_weights = gamma_res * abs_residual + residual_mag
+        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered, first=early)
 
     # -- online ----------------------------------------------------------------------------------
     def _window_terms(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Every filter's estimate and pad (radius + rounding of the sums), shape (..., n B), from windows
-        ``ys`` (..., W, p) and ``us`` (..., N, m): two matrix products for any number of windows."""
-        z = np.concatenate([ys.reshape(*ys.shape[:-2], -1), us.reshape(*us.shape[:-2], -1)], axis=-1)
-        return z @ self._window_weights + self._offset_flat, np.abs(z) @ self._pad_weights + self._pad_const
+        """Every filter's estimate and pad, shape (..., n B), from windows ``ys`` (..., W, p), ``us`` (..., N, m)."""
+        return self._bank.terms(ys, us)
 
     def _bank_box(
         self, est: FloatArray, pad: FloatArray, rows_lo: FloatArray, rows_hi: FloatArray, us: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """Intersection of the filters' boxes, given their window terms and boxes ``rows_*`` (..., N, n) of
         ``x_s … x_{k-1}`` (the first bounds ``R x_s``) with the window's inputs ``us`` (..., N, m)."""
-        prior_lo, prior_hi = rows_lo[..., 0, :], rows_hi[..., 0, :]
-        centre, half = 0.5 * (prior_lo + prior_hi), 0.5 * (prior_hi - prior_lo)
-        res_c = centre @ self._residual_t
-        res_r = half @ self._half_weights + np.abs(centre) @ self._centre_weights
-        low, high = est - pad + res_c - res_r, est + pad + res_c + res_r  # broadcast over runs
-        shape = (*low.shape[:-1], self.n, -1)
-        return inflate(np.max(low.reshape(shape), axis=-1), np.min(high.reshape(shape), axis=-1))
+        return self._bank.box(est, pad, rows_lo[..., 0, :], rows_hi[..., 0, :])
 
     def _fir(
         self, ys: FloatArray, us: FloatArray, rows_lo: FloatArray, rows_hi: FloatArray
@@ -367,11 +352,21 @@ class FiniteMemoryObserver(Observer):
     def _measured(
         self, ys: list[FloatArray], us: list[FloatArray], rows: list[Any], lower: FloatArray, upper: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """Intersect a box with the bank's, once ``rows`` holds the ``N`` rows before it (``rows[0]``: ``x_{k-N}``)."""
-        if len(rows) < self.window:
-            return lower, upper
-        y_win = np.stack(ys[-(self.window + self.filtered) :], axis=-2)
-        u_win = np.stack([np.broadcast_to(v, (*y_win.shape[:-2], self.m)) for v in us[-self.window :]], axis=-2)
+        """Intersect a box with the bank's; ``rows`` holds the rows before it (``rows[0]``: ``x_{k-N}``, or ``x_0``
+        while fewer than ``N``: then the bank of the first rows, if any, with ``rows[0]`` or this box as prior)."""
+        count = len(rows)
+        y_win = np.stack(ys[len(ys) - count - self.filtered :], axis=-2)
+        lead = y_win.shape[:-2]
+        u_win = np.zeros((*lead, count, self.m))
+        for j, v in enumerate(us[len(us) - count :]):
+            u_win[..., j, :] = v
+        if count < self.window:
+            if count - 1 + self.filtered >= len(self._first):
+                return lower, upper
+            bank = self._first[count - 1 + self.filtered]
+            prior_lo, prior_hi = rows[0] if rows else (lower, upper)
+            f_lo, f_hi = bank.box(*bank.terms(y_win, u_win), prior_lo, prior_hi)
+            return np.maximum(lower, f_lo), np.minimum(upper, f_hi)
         rows_lo = np.stack([np.broadcast_to(lo, y_win.shape[:-2] + lo.shape[-1:]) for lo, _ in rows], axis=-2)
         rows_hi = np.stack([np.broadcast_to(hi, y_win.shape[:-2] + hi.shape[-1:]) for _, hi in rows], axis=-2)
         f_lo, f_hi = self._fir(y_win, u_win, rows_lo, rows_hi)
@@ -446,23 +441,30 @@ class FiniteMemoryObserver(Observer):
         lower, upper = base.lower.copy(), base.upper.copy()
         big_n, last, steps = self.window, int(self.filtered), times.size
         # Window terms of a block of rows at a time (two matrix products), at most ~2e6 numbers each.
-        block = max(1, 2_000_000 // (max(1, ys[..., 0, 0].size) * self._offset_flat.size))
-        first = stop = big_n
+        block = max(1, 2_000_000 // (max(1, ys[..., 0, 0].size) * self._bank.offset_flat.size))
+        head = stop = big_n
         est = pad = np.empty(0)
-        for k in range(1, steps):  # rows k - 1 and k - N are final
-            p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
-            lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
-            upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
-            if k < big_n:
+        for k in range(steps):  # rows k - 1 and k - N (or 0) are final
+            if k > 0:
+                p_lo, p_hi = self._predict(lower[..., k - 1, :], upper[..., k - 1, :], us[..., k - 1, :])
+                lower[..., k, :] = np.maximum(lower[..., k, :], p_lo)
+                upper[..., k, :] = np.minimum(upper[..., k, :], p_hi)
+            if k < big_n:  # a growing window from x_0, if the bank of row k exists
+                if 0 <= k - 1 + last < len(self._first):
+                    bank = self._first[k - 1 + last]
+                    terms = bank.terms(ys[..., : k + last, :], us[..., :k, :])
+                    f_lo, f_hi = bank.box(*terms, lower[..., 0, :], upper[..., 0, :])
+                    lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
+                    upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
                 continue
             if k >= stop:
-                first, stop = k, min(k + block, steps)
-                y_win = sliding_window_view(ys[..., first - big_n : stop - 1 + last, :], big_n + last, axis=-2)
-                u_win = sliding_window_view(us[..., first - big_n : stop - 1, :], big_n, axis=-2)
+                head, stop = k, min(k + block, steps)
+                y_win = sliding_window_view(ys[..., head - big_n : stop - 1 + last, :], big_n + last, axis=-2)
+                u_win = sliding_window_view(us[..., head - big_n : stop - 1, :], big_n, axis=-2)
                 est, pad = self._window_terms(np.swapaxes(y_win, -1, -2), np.swapaxes(u_win, -1, -2))
             f_lo, f_hi = self._bank_box(
-                est[..., k - first, :],
-                pad[..., k - first, :],
+                est[..., k - head, :],
+                pad[..., k - head, :],
                 lower[..., k - big_n : k, :],
                 upper[..., k - big_n : k, :],
                 us[..., k - big_n : k, :],
@@ -495,7 +497,116 @@ class FiniteMemoryObserver(Observer):
         }
 
 
-def _noise_channels(system: LTISystem, full: ResolvedBounds, model: SampledModel) -> tuple[FloatArray, ...]:
+class _FilterBank:
+    r"""The filters of one window length, evaluated once from their weights (module docstring).
+
+    ``gains`` (n, B, W, p) weigh ``W = L`` measurements (``L + 1`` when ``y_k`` is used) of a window of
+    ``L`` steps; ``L = 0`` (only :math:`y_k`) is allowed. The model pieces are ``Φ``, ``Γ``, the noise
+    channels ``G`` with their box (centre ``c``, radius ``r``), ``C``, ``F`` and the box of ``v``.
+    """
+
+    def __init__(
+        self,
+        gains: FloatArray,
+        length: int,
+        phi: FloatArray,
+        gamma: FloatArray,
+        noise: tuple[FloatArray, FloatArray, FloatArray],
+        output: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    ) -> None:
+        k, big_n = gains, length
+        noise_map, c, r = noise
+        c_mat, f_mat, v_c, v_r = output
+        n, p, m, banks = phi.shape[0], c_mat.shape[0], gamma.shape[1], k.shape[1]
+        weights = k.shape[2]  # L, or L + 1 when y_k is used
+        self.K, self.length, self.n = k, big_n, n
+        powers, abs_powers = [np.eye(n)], [np.eye(n)]
+        for _ in range(big_n):
+            powers.append(phi @ powers[-1])
+            abs_powers.append(np.abs(phi) @ abs_powers[-1])
+        c_powers = np.stack([c_mat @ power for power in powers])  # (L + 1, p, n)
+        abs_c_powers = np.stack([np.abs(c_mat) @ power for power in abs_powers])
+        abs_k = np.abs(k)
+        # Magnitudes bounding the rounding of D_l and R (module docstring): γ_D times these.
+        d_mag = np.empty((big_n, n, banks, n))
+        # D_l = Φ^{L-1-l} - Σ_{j>l} K_j C Φ^{j-1-l}, per component i and filter b: shape (L, n, B, n).
+        d_mats = np.empty((big_n, n, banks, n))
+        for l_ in range(big_n):
+            d_mats[l_] = powers[big_n - 1 - l_][:, None, :]
+            d_mats[l_] -= np.einsum("ibjp,jpq->ibq", k[:, :, l_ + 1 :, :], c_powers[: weights - 1 - l_])
+            d_mag[l_] = abs_powers[big_n - 1 - l_][:, None, :]
+            d_mag[l_] += np.einsum("ibjp,jpq->ibq", abs_k[:, :, l_ + 1 :, :], abs_c_powers[: weights - 1 - l_])
+        kf = np.einsum("ibjp,pq->ibjq", k, f_mat)
+        self.residual = powers[big_n][:, None, :] - np.einsum("ibjp,jpq->ibq", k, c_powers[:weights])
+        r_mag = abs_powers[big_n][:, None, :] + np.einsum("ibjp,jpq->ibq", abs_k, abs_c_powers[:weights])
+        gamma_d = 4.0 * (big_n + 1) * (n + p + noise_map.shape[1] + 2) * _EPS
+        self.d_mats, self.d_mag, self.gamma_d = d_mats, d_mag, gamma_d  # for the ΔA terms of a subclass
+        self.M = np.einsum("libq,qm->libm", d_mats, gamma)  # (L, n, B, m)
+        d_noise = np.einsum("libq,qw->libw", d_mats, noise_map)  # D_l G: the process noise enters as G w_l
+        self.offset = np.einsum("libw,w->ib", d_noise, c) - np.einsum("ibjq,q->ib", kf, v_c)
+        radius = np.einsum("libw,w->ib", np.abs(d_noise), r) + np.einsum("ibjq,q->ib", np.abs(kf), v_r)
+        noise_mag = np.einsum("libq,qw->libw", d_mag, np.abs(noise_map))
+        radius += gamma_d * np.einsum("libw,w->ib", noise_mag, r + np.abs(c))  # rounding of D_l G (noise, d)
+        # Upward rounding of the evaluation itself (sums of L (n + nv) nonnegative terms).
+        terms = weights * (n + f_mat.shape[1])
+        self.radius = radius * (1 + (terms + 4) * _EPS) + ROUNDING_MARGIN * radius
+        sums = (2 * weights + 8) * _EPS
+        # One matrix for a whole window z = (y_s … y_{s+W-1}, u_s … u_{s+L-1}) → every filter's estimate.
+        rows = n * banks
+        window_weights = [k.reshape(rows, weights * p), np.moveaxis(self.M, 0, 2).reshape(rows, big_n * m)]
+        self.window_weights = np.concatenate(window_weights, axis=1).T  # (W p + L m, n B)
+        # pad = |z| @ pad_weights + pad_const: rounding of the sums, and of M_l = D_l Γ times |u|.
+        input_mag = np.moveaxis(np.einsum("libq,qm->libm", d_mag, np.abs(gamma)), 0, 2).reshape(rows, big_n * m)
+        self.pad_weights = sums * np.abs(self.window_weights)
+        self.pad_weights[weights * p :] += gamma_d * input_mag.T
+        self.pad_const = (sums * np.abs(self.offset) + self.radius).ravel()
+        self.offset_flat = self.offset.ravel()
+        # R x_s ∈ R c ± (|R| r + rounding of c, r, both products and of R itself): half @ A + |c| @ B.
+        gamma_res = (2 * n + 8) * _EPS
+        abs_residual, residual_mag = np.abs(self.residual).reshape(rows, n).T, gamma_d * r_mag.reshape(rows, n).T
+        self.residual_t = self.residual.reshape(rows, n).T  # (n, n B)
+        self.half_weights = (1 + gamma_res) * abs_residual + residual_mag
+        self.centre_weights = gamma_res * abs_residual + residual_mag
+
+    def terms(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Every filter's estimate and pad (radius + rounding of the sums), shape (..., n B), from windows
+        ``ys`` (..., W, p) and ``us`` (..., L, m): two matrix products for any number of windows."""
+        z = np.concatenate([ys.reshape(*ys.shape[:-2], -1), us.reshape(*us.shape[:-2], -1)], axis=-1)
+        return z @ self.window_weights + self.offset_flat, np.abs(z) @ self.pad_weights + self.pad_const
+
+    def box(
+        self, est: FloatArray, pad: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """Intersection of the filters' boxes from their window terms and a box (..., n) of ``x_s`` (for ``R x_s``)."""
+        centre, half = 0.5 * (prior_lo + prior_hi), 0.5 * (prior_hi - prior_lo)
+        res_c = centre @ self.residual_t
+        res_r = half @ self.half_weights + np.abs(centre) @ self.centre_weights
+        low, high = est - pad + res_c - res_r, est + pad + res_c + res_r  # broadcast over runs
+        shape = (*low.shape[:-1], self.n, -1)
+        return inflate(np.max(low.reshape(shape), axis=-1), np.min(high.reshape(shape), axis=-1))
+
+
+def _assemble(
+    found: list[list[FloatArray]], base: FloatArray, size: int | None, rng: np.random.Generator
+) -> FloatArray:
+    """A bank (n, B, W, p): each component's ``base`` filter, then its distinct ``found`` filters (a random subset
+    of ``size - 1`` of them when ``size`` is given); components with fewer repeat their base filter (a duplicate
+    changes nothing)."""
+    members = []
+    for i, filters in enumerate(found):
+        unique = np.unique(np.concatenate(filters), axis=0) if filters else base[i][None][:0]
+        if size is not None:
+            unique = unique[np.sort(rng.permutation(unique.shape[0])[: int(size) - 1])]
+        members.append(np.concatenate([base[i][None], unique]))
+    count = max(m.shape[0] for m in members)
+    return np.stack(
+        [np.concatenate([m, np.repeat(base[i][None], count - m.shape[0], 0)]) for i, m in enumerate(members)]
+    )
+
+
+def _noise_channels(
+    system: LTISystem, full: ResolvedBounds, model: SampledModel
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The process noise as ``G η`` with ``η`` in a box: ``(G, centre, radius)``.
 
     Discrete time: ``G = E`` and the box of ``w`` (noise channels that drive several states keep their

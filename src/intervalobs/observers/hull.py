@@ -377,9 +377,9 @@ class _CondensedLP:
         """Per key: status codes of the last bases of the ``2n`` objectives, which are optimal (the others
         are not restored), and the window start."""
         self.length, self.start, self.full = H, 0, True
-        self.dual_log: list[tuple[int, float, FloatArray]] | None = None
-        """When a list, every solve of a full window (``k > H``) appends ``(component, sign, row duals)``
-        (see ``HullEstimator.certificates``)."""
+        self.dual_log: list[tuple[int, float, FloatArray, int, bool]] | None = None
+        """When a list, every solve appends ``(component, sign, row duals, window length L, anchored)``,
+        ``anchored`` when the window starts at ``x_0`` (``k ≤ H``; see ``HullEstimator.certificates``)."""
 
     def set_window(
         self, k: int, y: FloatArray, u: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray, use_current: bool
@@ -464,8 +464,8 @@ class _CondensedLP:
                 usable[r] = False
                 continue
             duals[r] = dual
-            if self.dual_log is not None and self.full:
-                self.dual_log.append((r // 2, float(signs[r]), dual.copy()))
+            if self.dual_log is not None:
+                self.dual_log.append((r // 2, float(signs[r]), dual.copy(), self.length, not self.full))
         self._keep_bases(key, values, basics)
         bounds = np.where(usable, dual_bounds(self, costs, duals), -np.inf)
         return bounds[0::2], bounds[1::2]
@@ -907,9 +907,9 @@ class HullEstimator(Observer):
         return lower, upper
 
     def certificates(
-        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None
-    ) -> dict[tuple[int, float], FloatArray]:
-        r"""The duality certificates of the full-window LPs of a record: one FIR weight set per bound.
+        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, first_rows: bool = False
+    ) -> dict[tuple[int, float] | tuple[int, float, int], FloatArray]:
+        r"""The duality certificates of the window LPs of a record: one FIR weight set per bound.
 
         For the bound ``sign * (x_k)_i`` the multipliers :math:`\lambda_j` of the window's measurement
         rows ``j = 0 … H`` give the linear combination :math:`\sum_j \text{sign}\,\lambda_j^\top y_{k-H+j}`
@@ -924,6 +924,9 @@ class HullEstimator(Observer):
             Measurements of one record.
         u : array_like, shape (T, m), optional
             Known inputs.
+        first_rows : bool
+            Also return the certificates of the first rows' windows (``k ≤ H``: the ``L = k`` steps from
+            the prior of ``x_0``; row ``j`` is the weight of ``y_j``).
 
         Returns
         -------
@@ -931,6 +934,8 @@ class HullEstimator(Observer):
             ``(i, sign)`` → array of shape ``(count, H + 1, p)``: the row multipliers of every solve of
             the condensed window LP (steps ``k > H``) for that bound; with ``filtered`` both the
             predicted and the filtered solves (row ``H``, the weight of :math:`y_k`, is zero in the first).
+            With ``first_rows``, also ``(i, sign, L)`` → ``(count, H + 1, p)`` for the windows of ``L`` steps
+            anchored at ``x_0`` (rows of measurements outside the window are zero).
         """
         if self._condensed is None:
             raise AssumptionError(
@@ -947,13 +952,16 @@ class HullEstimator(Observer):
             log = lp.dual_log
         finally:
             lp.dual_log = None
-        out: dict[tuple[int, float], FloatArray] = {}
-        shape = (self.horizon + 1, self.p) if self.horizon is not None else (0, self.p)
-        for i in range(self.n):
-            for sign in (1.0, -1.0):
-                rows = [d.reshape(shape) for (j, s, d) in log if j == i and s == sign]
-                out[(i, sign)] = np.array(rows).reshape(len(rows), *shape)
-        return out
+        shape = (lp.horizon + 1, self.p)
+        found: dict[tuple[int, float] | tuple[int, float, int], list[FloatArray]] = {
+            (i, sign): [] for i in range(self.n) for sign in (1.0, -1.0)
+        }
+        for i, sign, duals, length, anchored in log:
+            if anchored and first_rows:
+                found.setdefault((i, sign, length), []).append(duals.reshape(shape))
+            elif not anchored:
+                found[(i, sign)].append(duals.reshape(shape))
+        return {key: np.array(rows).reshape(len(rows), *shape) for key, rows in found.items()}
 
     def meta(self) -> dict[str, Any]:
         """Facts recorded in every :class:`~intervalobs.estimate.Estimate`.

@@ -116,10 +116,10 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         n, m, big_n = self.n, self.m, self.window
         radius = np.array([model.radius[a, b] for a, b in model.entries])  # D_ab of the uncertain entries
         nd = radius.size
-        d_mats = self._d_mats  # (N, n, B, n): D_l of filter (i, b)
+        d_mats = self._bank.d_mats  # (N, n, B, n): D_l of filter (i, b)
         filters = n * d_mats.shape[2]
         d_flat = np.moveaxis(d_mats, 0, 2).reshape(filters, big_n, n)  # (F, N, n), filter order (i, b)
-        mag = np.moveaxis(self._d_mag, 0, 2).reshape(filters, big_n, n)
+        mag = np.moveaxis(self._bank.d_mag, 0, 2).reshape(filters, big_n, n)
         q_x = np.einsum("flq,eqr->lrfe", d_flat, model.M)  # D_l M_ab: (N, n, F, n_δ)
         q_u = np.einsum("flq,eqr->lrfe", d_flat, model.N)  # D_l N_ab: (N, m, F, n_δ)
         # centre terms: (x̂_0 … x̂_{N-1}, u_0 … u_{N-1}) @ weights -> (F n_δ), one product per step
@@ -127,7 +127,7 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
             [q_x.reshape(big_n * n, filters * nd), q_u.reshape(big_n * m, filters * nd)]
         )
         self._entry_radius = radius
-        gamma = self._gamma_d + (big_n * (3 * n + 2 * m) + nd + n + 8) * _EPS
+        gamma = self._bank.gamma_d + (big_n * (3 * n + 2 * m) + nd + n + 8) * _EPS
         spread_x = np.einsum("e,eqr->qr", radius, np.abs(model.M))  # Σ D_ab |M_ab|
         spread_u = np.einsum("e,eqr->qr", radius, np.abs(model.N))
         half_w = np.einsum("lrfe,e->lrf", np.abs(q_x), radius).reshape(big_n * n, filters)
@@ -239,7 +239,7 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         lead = mid.shape[:-2]
         u = np.broadcast_to(us, (*lead, *us.shape[-2:])).reshape(*lead, -1)
         centre = np.concatenate([mid.reshape(*lead, -1), u], axis=-1) @ self._centre_weights_dA
-        shared = np.abs(centre.reshape(*lead, self._offset_flat.size, -1)) @ self._entry_radius
+        shared = np.abs(centre.reshape(*lead, self._bank.offset_flat.size, -1)) @ self._entry_radius
         spread = np.concatenate([half.reshape(*lead, -1), big.reshape(*lead, -1), np.abs(u)], axis=-1)
         return shared + spread @ self._spread_weights_dA
 
