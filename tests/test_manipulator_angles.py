@@ -85,6 +85,7 @@ def test_hypothesis_bank_isolates_a_fault_switching_on_inside_a_step(model):
     first = np.array([t[np.argmax(s < 0)] if np.any(s < 0) else np.inf for s in signal])
     assert np.all((first[:2] > onset) & (first[:2] <= onset + 0.01))
     assert np.all(np.isinf(first[2:]))
+    assert np.all(np.isfinite(res.lower)) and np.all(np.isfinite(res.upper))  # refuted runs restart from C_k
     # a true hypothesis keeps its box sound
     for run, truth in ((2, x[0]), (3, x[1]), (4, x0[0]), (5, x0[1]), (6, x0[0]), (7, x0[1])):
         assert np.all(res.lower[run] <= truth) and np.all(truth <= res.upper[run])

@@ -785,7 +785,9 @@ def angles_only_bounds(
     (weights :math:`h - s \ge 0`), a box :math:`C_k` of :math:`p_k`. The estimator intersects
     :math:`P_k` with :math:`C_k` before propagating; the signals are :math:`\overline{C}_k -
     \underline{P}_k` and :math:`\overline{P}_k - \underline{C}_k`: negative means the intersection is
-    empty, i.e. the record is inconsistent with the run's fault box (the box is then kept unrefined).
+    empty, i.e. the record is inconsistent with the run's fault box. The run then restarts from
+    :math:`C_k` alone: its box means nothing any more, but it stays finite, so a refuted hypothesis
+    does not stop the other runs of the batch (the flow box's :math:`h\max|\ddot q| \le 1`).
     All boxes are widened by :func:`~intervalobs.interval.inflate`.
 
     Soundness needs only the model, the parameter box, :math:`u_{un} \in` ``fault_box`` and
@@ -896,7 +898,7 @@ def angles_only_bounds(
         m_lo, m_hi = inflate(meas - 0.5 * h * pd_hi - e_hi, meas - 0.5 * h * pd_lo - e_lo, scale=meas_scale[:, k])
         sig_lo[:, k + 1], sig_hi[:, k + 1] = m_hi - p_lo, p_hi - m_lo
         ok = np.all((m_hi >= p_lo) & (m_lo <= p_hi), axis=-1)[:, None]
-        p_lo, p_hi = np.where(ok, np.maximum(p_lo, m_lo), p_lo), np.where(ok, np.minimum(p_hi, m_hi), p_hi)
+        p_lo, p_hi = np.where(ok, np.maximum(p_lo, m_lo), m_lo), np.where(ok, np.minimum(p_hi, m_hi), m_hi)
         # propagate ζ over the step and shift to p_{k+1}
         shift = shift_all[:, k]
         size = decay * np.maximum(np.abs(p_lo), np.abs(p_hi)) + gain * np.maximum(np.abs(psi_lo), np.abs(psi_hi))
