@@ -193,8 +193,11 @@ def test_campaign_help_says_levels_are_fractions(capsys) -> None:
 def _interrupt_when(args: list[str], ready: Callable[[str], bool], cwd: Path) -> tuple[int, str]:
     """Run the CLI in its own process group, send SIGINT to the whole group (as a terminal's Ctrl-C
     does) once ``ready(stderr so far)``, and return the exit code and the whole stderr."""
+    # A shell that starts the suite in the background ignores SIGINT, and the child would inherit that: a terminal's
+    # Ctrl-C reaches a CLI whose SIGINT has its default action, so the child gets exactly that.
     proc = subprocess.Popen([*CLI, *args], stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
-                            cwd=cwd, start_new_session=True)  # fmt: skip
+                            cwd=cwd, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # fmt: skip
     assert proc.stderr is not None
     err: list[str] = []
     reader = threading.Thread(target=lambda: err.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)

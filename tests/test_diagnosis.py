@@ -10,6 +10,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from contextlib import closing
 from pathlib import Path
 
@@ -165,8 +166,17 @@ def _interrupting_task(level, magnitude, run_ids, seed):
     return _toy_task(level, magnitude, run_ids, seed)
 
 
+@pytest.fixture
+def sigint_raises() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt, as in a terminal session: Python installs that handler only if SIGINT was not
+    ignored at its start, and a suite started in the background of a shell inherits SIG_IGN."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.skipif(not hasattr(signal, "SIGINT") or sys.platform == "win32", reason="POSIX signals")
-def test_interrupted_campaign_saves_finished_batches_and_resumes(tmp_path):
+def test_interrupted_campaign_saves_finished_batches_and_resumes(tmp_path, sigint_raises):
     CALLS.clear()
     STORE[:] = [tmp_path / "campaign.sqlite"]
     interrupted = dataclasses.replace(TOY, task=_interrupting_task)
