@@ -1,4 +1,4 @@
-"""Write docs/benchmarks.md from benchmarks/results.json and benchmarks/tightness.json.
+"""Write docs/benchmarks.md from the JSON results of the benchmarks (results, tightness, robust_tightness, scale).
 
 ``make bench`` runs it after the benchmarks; ``make docs`` and a test only check that the committed page
 matches the JSON files (building the docs never writes a tracked file). Usage: ``python benchmarks/report.py``.
@@ -186,6 +186,32 @@ def robust_section() -> list[str]:
     return [*lines, ""]
 
 
+def scale_section() -> list[str]:
+    """Cost against size on the tank cascades (benchmarks/scale.py), with the issue's targets checked."""
+    results = HERE / "scale.json"
+    lines = ["## Cost against size: tank cascades", "", *_docstring(HERE / "scale.py").splitlines(), ""]
+    if not results.exists():
+        return [*lines, "No results yet: run `make bench`.", ""]
+    data = json.loads(results.read_text())
+    rows = {row["n"]: row for row in data["rows"]}
+    lines += [f"Settings: {_cell(data['settings'])}.", "", *_table(data["rows"]), ""]
+    targets = [
+        ("hull ≤ 5 ms/step at n ≤ 6", [rows.get(3, {}).get("hull ms/step"), rows.get(6, {}).get("hull ms/step")], 5.0),
+        ("hull ≤ 50 ms/step at n = 30, p = 21", [rows.get(30, {}).get("hull ms/step")], 50.0),
+        ("bank ≤ 1 ms/step at n = 30", [rows.get(30, {}).get("bank ms/step")], 1.0),
+        ("learn ≤ 60 s at n = 30", [rows.get(30, {}).get("bank learn s")], 60.0),
+    ]
+    lines += ["Targets of issue 21 on these runs:", ""]
+    for label, values, limit in targets:
+        numbers = [v for v in values if isinstance(v, float)]
+        if len(numbers) < len(values):
+            verdict = "not measured (see the table)"
+        else:
+            verdict = ("met" if max(numbers) <= limit else "NOT met") + f" ({', '.join(f'{v:.4g}' for v in numbers)})"
+        lines.append(f"- {label}: {verdict}")
+    return [*lines, ""]
+
+
 def render() -> str:
     """The whole page.
 
@@ -193,8 +219,13 @@ def render() -> str:
     -------
     str
     """
-    lines = ["# Benchmarks", "", "`make bench` runs both benchmarks below and rewrites this page.", ""]
-    return "\n".join([*lines, *recursion_section(), *tightness_section(), *robust_section()]).rstrip("\n") + "\n"
+    lines = ["# Benchmarks", "", "`make bench` runs the benchmarks below and rewrites this page.", ""]
+    return (
+        "\n".join([*lines, *recursion_section(), *tightness_section(), *robust_section(), *scale_section()]).rstrip(
+            "\n"
+        )
+        + "\n"
+    )
 
 
 def main() -> None:
