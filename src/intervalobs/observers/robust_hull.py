@@ -319,7 +319,9 @@ class RobustHullEstimator(Observer):
         drift = np.einsum("lab,jb->jal", mod.N, u_win)
         put(dyn[:, :, None], d0 + np.arange(nd)[None, None, :], -drift)
         gamma_u = u_win @ mod.Gamma.T
-        dyn_pad = 2.0 * (self.m + 2) * _EPS * (np.abs(u_win) @ np.abs(mod.Gamma).T + np.abs(drift) @ d_max)
+        # rounding of Γ_c u_j and of the coefficients N_l u_j (times |δ_l|): γ_m of |Γ_c||u_j|, |N_l||u_j|
+        abs_drift = np.einsum("lab,jb->jal", np.abs(mod.N), np.abs(u_win))
+        dyn_pad = 2.0 * (self.m + 2) * _EPS * (np.abs(u_win) @ np.abs(mod.Gamma).T + abs_drift @ d_max)
         # measurements, row L n + j p + r
         meas = L * n + np.arange(L * p).reshape(L, p)
         put(meas[:, :, None], x_col[:-1, None, :], mod.C[None])
