@@ -168,7 +168,7 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
     duals = {(i, sign): dual for i, sign, dual, *_ in lp.dual_log}
     for i in range(3):
         for sign in (1.0, -1.0):
-            certified = sign * (minima[sign][i] + drive[i] - pad[i])
+            certified = sign * (minima[sign][i] - pad[i]) + drive[i]  # the drive holds Φ^L times the prior's centre
             gains = np.zeros((3, 1, 6, 1))
             gains[:, 0] = sign * duals[(i, sign)].reshape(7, 1)[:6]
             obs = FiniteMemoryObserver(system, bounds, gains, wide_fallback(system, bounds))
