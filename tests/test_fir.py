@@ -178,7 +178,12 @@ def test_certificate_is_reproduced_by_its_filter() -> None:
 
 def test_learn_errors() -> None:
     system, bounds = small_discrete()
-    for name, kwargs in (("records", {"records": 0}), ("steps", {"steps": 5}), ("size", {"size": 0})):
+    for name, kwargs in (
+        ("records", {"records": 0}),
+        ("steps", {"steps": 5}),
+        ("size", {"size": 0}),
+        ("first_records", {"first_records": -1}),
+    ):
         with pytest.raises(IntervalObserverError, match=name):
             FiniteMemoryObserver.learn(system, bounds, window=4, **kwargs)  # type: ignore[arg-type]
     unstable = LTISystem(1.2 * A68, system.C, B=system.B, E=system.E, F=system.F, dt=1.0)
@@ -338,9 +343,11 @@ def test_first_row_certificate_is_reproduced_by_its_filter() -> None:
 def test_short_record_is_tight_from_its_first_rows(filtered: bool) -> None:
     """Growing windows from the prior: the first rows of a 20-sample record within 2.5x of the exact hull per
     component and 1.05x on average (the fallback alone: 10-20x at rows 2-5), sound against vertex and bang-bang
-    truths. (A small training set: 2 records of 60 steps and the default 30 short records.)"""
+    truths. (A small training set: 2 records of 60 steps and 30 short records.)"""
     case = scale_cases.short_record()
-    bank = FiniteMemoryObserver.learn(case.system, case.bounds, window=10, records=2, steps=60, filtered=filtered)
+    bank = FiniteMemoryObserver.learn(
+        case.system, case.bounds, window=10, records=2, steps=60, filtered=filtered, first_records=30
+    )
     assert len(bank._first) == 9 + filtered
     hull = HullEstimator.design(case.system, case.bounds, horizon=None, filtered=filtered)
     ratios, fallback_ratios = [], []

@@ -230,7 +230,7 @@ class FiniteMemoryObserver(Observer):
         h: float | None = None,
         fallback: Observer | None = None,
         filtered: bool = False,
-        first_records: int = 30,
+        first_records: int | None = None,
     ) -> FiniteMemoryObserver:
         """A bank: the worst-case filter plus the exact window hull's certificates on simulated records.
 
@@ -267,10 +267,12 @@ class FiniteMemoryObserver(Observer):
         filtered : bool
             Learn filters that also use :math:`y_k` (certificates of the filtered window hull; the
             worst-case filter gets a zero weight on :math:`y_k`): rows are filtered boxes.
-        first_records : int
+        first_records : int, optional
             Number of further short training records (``window + 1`` samples) for the banks of the first rows
             (growing windows from the prior of :math:`x_0`); those banks also take the first rows of the
-            ``records``. 0 leaves them to those alone.
+            ``records``, and 0 leaves them to those alone. Default ``records * steps // (4 * window)`` (30 with
+            the other defaults): a quarter of the main training's samples, since a window from the wide prior
+            costs the hull about twice a full one (30 tanks).
 
         Returns
         -------
@@ -278,8 +280,9 @@ class FiniteMemoryObserver(Observer):
             ``meta()["bank"]`` is the number of filters per component.
         """
         least_steps = int(window) + 2 if isinstance(window, (int, np.integer)) else 2  # one full window at least
-        checks = [("records", records, 1), ("steps", steps, least_steps), ("first_records", first_records, 0)]
+        checks = [("records", records, 1), ("steps", steps, least_steps)]
         checks += [("size", size, 1)] if size is not None else []
+        checks += [("first_records", first_records, 0)] if first_records is not None else []
         for name, value, least in checks:
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
                 raise DataError(f"{name}: expected an integer >= {least}, got {value!r}")
@@ -305,6 +308,8 @@ class FiniteMemoryObserver(Observer):
         # Short records (window + 1 samples) for the first rows only: i.i.d. vertex or switching noise, both from
         # a vertex of the x_0 box (the prior's faces are what the first rows' certificates depend on).
         short = np.random.default_rng([int(seed), 0xF1B, 1])
+        if first_records is None:
+            first_records = int(records) * int(steps) // (4 * int(window))
         for record in range(int(records) + int(first_records)):
             if record < records:
                 noise, own, times = _training_noise(system, full, t.size, record, rng), rng, t
