@@ -11,6 +11,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from intervalobs.examples.scale_cases import TANK_SIZES
+
 HERE = Path(__file__).resolve().parent
 PAGE = HERE.parent / "docs" / "benchmarks.md"
 
@@ -207,6 +209,13 @@ def scale_section() -> list[str]:
     data = json.loads(results.read_text())
     rows = {row["n"]: row for row in data["rows"]}
     lines += [f"Settings: {_cell(data['settings'])}.", "", *_table(data["rows"]), ""]
+    missing = [n for n in TANK_SIZES if n not in rows]
+    if missing:
+        lines += [
+            f"Not measured in this run: n = {', '.join(map(str, missing))} (the run was stopped before these sizes; "
+            "`python benchmarks/scale.py` measures every size and caps a cell by its budget).",
+            "",
+        ]
     targets = [
         ("hull ≤ 5 ms/step at n ≤ 6", [rows.get(3, {}).get("hull ms/step"), rows.get(6, {}).get("hull ms/step")], 5.0),
         ("hull ≤ 50 ms/step at n = 30, p = 21", [rows.get(30, {}).get("hull ms/step")], 50.0),
