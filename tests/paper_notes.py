@@ -95,23 +95,47 @@ def misquoted(name: str, summary: Mapping[str, Any], partial: bool = False) -> t
 
     Returns
     -------
+    tuple of (list of str, int)
+        The problems and how many quotes were compared, as :func:`unquoted` returns them.
+    """
+    return unquoted(PAGE, QUOTES[name], summary, partial)
+
+
+def unquoted(
+    page: Path, quotes: list[Quote], values: Mapping[str, Any], partial: bool = False
+) -> tuple[list[str], int]:
+    """Quotes that ``page`` does not show as ``values`` has them (see :func:`misquoted`).
+
+    Parameters
+    ----------
+    page : Path
+        The markdown page.
+    quotes : list of Quote
+        Its quotes.
+    values : mapping
+        What their fields read (a summary, or benchmark results).
+    partial : bool
+        Skip quotes whose keys ``values`` lacks.
+
+    Returns
+    -------
     problems : list of str
         One line per quote the page does not show (or whose key is missing when not ``partial``).
     checked : int
         How many quotes were compared.
     """
-    page = _collapsed(PAGE.read_text())
+    text_of_page = _collapsed(page.read_text())
     problems, checked = [], 0
-    for quote in QUOTES[name]:
+    for quote in quotes:
         try:
-            text = _collapsed(render(quote, summary))
+            text = _collapsed(render(quote, values))
         except (KeyError, IndexError) as missing:
             if not partial:
-                problems.append(f"{quote.text!r}: no summary key {missing}")
+                problems.append(f"{quote.text!r}: no key {missing}")
             continue
         checked += 1
-        if text not in page:
-            problems.append(f"docs/paper-notes.md should say {text!r}")
+        if text not in text_of_page:
+            problems.append(f"docs/{page.name} should say {text!r}")
     return problems, checked
 
 
