@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 from hypothesis import HealthCheck, settings
+from scipy.linalg import expm
 
 from intervalobs import Bounds, LTISystem
 
@@ -29,3 +30,30 @@ def random_system(seed: int, n: int, p: int, continuous: bool, uncertain: bool) 
         (-np.ones(n), np.ones(n)), w=(-0.1 * np.ones(n), 0.1 * np.ones(n)), v=(-0.05 * np.ones(p), 0.05 * np.ones(p))
     )
     return system, bounds
+
+
+def unit_bounds(n: int, nw: int, p: int) -> Bounds:
+    """Unit boxes of x0 and w, measurement noise within ±0.01 (the radius :func:`simulate_truth` uses)."""
+    return Bounds(
+        x0=(-np.ones(n), np.ones(n)), w=(-np.ones(nw), np.ones(nw)), v=(-0.01 * np.ones(p), 0.01 * np.ones(p))
+    )
+
+
+def simulate_truth(
+    a: np.ndarray, e: np.ndarray, c: np.ndarray, delta: np.ndarray, x0: np.ndarray, h: float, steps: int, rng
+) -> tuple[np.ndarray, np.ndarray]:
+    """Exact exponentials of 4 sub-steps per sample; the noise switches sign (bang-bang) at every sub-step."""
+    n, nw, sub = a.shape[0], e.shape[1], 4
+    block = np.zeros((n + nw, n + nw))
+    block[:n, :n], block[:n, n:] = a + delta, e
+    flow = expm(block * (h / sub))
+    x = np.empty((steps, n))
+    x[0] = x0
+    for k in range(steps - 1):
+        state = x[k]
+        for _ in range(sub):
+            w = rng.choice([-1.0, 1.0], nw)
+            state = flow[:n, :n] @ state + flow[:n, n:] @ w
+        x[k + 1] = state
+    y = x @ c.T + 0.01 * rng.choice([-1.0, 1.0], (steps, c.shape[0]))
+    return x, y

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy.linalg import block_diag, expm
 
+from conftest import simulate_truth, unit_bounds
 from intervalobs import (
     ArgumentTypeError,
     AssumptionError,
-    Bounds,
     DesignError,
     DimensionError,
     IntervalObserver,
@@ -32,12 +32,6 @@ FLOOR = 1e-12
 def stiff_system(uncertain: bool) -> LTISystem:
     da = 1e-3 * np.abs(STIFF_A)
     return LTISystem(STIFF_A, [[0.0, 1.0]], E=np.eye(2), dA=(-da, da) if uncertain else None)
-
-
-def unit_bounds(n: int, nw: int, p: int) -> Bounds:
-    return Bounds(
-        x0=(-np.ones(n), np.ones(n)), w=(-np.ones(nw), np.ones(nw)), v=(-0.01 * np.ones(p), 0.01 * np.ones(p))
-    )
 
 
 def random_stiff(n: int, seed: int, oscillating: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -302,26 +296,6 @@ def test_blocks_argument_is_checked() -> None:
         IntervalObserver(system, unit_bounds(2, 2, 1), observer.L, h=0.1, blocks=(1,))
     with pytest.raises(DimensionError, match=r"^blocks:"):
         IntervalObserver(system, unit_bounds(2, 2, 1), observer.L, h=0.1, method="framer", blocks=(2,))
-
-
-def simulate_truth(
-    a: np.ndarray, e: np.ndarray, c: np.ndarray, delta: np.ndarray, x0: np.ndarray, h: float, steps: int, rng
-) -> tuple[np.ndarray, np.ndarray]:
-    """Exact exponentials of 4 sub-steps per sample; the noise switches sign (bang-bang) at every sub-step."""
-    n, nw, sub = a.shape[0], e.shape[1], 4
-    block = np.zeros((n + nw, n + nw))
-    block[:n, :n], block[:n, n:] = a + delta, e
-    flow = expm(block * (h / sub))
-    x = np.empty((steps, n))
-    x[0] = x0
-    for k in range(steps - 1):
-        state = x[k]
-        for _ in range(sub):
-            w = rng.choice([-1.0, 1.0], nw)
-            state = flow[:n, :n] @ state + flow[:n, n:] @ w
-        x[k + 1] = state
-    y = x @ c.T + 0.01 * rng.choice([-1.0, 1.0], (steps, c.shape[0]))
-    return x, y
 
 
 # "n=K": real spectrum; "c=K": complex pairs. c=10 at h = 0.001 and 0.01 (a slow pair sampled fast) needs the

@@ -122,7 +122,7 @@ def round_outward(lower: ArrayLike, upper: ArrayLike, ulps: int = 1) -> tuple[Fl
 def inflate(
     lower: ArrayLike,
     upper: ArrayLike,
-    margin: float = ROUNDING_MARGIN,
+    margin: float | FloatArray = ROUNDING_MARGIN,
     scale: ArrayLike | None = None,
     floor: float = _TINY,
 ) -> tuple[FloatArray, FloatArray]:
@@ -136,8 +136,9 @@ def inflate(
     lower, upper : array_like
         Interval ends (shapes that broadcast). A nonnegative radius ``r`` is rounded up by
         ``inflate(-r, r)[1]``.
-    margin : float
-        Relative margin, at least ``ROUNDING_MARGIN`` for recursions (:func:`recursion_margin`).
+    margin : float or numpy.ndarray
+        Relative margin, at least ``ROUNDING_MARGIN`` for recursions (:func:`recursion_margin`); an array
+        broadcasts against the ends (one margin per recursion along an axis).
     scale : array_like, optional
         Magnitude the rounding errors are relative to (e.g. the sum of the absolute terms that were
         added); default ``max(|lower|, |upper|)``.

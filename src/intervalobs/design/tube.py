@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -197,6 +197,10 @@ class TubeDesign:
         Which candidate gain (and coordinates) won.
     blocks : tuple of int
         Sizes of the blocks of ``z`` whose Euclidean norms the tube bounds (empty: all of size 1, a box).
+    companions : tuple of numpy.ndarray
+        Further gains, in the same coordinates, whose tubes the observer runs next to this one and
+        intersects with it at every step: the winning candidate when ``L`` is its refinement (a smaller
+        steady radius does not make every step of the transient from the prior box narrower).
     """
 
     L: FloatArray
@@ -206,6 +210,7 @@ class TubeDesign:
     steady_radius: FloatArray
     candidate: str
     blocks: tuple[int, ...] = ()
+    companions: tuple[FloatArray, ...] = ()
 
 
 def tube_horizon(m: FloatArray, norms: BlockNorms | None = None) -> int | None:
@@ -381,7 +386,8 @@ def design_tube_gain(
     basis of ``Φ - LC``, as a box and in block norms, the smaller steady radius kept (see the module
     docstring). A winner in the original coordinates is then refined locally (a pattern search on its
     entries, at most 16) for a smaller steady radius sum with no state's steady radius larger; the
-    refined gain replaces it only when its verified tube is never wider in any state.
+    refined gain is kept only when its verified tube is never wider in any state, and then with the
+    winner as its companion (the observer intersects both tubes at every step).
 
     Parameters
     ----------
@@ -427,8 +433,10 @@ def design_tube_gain(
                     found = blocks
         if found is not None and (best is None or found.steady_radius.sum() < best.steady_radius.sum()):
             best = found
-    refined = None if best is None else _refined(model, C, F, v_radius, best)
-    return best if refined is None else refined
+    if best is None:
+        return None
+    refined = _refined(model, C, F, v_radius, best)
+    return best if refined is None else replace(refined, companions=(best.L,))
 
 
 def _refined(

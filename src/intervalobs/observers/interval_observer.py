@@ -22,7 +22,7 @@ from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
-from ..validation import as_choice, as_matrix, check_no_kwargs
+from ..validation import as_array, as_choice, as_matrix, check_no_kwargs
 from .base import Observer, ObserverState
 
 __all__ = ["METHODS", "IntervalObserver"]
@@ -41,8 +41,9 @@ class IntervalObserver(Observer):
         The model (with optional interval ``dA``).
     bounds : Bounds
         Boxes of ``x0``, ``w`` and ``v``.
-    L : array_like, shape (n, p)
-        Gain of the sampled model.
+    L : array_like, shape (n, p) or (G, n, p)
+        Gain of the sampled model; with ``G`` gains (tube only) the observer runs one tube per gain, in
+        the same coordinates, and returns their intersection at every step (see Notes).
     T : array_like, shape (n, n), optional
         Coordinate change ``z = T x`` in which the radius is propagated (default identity).
     h : float, optional
@@ -94,6 +95,13 @@ class IntervalObserver(Observer):
     bounded exactly (seed 002, Lemma A.1). It needs a stable width system
     :math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
 
+    Several gains (tube only; :meth:`design` passes the refined gain and the candidate it was refined
+    from): each gain :math:`L_g` runs its own centre and tube, and the box is the intersection
+    :math:`[\max_g(\hat x_g - \rho_g), \min_g(\hat x_g + \rho_g)]`, never wider than any single gain's
+    box at any step. In the identity coordinates every tube's :math:`\delta\Phi` term bounds :math:`|x_k|`
+    by that intersection, :math:`\max(|\underline{x}_k|, |\overline{x}_k|) \le |\hat x_g| + \rho_g`,
+    so each tube is also never wider than it is alone (the recursion is monotone in :math:`d_k`).
+
     Each step follows from the inclusion of the previous one, so both hold for every admissible noise
     realisation, inside the sampling intervals too.
     """
@@ -124,7 +132,13 @@ class IntervalObserver(Observer):
         self.model: SampledModel = sampled_model(system, self.bounds, h)
         self._uncertain = self.model.uncertain  # data-dependent radii (interval ΔA): read once per step
         self.h = self.model.h if system.continuous else float(system.dt or 1.0)
-        self.L = as_matrix("L", L, (self.n, self.p))
+        gains = as_array("L", L)
+        gains = gains[None] if gains.ndim < 3 else gains
+        if gains.ndim != 3 or gains.shape[0] == 0 or (method == "framer" and gains.shape[0] > 1):
+            expected = f"({self.n}, {self.p})" + ("" if method == "framer" else f" or (G, {self.n}, {self.p})")
+            raise DimensionError(f"L: expected shape {expected} ({method}), got shape {np.shape(L)}")
+        self.gains = np.stack([as_matrix("L", gain, (self.n, self.p)) for gain in gains])
+        self.L = self.gains[0]
         self.T = np.eye(self.n) if T is None else as_matrix("T", T, (self.n, self.n))
         if np.linalg.cond(self.T) > 1e12:
             raise DimensionError(
@@ -136,16 +150,20 @@ class IntervalObserver(Observer):
             raise DimensionError(
                 f"blocks: expected sizes 1 or 2 summing to n = {self.n} (tube only), got {self.norms.sizes}"
             )
-        width_matrix, self.M = framer_matrices(self.model, system.C, self.L, self.T)
+        matrices = [framer_matrices(self.model, system.C, gain, self.T) for gain in self.gains]
+        width_matrix, self.M = matrices[0]
+        self._Ms = np.stack([m for _, m in matrices])  # (G, n, n)
         v_center = self.bounds.centre("v")
         v_radius = self.bounds.radius("v")
-        F = system.F
+        gains_F = self.gains @ system.F
         self._abs_T = np.abs(self.T)
         self._abs_T_inv = np.abs(self.T_inv)
-        self._TL = self.T @ self.L
+        self._TL = self.T @ self.gains  # (G, n, p)
         self._TGamma = self.T @ self.model.Gamma
-        self._offset = self.T @ (self.model.noise_center - self.L @ F @ v_center)
-        self._radius_input = self.norms.vector(self._abs_T @ (self.model.noise_radius + np.abs(self.L @ F) @ v_radius))
+        self._offset = (self.model.noise_center - gains_F @ v_center) @ self.T.T  # (G, n)
+        self._radius_input = self.norms.vector(  # (G, count)
+            (self.model.noise_radius + np.abs(gains_F) @ v_radius) @ self._abs_T.T
+        )
         self._back = self.norms.cols(self._abs_T_inv)  # x radius = back @ z radius
         self._K_phi = self._abs_T @ self.model.dPhi
         self._K_gamma = self._abs_T @ self.model.dGamma
@@ -153,7 +171,7 @@ class IntervalObserver(Observer):
         self._identity = self.norms.singleton and np.array_equal(self.T, np.eye(self.n))
         if method == "tube" and self._uncertain and not self._identity:
             self._S_phi = coupling(self.model, self.T, self.norms)
-        self._center_recursion = LinearRecursion(self.M)
+        self._center_recursions = [LinearRecursion(m) for m in self._Ms]
         self._radius_cache = np.empty((0, self.norms.count))
         if method == "framer":
             self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width_matrix))))
@@ -164,28 +182,16 @@ class IntervalObserver(Observer):
                 )
             self._abs_M = np.abs(self.M)
             self._radius_recursion = LinearRecursion(self._abs_M)
-            amplification = max(self._center_recursion.error_factor, self._radius_recursion.error_factor)
-            contraction = self.spectral_radius
+            amplification = max(self._center_recursions[0].error_factor, self._radius_recursion.error_factor)
+            self.margin: float | FloatArray = recursion_margin(self.n, amplification, self.spectral_radius)
         else:
-            horizon = tube_horizon(self.M, self.norms)
-            if horizon is None:
-                raise DesignError(
-                    "L: expected Φ - LC to be Schur stable (and to contract within 4000 steps), "
-                    f"got spectral radius {np.max(np.abs(np.linalg.eigvals(self.M))):.6g}"
-                )
-            self.horizon = horizon
-            self.spectral_radius, _ = tube_stability(
-                self.model, self.M, self._radius_input, horizon, self.T, self.norms
+            self._tubes()
+            self.margin = np.array(  # each gain's box its own margin, shape (G, 1)
+                [
+                    [recursion_margin(self.n, recursion.error_factor, float(np.max(np.abs(np.linalg.eigvals(m)))))]
+                    for recursion, m in zip(self._center_recursions, self._Ms)
+                ]
             )
-            if not self.spectral_radius < 1:
-                raise DesignError(
-                    f"L: expected a bounded error tube, got ρ(|M^J| + GδΦ) = {self.spectral_radius:.6g} >= 1; "
-                    "reduce dA or use IntervalObserver.design"
-                )
-            self._abs_powers = abs_powers(self.M, horizon + 1, self.norms)
-            amplification = self._center_recursion.error_factor
-            contraction = float(np.max(np.abs(np.linalg.eigvals(self.M))))
-        self.margin = recursion_margin(self.n, amplification, contraction)
         self.design_result: FramerDesign | TubeDesign | None = None
 
     @classmethod
@@ -250,7 +256,8 @@ class IntervalObserver(Observer):
                 "IntervalObserver.design: no candidate gain gives a bounded error tube; "
                 "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
             )
-        observer = cls(system, full, tube.L, tube.T, h, method="tube", blocks=tube.blocks)
+        gains = np.stack((tube.L, *tube.companions))
+        observer = cls(system, full, gains if len(gains) > 1 else tube.L, tube.T, h, method="tube", blocks=tube.blocks)
         observer.design_result = tube
         return observer
 
@@ -271,13 +278,16 @@ class IntervalObserver(Observer):
         z_c = self.T @ (0.5 * (lo + hi))
         z_r = self.norms.vector(self._abs_T @ (0.5 * (hi - lo)))
         internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r}
-        if self.method == "tube":
+        if self.method == "tube":  # every gain starts from the same box: a leading gain axis
+            gains, longest = self.gains.shape[0], self._abs_powers.shape[1] - 1
             internal.update(
+                z_center=np.repeat(z_c[None, :], gains, axis=0),
+                z_radius=np.repeat(z_r[None, :], gains, axis=0),
                 k=0,
-                rho_queue=np.repeat(z_r[None, :], self.horizon, axis=0),
-                d_history=np.zeros((self.horizon, self.norms.count)),
+                rho_queue=np.repeat(z_r[None, None, :], gains, axis=0).repeat(longest, axis=1),
+                d_history=np.zeros((gains, longest, self.norms.count)),
             )
-        lower, upper = self._x_box(z_c, z_r)
+        lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
         # In coordinates T ≠ I the z-box maps back wider than the prior: report their intersection.
         return ObserverState(np.maximum(lower, lo), np.minimum(upper, hi), internal=internal)
 
@@ -311,92 +321,154 @@ class IntervalObserver(Observer):
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
+        gains = () if self.method == "framer" else (self.gains.shape[0],)  # the tube's gain axis
         if self.model.uncertain:
-            z_c = np.empty((*ys.shape[:-1], self.n))
-            z_r = np.empty((*ys.shape[:-1], self.norms.count))
+            lead = ys.shape[:-2]
+            z_c = np.empty((times.size, *lead, *gains, self.n))  # time first, moved after the runs' axes
+            z_r = np.empty((times.size, *lead, *gains, self.norms.count))
             internal = state.internal
             for k in range(times.size):
-                z_c[..., k, :], z_r[..., k, :] = internal["z_center"], internal["z_radius"]
+                z_c[k], z_r[k] = internal["z_center"], internal["z_radius"]
                 if k + 1 < times.size:
                     internal = self._advance(internal, ys[..., k, :], us[..., k, :])
+            z_c, z_r = np.moveaxis(z_c, 0, len(lead)), np.moveaxis(z_r, 0, len(lead))
         else:
-            drive = ys[..., :-1, :] @ self._TL.T + us[..., :-1, :] @ self._TGamma.T + self._offset
-            z_c = self._center_recursion(state.internal["z_center"], drive)
+            known = us[..., :-1, :] @ self._TGamma.T
+            start = np.reshape(state.internal["z_center"], (-1, self.n))
+            centres = [
+                recursion(start[g], ys[..., :-1, :] @ self._TL[g].T + known + self._offset[g])
+                for g, recursion in enumerate(self._center_recursions)
+            ]
+            z_c = np.stack(centres, axis=-2) if gains else centres[0]
             z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
         lower, upper = self._x_box(z_c, z_r)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
         return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
     # -- internals -------------------------------------------------------------------------------
+    def _tubes(self) -> None:
+        """Horizon ``J_g``, verified ``ρ(|M_g^J| + GS) < 1`` and powers ``|M_g^i|`` of every gain's tube.
+
+        The powers are kept up to the longest horizon: ``_abs_powers[g, i]`` is zero for ``i > J_g``, and
+        ``_terms`` holds ``|M_g^i|``, ``i < J_g``, flattened against a history of ``J_max`` disturbances,
+        so that every gain's sum ``Σ_{i<J_g}|M_g^i| d_{k-i}`` is one product.
+        """
+        horizons, radii = [], []
+        for g, (m, disturbance) in enumerate(zip(self._Ms, self._radius_input)):
+            which = f" (gain {g})" if self._Ms.shape[0] > 1 else ""
+            horizon = tube_horizon(m, self.norms)
+            if horizon is None:
+                raise DesignError(
+                    "L: expected Φ - LC to be Schur stable (and to contract within 4000 steps), "
+                    f"got spectral radius {np.max(np.abs(np.linalg.eigvals(m))):.6g}{which}"
+                )
+            radius, _ = tube_stability(self.model, m, disturbance, horizon, self.T, self.norms)
+            if not radius < 1:
+                raise DesignError(
+                    f"L: expected a bounded error tube, got ρ(|M^J| + GδΦ) = {radius:.6g} >= 1{which}; "
+                    "reduce dA or use IntervalObserver.design"
+                )
+            horizons.append(horizon)
+            radii.append(radius)
+        self.horizons = tuple(horizons)
+        self.horizon = horizons[0]
+        self.spectral_radius = max(radii)
+        count, longest = self.norms.count, max(horizons)
+        self._abs_powers = np.zeros((len(horizons), longest + 1, count, count))
+        for g, (m, horizon) in enumerate(zip(self._Ms, horizons)):
+            self._abs_powers[g, : horizon + 1] = abs_powers(m, horizon + 1, self.norms)
+        terms = self._abs_powers[:, :longest].copy()
+        for g, horizon in enumerate(horizons):
+            terms[g, horizon:] = 0.0
+        self._terms = terms.transpose(0, 1, 3, 2).reshape(len(horizons), longest * count, count)
+        self._lags = np.asarray(horizons)
+        self._oldest = longest - self._lags  # queue position of ρ_{k+1-J_g}
+
     def _default_radius(self, steps: int) -> FloatArray:
         """Radii from the design's initial box for a point model: data-independent, computed once."""
         if self._radius_cache.shape[0] < steps:
-            state = self.init()
+            rho0 = np.reshape(self.init().internal["z_radius"], (-1, self.norms.count))[0]
             if self.method == "framer":
-                constant = np.broadcast_to(self._radius_input, (steps - 1, self.n))
-                self._radius_cache = self._radius_recursion(state.internal["z_radius"], constant)
+                constant = np.broadcast_to(self._radius_input[0], (steps - 1, self.n))
+                self._radius_cache = self._radius_recursion(rho0, constant)
             else:
-                self._radius_cache = self._point_tube_radius(state.internal["z_radius"], steps)
+                tubes = [self._point_tube_radius(g, rho0, steps) for g in range(self.gains.shape[0])]
+                self._radius_cache = np.stack(tubes, axis=1)
         return self._radius_cache[:steps]
 
-    def _point_tube_radius(self, rho0: FloatArray, steps: int) -> FloatArray:
-        """Tube radii for a constant disturbance radius, vectorised: the same recursion as ``_advance``.
+    def _point_tube_radius(self, gain: int, rho0: FloatArray, steps: int) -> FloatArray:
+        """Tube radii of one gain for a constant disturbance radius, vectorised: the recursion of ``_advance``.
 
         For ``k ≤ J``: ``ρ_k = |M^k|ρ₀ + Σ_{i<k}|M^i|d``; after that ``ρ_k = |M^J|ρ_{k-J} + Σ_{i<J}|M^i|d``,
         evaluated a block of ``J`` steps at a time.
         """
-        horizon = self.horizon
-        d = self._radius_input
+        horizon = self.horizons[gain]
+        powers = self._abs_powers[gain, : horizon + 1]
         radii = np.empty((max(steps, horizon + 1), self.norms.count))
-        terms = self._abs_powers[:horizon] @ d
+        terms = powers[:horizon] @ self._radius_input[gain]
         radii[0] = rho0
-        radii[1 : horizon + 1] = self._abs_powers[1:] @ rho0 + np.cumsum(terms, axis=0)
+        radii[1 : horizon + 1] = powers[1:] @ rho0 + np.cumsum(terms, axis=0)
         constant = terms.sum(axis=0)
-        lagged = self._abs_powers[horizon].T
+        lagged = powers[horizon].T
         for start in range(horizon + 1, steps, horizon):
             stop = min(start + horizon, steps)
             radii[start:stop] = radii[start - horizon : stop - horizon] @ lagged + constant
         return radii[:steps]
 
     def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
-        """Radius of the box of everything unknown that enters one step (in z-coordinates)."""
-        radius = self._radius_input
+        """Radius of the box of everything unknown that enters one step (in z-coordinates), per gain."""
+        radius = self._radius_input if self.method == "tube" else self._radius_input[0]
         if not self._uncertain:
             return np.asarray(radius)
-        if self.method == "framer" or self._identity:
+        inputs = self.norms.vector(np.abs(u) @ self._K_gamma.T)
+        if self.method == "framer":
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
-            return np.asarray(radius + x_abs @ self._K_phi.T + np.abs(u) @ self._K_gamma.T)
+            return np.asarray(radius + x_abs @ self._K_phi.T + inputs)
+        if self._identity:  # |x_k| from the intersection of the gains' boxes (class docstring)
+            lower, upper = np.max(z_c - z_r, axis=-2), np.min(z_c + z_r, axis=-2)
+            x_abs = np.maximum(np.abs(lower), np.abs(upper))
+            return np.asarray(radius + (x_abs @ self._K_phi.T + inputs)[..., None, :])
         # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
         centre = np.minimum(
             self.norms.vector(np.abs(z_c @ self.T_inv.T) @ self._K_phi.T), self.norms.vector(z_c) @ self._S_phi.T
         )
-        inputs = self.norms.vector(np.abs(u) @ self._K_gamma.T)
-        return np.asarray(radius + inputs + centre + z_r @ self._S_phi.T)
+        return np.asarray(radius + inputs[..., None, :] + centre + z_r @ self._S_phi.T)
 
     def _advance(self, internal: dict[str, Any], y: FloatArray, u: FloatArray) -> dict[str, Any]:
         z_c, z_r = internal["z_center"], internal["z_radius"]
         disturbance = self._disturbance_radius(z_c, z_r, u)
-        new_c = z_c @ self.M.T + y @ self._TL.T + u @ self._TGamma.T + self._offset
+        known = u @ self._TGamma.T
         if self.method == "framer":
+            new_c = z_c @ self.M.T + y @ self._TL[0].T + known + self._offset[0]
             return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance}
+        # every gain at once: centres and radii carry a gain axis before the state axis
+        new_c = (
+            np.einsum("gij,...gj->...gi", self._Ms, z_c)
+            + np.einsum("gip,...p->...gi", self._TL, y)
+            + known[..., None, :]
+            + self._offset
+        )
         k = internal["k"]
         queue, history = internal["rho_queue"], internal["d_history"]
         # A batched y or u (or a batched ΔA disturbance) gives the queues their leading axes.
-        lead = np.broadcast_shapes(np.shape(disturbance)[:-1], z_r.shape[:-1], new_c.shape[:-1])
-        count = self.norms.count
-        disturbance = np.broadcast_to(disturbance, (*lead, count))
-        if queue.shape[:-2] != lead:  # the first step of a batch from the shared prior
-            history = np.broadcast_to(history, (*lead, self.horizon, count))
-            queue = np.broadcast_to(queue, (*lead, self.horizon, count))
+        lead = np.broadcast_shapes(np.shape(disturbance)[:-2], z_r.shape[:-2], new_c.shape[:-2])
+        gains, count = self._Ms.shape[0], self.norms.count
+        disturbance = np.broadcast_to(disturbance, (*lead, gains, count))
+        if queue.shape[:-3] != lead:  # the first step of a batch from the shared prior
+            history = np.broadcast_to(history, (*lead, *history.shape[-3:]))
+            queue = np.broadcast_to(queue, (*lead, *queue.shape[-3:]))
+        # history[i] = d_{k-i}, i < J_max; queue[j] = ρ_{k+1-J_max+j} (ρ₀ before the record)
         history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
-        lag = min(k + 1, self.horizon)
-        new_r = queue[..., 0, :] @ self._abs_powers[lag].T + np.einsum(
-            "ijl,...il->...j", self._abs_powers[: self.horizon], history
-        )
+        index = np.arange(gains)
+        lag = self._abs_powers[index, np.minimum(k + 1, self._lags)]
+        oldest = queue[..., index, self._oldest, :]
+        flat = history.reshape(*lead, gains, 1, -1)
+        new_r = np.einsum("gjl,...gl->...gj", lag, oldest) + (flat @ self._terms)[..., 0, :]
         queue = np.concatenate([queue[..., 1:, :], new_r[..., None, :]], axis=-2)
         return {"z_center": new_c, "z_radius": new_r, "k": k + 1, "rho_queue": queue, "d_history": history}
 
     def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The x box of a z box; for the tube the intersection of the gains' boxes (axis -2 of ``z_c``)."""
         x_c = z_c @ self.T_inv.T
         if self.norms.singleton:
             x_r = z_r @ self._abs_T_inv.T
@@ -404,7 +476,10 @@ class IntervalObserver(Observer):
         else:
             x_r = z_r @ self._back.T
             scale = np.abs(z_c) @ self._abs_T_inv.T + x_r
-        return inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale)
+        lower, upper = inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale)
+        if self.method == "framer":
+            return lower, upper
+        return np.max(lower, axis=-2), np.min(upper, axis=-2)
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.
@@ -412,10 +487,11 @@ class IntervalObserver(Observer):
         Returns
         -------
         dict
-            ``method`` (``"IntervalObserver/<method>"``), ``L``, ``T``, ``spectral_radius``, ``h``,
-            ``transient_s``; ``horizon`` (and ``blocks`` when not all of size 1) for the tube method;
-            after :meth:`design`, ``steady_width``
-            (noise-only steady-state width bound).
+            ``method`` (``"IntervalObserver/<method>"``), ``L`` (the first gain), ``T``, ``spectral_radius``
+            (the largest over the gains), ``h``, ``transient_s``; ``horizon`` (the first gain's; and ``blocks``
+            when not all of size 1) for the tube method, with ``gains`` and ``horizons`` of every gain when
+            there are several; after :meth:`design`, ``steady_width`` (noise-only steady-state width
+            bound of the first gain).
         """
         info: dict[str, Any] = {
             "method": f"IntervalObserver/{self.method}",
@@ -427,6 +503,9 @@ class IntervalObserver(Observer):
         }
         if self.method == "tube":
             info["horizon"] = self.horizon
+            if self.gains.shape[0] > 1:
+                info["gains"] = self.gains.tolist()
+                info["horizons"] = list(self.horizons)
             if not self.norms.singleton:
                 info["blocks"] = list(self.norms.sizes)
         if self.design_result is not None:
