@@ -177,36 +177,36 @@ def test_refined_gain_is_never_looser_than_the_winning_candidate(monkeypatch, se
     model = sampled_model(system, bounds.resolve(system), 0.05 if continuous else None)
     v_radius = bounds.resolve(system).radius("v")
     refined = tube.design_tube_gain(model, system.C, system.F, v_radius)
-    monkeypatch.setattr(tube, "_REFINE_MAX_ENTRIES", 0)
+    monkeypatch.setattr(tube, "_SMALL_GAIN_ENTRIES", 0)
     plain = tube.design_tube_gain(model, system.C, system.F, v_radius)
     assert refined is not None and plain is not None
     assert np.all(refined.steady_radius <= plain.steady_radius)
     assert refined.candidate in (plain.candidate, f"{plain.candidate}+refined")
 
 
-# (seed, n, p): designs whose refined gain keeps the winner as its companion, with equal and unequal horizons
-TWO_GAIN_CASES = [(0, 3, 2), (1, 3, 1), (10, 4, 1), (9, 4, 2)]
+# (seed, n, p): designs with companion gains, with equal and unequal horizons
+SEVERAL_GAIN_CASES = [(0, 3, 2), (1, 3, 1), (10, 4, 1), (9, 4, 2)]
 
 
-def two_gain_observer(seed: int, n: int, p: int) -> tuple[LTISystem, Bounds, IntervalObserver]:
-    """A random uncertain continuous system (E = I, unit boxes) and its designed tube, which has two gains."""
+def banked_observer(seed: int, n: int, p: int) -> tuple[LTISystem, Bounds, IntervalObserver]:
+    """A random uncertain continuous system (E = I, unit boxes) and its designed tube, which has companions."""
     random, _ = random_system(seed, n, p, True, True)
     system = LTISystem(random.A, random.C, E=np.eye(n), dA=random.dA)
     bounds = unit_bounds(n, n, p)
     observer = IntervalObserver.design(system, bounds, h=0.05)
-    assert observer.gains.shape[0] == 2
+    assert observer.gains.shape[0] >= 2
     return system, bounds, observer
 
 
-@pytest.mark.parametrize("seed,n,p", TWO_GAIN_CASES)
+@pytest.mark.parametrize("seed,n,p", SEVERAL_GAIN_CASES)
 def test_several_gains_enclose_an_independent_truth_and_are_never_wider_than_one_gain(seed, n, p):
     """Truth from exact exponentials with ΔA and x0 at box vertices and the noise switching sign inside the
     steps; the intersected box is never wider than either gain's own tube at any step.
 
-    The per-gain sums are the ones a single-gain observer forms, in another order (over J_max ≤ 104 terms of
+    The per-gain sums are the ones a single-gain observer forms, in another order (over J_max ≤ 200 terms of
     4 entries padded with zeros), so they agree to a few hundred ulps: 1e-12 relative covers it.
     """
-    system, bounds, observer = two_gain_observer(seed, n, p)
+    system, bounds, observer = banked_observer(seed, n, p)
     alone = [IntervalObserver(system, bounds, gain, h=0.05) for gain in observer.gains]
     rng = np.random.default_rng(seed)
     steps, d = 200, system.dA[1]
@@ -220,11 +220,11 @@ def test_several_gains_enclose_an_independent_truth_and_are_never_wider_than_one
             own = single.run(t, y)
             assert np.all(own.lower <= x) and np.all(x <= own.upper)
             assert np.all(estimate.width() <= own.width() * (1 + 1e-12))
-    assert np.any(estimate.width() < np.minimum(*[single.run(t, y).width() for single in alone]))
+    assert np.any(estimate.width() < np.min([single.run(t, y).width() for single in alone], axis=0))
 
 
 def test_several_gains_run_equals_step_with_and_without_runs_axis():
-    system, bounds, observer = two_gain_observer(1, 3, 1)
+    system, bounds, observer = banked_observer(1, 3, 1)
     point = IntervalObserver(LTISystem(system.A, system.C, E=system.E), bounds, observer.gains, h=0.05)
     t = 0.05 * np.arange(150)
     for obs, model in ((observer, system), (point, point.system)):
@@ -244,9 +244,9 @@ def test_several_gains_run_equals_step_with_and_without_runs_axis():
 
 
 def test_several_gains_are_refused_for_the_framer_and_bad_shapes():
-    system, bounds, observer = two_gain_observer(0, 3, 2)
+    system, bounds, observer = banked_observer(0, 3, 2)
     with pytest.raises(DimensionError, match=r"^L: expected shape \(3, 2\) \(framer\), got shape \(2, 3, 2\)"):
-        IntervalObserver(system, bounds, observer.gains, h=0.05, method="framer")
+        IntervalObserver(system, bounds, observer.gains[:2], h=0.05, method="framer")
     with pytest.raises(
         DimensionError, match=r"^L: expected shape \(3, 2\) or \(G, 3, 2\) \(tube\), got shape \(0, 3, 2\)"
     ):
@@ -255,14 +255,15 @@ def test_several_gains_are_refused_for_the_framer_and_bad_shapes():
         IntervalObserver(system, bounds, np.zeros((2, 2, 2)), h=0.05)
 
 
-def test_spring_mass_tube_is_never_wider_than_its_refined_gain_or_the_winner_alone():
+def test_spring_mass_tube_is_never_wider_than_any_of_its_gains_alone():
     """The example the refinement was made for: before t = 6.5 s the refined gain alone is wider than the
-    winner at some steps (the transient from the prior box); the designed observer runs both."""
+    winner at some steps (the transient from the prior box); the designed observer runs both, and the
+    other candidates bounded in the identity coordinates."""
     from intervalobs.examples import spring_mass
 
     system, bounds, h = spring_mass.system(), spring_mass.bounds(), spring_mass.SAMPLING_PERIOD
     observer = IntervalObserver.design(system, bounds, h=h)
-    assert observer.gains.shape[0] == 2 and observer.design_result.candidate.endswith("+refined")
+    assert observer.gains.shape[0] >= 2 and observer.design_result.candidate.endswith("+refined")
     t = h * np.arange(700)
     u = spring_mass.input_signal(t)
     sim = simulate(system, bounds, t, u=u, noise="extreme", seed=0, substeps=10, runs=2)

@@ -68,8 +68,9 @@ rounding pad: the gain is only a candidate, its tube is computed and verified af
 _HORIZON_CONTRACTION = 0.25
 _MAX_HORIZON = 4000
 _SHORT_HORIZON = 256
-_REFINE_MAX_ENTRIES = 16
-"""Gains with more entries are not refined (the pattern search costs a few evaluations per entry and level)."""
+_SMALL_GAIN_ENTRIES = 16
+"""Gains with more entries are neither refined (the pattern search costs a few evaluations per entry and level)
+nor given companions (every companion adds a tube, ``|M^i|`` for ``i ≤ J``, to every step)."""
 _REFINE_LEVELS = 9
 _REFINE_SIGNIFICANT = 1e-9
 """A refinement step must lower the score by this relative amount (far above its rounding): the search
@@ -199,8 +200,8 @@ class TubeDesign:
         Sizes of the blocks of ``z`` whose Euclidean norms the tube bounds (empty: all of size 1, a box).
     companions : tuple of numpy.ndarray
         Further gains, in the same coordinates, whose tubes the observer runs next to this one and
-        intersects with it at every step: the winning candidate when ``L`` is its refinement (a smaller
-        steady radius does not make every step of the transient from the prior box narrower).
+        intersects with it at every step (:func:`design_tube_gain`: the other candidates bounded in the
+        identity coordinates, by increasing steady radius sum).
     """
 
     L: FloatArray
@@ -386,8 +387,11 @@ def design_tube_gain(
     basis of ``Φ - LC``, as a box and in block norms, the smaller steady radius kept (see the module
     docstring). A winner in the original coordinates is then refined locally (a pattern search on its
     entries, at most 16) for a smaller steady radius sum with no state's steady radius larger; the
-    refined gain is kept only when its verified tube is never wider in any state, and then with the
-    winner as its companion (the observer intersects both tubes at every step).
+    refined gain is kept only when its verified tube is never wider in any state. A result in the original
+    coordinates (at most 16 entries) carries every other candidate bounded there as a companion, the
+    unrefined winner first: a smaller steady radius does not make every step narrower (the transient from
+    the prior box), and estimates of different gains err differently, so the observer intersects all their
+    tubes at every step.
 
     Parameters
     ----------
@@ -419,9 +423,11 @@ def design_tube_gain(
             candidates[f"kalman-{factor:g}"] = gain
     candidates.update(extra or {})
     best: TubeDesign | None = None
+    plain: list[TubeDesign] = []  # the candidates bounded in the identity coordinates
     for name, gain in candidates.items():
         error = model.Phi - gain @ C
         found = _tube_in(model, gain, error, np.eye(n), (1,) * n, F, v_radius, name)
+        plain += [] if found is None else [found]
         form = real_modal_form(error) if found is None else None
         if form is not None:
             modal, sizes = form
@@ -436,7 +442,11 @@ def design_tube_gain(
     if best is None:
         return None
     refined = _refined(model, C, F, v_radius, best)
-    return best if refined is None else replace(refined, companions=(best.L,))
+    winner = best if refined is None else refined
+    if winner.L.size > _SMALL_GAIN_ENTRIES or winner.blocks or not np.array_equal(winner.T, np.eye(n)):
+        return winner
+    others = sorted((found for found in plain if found is not winner), key=lambda found: found.steady_radius.sum())
+    return replace(winner, companions=tuple(found.L for found in others))
 
 
 def _refined(
@@ -452,7 +462,7 @@ def _refined(
     candidates minimise a variance, not this box bound, so the refinement typically gains several per cent.
     """
     n = model.Phi.shape[0]
-    if start.L.size > _REFINE_MAX_ENTRIES or start.blocks or not np.array_equal(start.T, np.eye(n)):
+    if start.L.size > _SMALL_GAIN_ENTRIES or start.blocks or not np.array_equal(start.T, np.eye(n)):
         return None
     limit = start.steady_radius
 

@@ -95,8 +95,9 @@ class IntervalObserver(Observer):
     bounded exactly (seed 002, Lemma A.1). It needs a stable width system
     :math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
 
-    Several gains (tube only; :meth:`design` passes the refined gain and the candidate it was refined
-    from): each gain :math:`L_g` runs its own centre and tube, and the box is the intersection
+    Several gains (tube only; :meth:`design` passes the winning gain and the other candidates bounded in
+    the identity coordinates, :attr:`~intervalobs.design.tube.TubeDesign.companions`): each gain
+    :math:`L_g` runs its own centre and tube, and the box is the intersection
     :math:`[\max_g(\hat x_g - \rho_g), \min_g(\hat x_g + \rho_g)]`, never wider than any single gain's
     box at any step. In the identity coordinates every tube's :math:`\delta\Phi` term bounds :math:`|x_k|`
     by that intersection, :math:`\max(|\underline{x}_k|, |\overline{x}_k|) \le |\hat x_g| + \rho_g`,
