@@ -264,6 +264,43 @@ def test_certificates_one_per_condensed_solve_and_refused_otherwise() -> None:
         HullEstimator.design(system, bounds, horizon=None).certificates(t, sim.y, u)
 
 
+def test_certificates_reuse_given_multipliers_instead_of_solving() -> None:
+    """reuse: objectives given multipliers are not solved nor logged, and the box they give is still sound (any
+    multipliers are: zero multipliers bound x_k by the prior and the noise box alone)."""
+    system, bounds = small_discrete()
+    t = np.arange(40, dtype=float)
+    u = np.sin(t)[:, None]
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=5)
+    calls = []
+
+    def reuse(lp: object, costs: np.ndarray) -> np.ndarray:
+        given = np.zeros((costs.shape[0], lp.nrow))  # type: ignore[attr-defined]
+        given[:2] = np.nan  # component 0 solved, the others bounded by zero multipliers
+        calls.append(costs.shape[0])
+        return given
+
+    hull = HullEstimator.design(system, bounds, horizon=6)
+    certs = hull.certificates(t, sim.y, u, first_rows=True, reuse=reuse)
+    assert len(calls) == t.size - 1 and set(calls) == {2 * system.n}  # every window of the record
+    assert all(len(found) == 0 for key, found in certs.items() if key[0] != 0)
+    assert len(certs[(0, 1.0)]) == len(certs[(0, -1.0)]) == t.size - 1 - 6  # the full windows, component 0
+    plain = hull.run(t, sim.y, u)
+    lp = hull._condensed
+    assert lp is not None
+    lp.reuse = reuse
+    try:
+        loose = hull.run(t, sim.y, u)
+    finally:
+        lp.reuse = None
+    report = loose.enclosure(sim.x)
+    assert report.max_violation == 0.0 and report.fraction == 1.0
+    assert np.all(loose.width()[6:, 1:] > plain.width()[6:, 1:])  # the reused components did not use the data
+    # component 0 is solved, from the looser priors of the others: never tighter than with every LP solved
+    assert np.all(loose.lower[:, 0] <= plain.lower[:, 0] + 1e-9) and np.all(
+        loose.upper[:, 0] >= plain.upper[:, 0] - 1e-9
+    )
+
+
 def test_falls_back_to_the_default_threads_when_highs_runs_with_more() -> None:
     # HiGHS keeps one scheduler per process: started by another highspy user with 2 threads, it refuses
     # our one-thread runs; the estimator must then switch to the default and give the same bounds.

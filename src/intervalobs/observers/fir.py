@@ -70,7 +70,7 @@ from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
-from ..validation import as_box
+from ..validation import as_box, as_choice
 from .base import Observer, ObserverState
 from .hull import HullEstimator
 from .interval_observer import IntervalObserver
@@ -155,6 +155,9 @@ class FiniteMemoryObserver(Observer):
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
+        self.training: dict[str, int] = {}
+        """Training LPs of :meth:`learn` with a ``tolerance``: ``solved`` and ``reused`` (bounded by a stored
+        certificate instead)."""
         noise = _noise_channels(system, self.bounds, model)
         output = (system.C, system.F, self.bounds.centre("v"), self.bounds.radius("v"))
         self._bank = _FilterBank(k, self.window, model.Phi, model.Gamma, noise, output)
@@ -231,6 +234,8 @@ class FiniteMemoryObserver(Observer):
         fallback: Observer | None = None,
         filtered: bool = False,
         first_records: int | None = None,
+        tolerance: float | None = None,
+        selection: str = "random",
     ) -> FiniteMemoryObserver:
         """A bank: the worst-case filter plus the exact window hull's certificates on simulated records.
 
@@ -258,8 +263,8 @@ class FiniteMemoryObserver(Observer):
         seed : int
             Seed of the training noise (the bank is deterministic given it).
         size : int, optional
-            Keep at most this many filters per component (the worst-case one and a random subset of
-            the certificates): online cost against tightness (docs/tightness.md). Default: all.
+            Keep at most this many filters per component (the worst-case one and ``size - 1`` certificates chosen
+            as ``selection`` says): online cost against tightness (docs/tightness.md). Default: all.
         h : float, optional
             Sampling period of a continuous-time system.
         fallback : Observer, optional
@@ -273,6 +278,17 @@ class FiniteMemoryObserver(Observer):
             ``records``, and 0 leaves them to those alone. Default ``records * steps // (4 * window)`` (30 with
             the other defaults): a quarter of the main training's samples, since a window from the wide prior
             costs the hull about twice a full one (30 tanks).
+        tolerance : float, optional
+            Solve a training window's LP only where the bank may still fall short: a bound (component, sign,
+            window shape) whose stored certificates came within ``tolerance`` of the LP on average over its
+            last ``COVERAGE_PATIENCE`` = 10 solves (shortfall relative to the width of the component's box) is
+            solved on one window in 10 only, and bounded by its best stored certificate on the others (the
+            stored certificates are ranked by their value on the window; the chosen one's bound is certified).
+            Default: every LP is solved.
+        selection : {"random", "cover"}
+            How ``size`` picks the certificates of the full windows: a random subset, or ``"cover"``: greedily, each
+            the one that adds the most to the summed lower- and upper-end bounds over the training windows (tighter
+            for the same size). The first rows' banks keep a random subset.
 
         Returns
         -------
@@ -286,6 +302,13 @@ class FiniteMemoryObserver(Observer):
         for name, value, least in checks:
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
                 raise DataError(f"{name}: expected an integer >= {least}, got {value!r}")
+        if tolerance is not None and (
+            isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0 <= tolerance < np.inf
+        ):
+            raise DataError(f"tolerance: expected a finite number >= 0 or None, got {tolerance!r}")
+        as_choice("selection", selection, ("random", "cover"))
+        cover = size is not None and selection == "cover"
+        coverage = None if tolerance is None and not cover else _Coverage(-np.inf if tolerance is None else tolerance)
         full = bounds.resolve(system)
         worst, elapsed = _worst_case_gains(system, full, window, h)
         if filtered:  # a predicted filter is a filtered one with no weight on y_k
@@ -316,18 +339,26 @@ class FiniteMemoryObserver(Observer):
             else:
                 noise, own, times = ("vertex", "extreme")[record % 2], short, t[: int(window) + 1]
             sim = simulate(system, full, times, noise=noise, seed=int(own.integers(2**31)))
-            for key, duals in hull.certificates(times, sim.y, sim.u, first_rows=True).items():
+            for key, duals in hull.certificates(times, sim.y, sim.u, first_rows=True, reuse=coverage).items():
                 i, sign, *length = key  # length: the steps of a window from x_0 (first rows)
                 weights = length[0] + last if length else int(window) + last
                 if weights <= len(first) or not length:  # (row N from x_0 is left to the full bank)
                     (first[weights - 1] if length else bank)[i].append(sign * duals[:, :weights, :])
+            if coverage is not None:
+                coverage.settle()  # the record's last window
         elapsed += time.perf_counter() - start
-        gains = _assemble(bank, worst, size, rng)
+        training = {} if coverage is None else {"solved": coverage.solved, "reused": coverage.reused}
+        if cover and coverage is not None and size is not None:
+            gains = coverage.select(worst, size)
+        else:
+            gains = _assemble(bank, worst, size, rng)
         # Rows before the window is full: the certificates, and the zero filter (the prior's open-loop image).
         early = [_assemble(found, np.zeros((system.n, j + 1, system.p)), size, rng) for j, found in enumerate(first)]
         if fallback is None:
             fallback = IntervalObserver.design(system, full, h=h)
-        return cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered, first=early)
+        observer = cls(system, full, gains, fallback, h=h, lp_seconds=elapsed, filtered=filtered, first=early)
+        observer.training = training
+        return observer
 
     # -- online ----------------------------------------------------------------------------------
     def _window_terms(self, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -486,7 +517,7 @@ class FiniteMemoryObserver(Observer):
         dict
             ``method``, ``window``, ``filtered``, ``bank`` (filters per component), ``radius`` (evaluated, rounded
             up) and ``residual`` (max ``|R|``) of each component's first filter (the worst-case one),
-            ``lp_seconds``, ``fallback`` (its meta).
+            ``lp_seconds``, ``training`` (:attr:`training`), ``fallback`` (its meta).
         """
         fallback_meta = self.fallback.meta() if hasattr(self.fallback, "meta") else {}
         return {
@@ -497,6 +528,7 @@ class FiniteMemoryObserver(Observer):
             "radius": self.radius[:, 0].tolist(),
             "residual": float(np.max(np.abs(self.residual[:, 0]))),
             "lp_seconds": self.lp_seconds,
+            "training": dict(self.training),
             "fallback": fallback_meta,
             "transient_s": float(self.window * self.h),
         }
@@ -606,6 +638,158 @@ def _assemble(
     count = max(m.shape[0] for m in members)
     return np.stack(
         [np.concatenate([m, np.repeat(base[i][None], count - m.shape[0], 0)]) for i, m in enumerate(members)]
+    )
+
+
+COVERAGE_PATIENCE = 10
+"""Solves over which ``learn`` averages a bound's gap; a bound within its tolerance is solved once in this many
+windows (so a bank that stops covering the data resumes training)."""
+
+
+class _Coverage:
+    r"""Which training LPs :meth:`FiniteMemoryObserver.learn` solves (the ``reuse`` hook of
+    :meth:`~intervalobs.observers.hull.HullEstimator.certificates`).
+
+    Per objective (window shape, component, sign) it keeps the certificates found so far as their multipliers
+    ``y`` and reduced costs ``d = c - Aᵀy``, so that the bounds of all of them on a window are one matrix-vector
+    product, :math:`y^+\cdot\underline r + y^-\cdot\overline r + d^+\cdot\underline z + d^-\cdot\overline z`
+    (row and column bounds; used to rank them: the hull certifies the bound of the one it is given). After a
+    solve, the gap is the LP's bound minus the best stored certificate's bound on that window, relative to the
+    width of the component's box there: the stored bank's shortfall on a window it has not seen. An objective
+    whose mean gap over its last ``COVERAGE_PATIENCE`` solves is at most ``tolerance`` is solved on one window in
+    ``COVERAGE_PATIENCE`` only; on the others its bound is its best stored certificate's (any multipliers give a
+    sound bound).
+    """
+
+    def __init__(self, tolerance: float) -> None:
+        self.tolerance = tolerance
+        self.found: dict[tuple[Any, int], list[Any]] = {}  # per key: [count, (y+, y-, d+, d-) rows, multipliers]
+        self.gaps: dict[tuple[Any, int], list[float]] = {}
+        self.windows: dict[Any, list[FloatArray]] = {}  # per window shape: the bounds of every training window
+        self.model: tuple[FloatArray, Any] = (np.zeros((0, 0)), np.zeros((0, 0)))  # the 2n costs and Aᵀ
+        self.skips: dict[tuple[Any, int], int] = {}
+        self.log: list[Any] | None = None
+        self.seen = 0
+        self.pending: tuple[Any, ...] | None = None
+        self.solved = self.reused = 0
+
+    def __call__(self, lp: Any, costs: FloatArray) -> FloatArray:
+        """Multipliers for the objectives not to solve on this window (NaN rows: solve)."""
+        self.settle()
+        if lp.dual_log is not self.log:  # a new record
+            self.log, self.seen = lp.dual_log, 0
+        measured = np.isfinite(lp.row_lo)
+        shape = (lp.length, lp.full, int(np.count_nonzero(measured)))
+        rows = [np.where(measured, lp.row_lo, 0.0), np.where(measured, lp.row_hi, 0.0)]
+        window = np.concatenate([*rows, lp.col_lo, lp.col_hi])
+        count = costs.shape[0]
+        best, given = np.full(count, -np.inf), np.full((count, lp.nrow), np.nan)
+        for r in range(count):
+            key = (shape, r)
+            if key not in self.found:
+                continue
+            stored, terms, duals = self.found[key]
+            values = terms[:stored] @ window
+            b = int(np.argmax(values))
+            best[r] = values[b]
+            gaps = self.gaps[key][-COVERAGE_PATIENCE:]
+            covered = len(gaps) == COVERAGE_PATIENCE and float(np.mean(gaps)) <= self.tolerance
+            if covered and self.skips.get(key, 0) < COVERAGE_PATIENCE - 1:
+                given[r] = duals[b]
+                self.skips[key] = self.skips.get(key, 0) + 1
+            else:
+                self.skips[key] = 0
+        reused = int(np.count_nonzero(~np.isnan(given[:, 0])))
+        self.reused, self.solved = self.reused + reused, self.solved + count - reused
+        self.pending = (shape, window, measured, best, costs, lp.matrix_t)
+        self.windows.setdefault(shape, []).append(window)
+        self.model = (costs, lp.matrix_t)
+        return given
+
+    def select(self, base: FloatArray, size: int) -> FloatArray:
+        """A bank (n, B, W, p) of the full windows: each component's ``base`` filter (W, p), then at most ``size - 1``
+        stored certificates chosen greedily to cover the training windows.
+
+        Every filter bounds both ends of its component (the box ``est ± radius``); its value on a window for the
+        other end is that of its negated multipliers for the negated cost (reduced cost ``-d``). The greedy choice
+        adds the filter that most raises the sum over the training windows of the best lower-end bound plus the
+        best upper-end bound (minus the width), starting from ``base``; gains only fall as filters are added, so
+        each step re-evaluates only the candidates whose earlier gain still leads (lazy greedy).
+        """
+        full = [shape for shape in self.windows if shape[1]]
+        n, weights, p = base.shape[0], base.shape[1], base.shape[2]
+        if not full:
+            return base[:, None]
+        windows = np.array(self.windows[max(full, key=lambda shape: shape[2])]).T  # scored on the most measured
+        costs, matrix_t = self.model
+        members = []
+        for i in range(n):
+            duals, signs = [], []
+            for shape in full:
+                for r, sign in ((2 * i, 1.0), (2 * i + 1, -1.0)):
+                    if (shape, r) in self.found:
+                        count, _, stored = self.found[(shape, r)]
+                        duals.append(sign * stored[:count])  # as multipliers of the lower end's cost
+                        signs.append(np.full(count, sign))
+            base_y = np.zeros((1, matrix_t.shape[1]))
+            base_y[0, : weights * p] = base[i].ravel()
+            lower_y = np.concatenate([base_y, *duals])
+            lower_y[:, weights * p :] = 0.0  # the rows a filter does not weigh (y_k of a predicted one)
+            reduced = costs[2 * i] - lower_y @ matrix_t.T
+            lower = _dual_terms(lower_y, reduced) @ windows  # (candidates, windows): bounds of the lower end
+            upper = _dual_terms(-lower_y, -reduced) @ windows  # … and of the upper end (negated)
+            chosen = [0]
+            best_lo, best_hi = lower[0].copy(), upper[0].copy()
+            bound = np.sum(np.maximum(lower - best_lo, 0) + np.maximum(upper - best_hi, 0), axis=1)
+            bound[0] = -np.inf
+            while len(chosen) < min(size, lower.shape[0]):
+                c = int(np.argmax(bound))
+                if bound[c] <= 0:
+                    break
+                gain = np.sum(np.maximum(lower[c] - best_lo, 0) + np.maximum(upper[c] - best_hi, 0))
+                bound[c] = gain
+                if gain < np.max(bound):  # another candidate may gain more: re-evaluate it first
+                    continue
+                chosen.append(c)
+                bound[c] = -np.inf
+                best_lo, best_hi = np.maximum(best_lo, lower[c]), np.maximum(best_hi, upper[c])
+            filters = lower_y[chosen].reshape(len(chosen), -1, p)[:, :weights]
+            filters[0] = base[i]
+            members.append(filters)
+        count = max(m.shape[0] for m in members)
+        return np.stack([np.concatenate([m, np.repeat(m[:1], count - m.shape[0], 0)]) for m in members])
+
+    def settle(self) -> None:
+        """Gaps and storage of the certificates solved on the pending window (logged since the last call)."""
+        if self.pending is None or self.log is None:
+            return
+        shape, window, measured, best, costs, matrix_t = self.pending
+        entries, self.seen, self.pending = self.log[self.seen :], len(self.log), None
+        values = best.copy()
+        new: dict[int, tuple[FloatArray, FloatArray]] = {}
+        for i, sign, duals, *_ in entries:
+            r = 2 * i + int(sign < 0)
+            y = np.where(measured, duals, 0.0)
+            reduced = costs[r] - matrix_t @ y
+            new[r] = (_dual_terms(y, reduced), duals)
+            values[r] = new[r][0] @ window
+        width = -(values[0::2] + values[1::2])  # upper minus lower end of each component's box
+        for r, (terms, duals) in new.items():
+            key = (shape, r)
+            gap = (values[r] - best[r]) / width[r // 2] if width[r // 2] > 0 else np.inf
+            self.gaps.setdefault(key, []).append(float(max(gap, 0.0)))
+            entry = self.found.setdefault(key, [0, np.empty((8, terms.size)), np.empty((8, duals.size))])
+            if entry[0] == entry[1].shape[0]:  # capacity doubles
+                entry[1], entry[2] = np.vstack([entry[1], entry[1]]), np.vstack([entry[2], entry[2]])
+            entry[1][entry[0]], entry[2][entry[0]] = terms, duals
+            entry[0] += 1
+
+
+def _dual_terms(duals: FloatArray, reduced: FloatArray) -> FloatArray:
+    """Rows ``(y+, y-, d+, d-)`` of multipliers ``y`` and reduced costs ``d``: their weak-duality value on a window is
+    the product with ``(row_lo, row_hi, col_lo, col_hi)`` (free rows zeroed; rounding not counted)."""
+    return np.concatenate(
+        [np.maximum(duals, 0.0), np.minimum(duals, 0.0), np.maximum(reduced, 0.0), np.minimum(reduced, 0.0)], axis=-1
     )
 
 

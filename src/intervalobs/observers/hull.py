@@ -38,6 +38,7 @@ estimator**, never an estimate (it is not an :class:`~intervalobs.estimate.Estim
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
@@ -397,6 +398,10 @@ class _CondensedLP:
         self.dual_log: list[tuple[int, float, FloatArray, int, bool]] | None = None
         """When a list, every solve appends ``(component, sign, row duals, window length L, anchored)``,
         ``anchored`` when the window starts at ``x_0`` (``k ≤ H``; see ``HullEstimator.certificates``)."""
+        self.reuse: Callable[[_CondensedLP, FloatArray], FloatArray] | None = None
+        """When set, called with this LP (bounds of the window set) and the ``2n`` costs before the solves;
+        returns multipliers ``(2n, rows)`` to use instead of solving, a NaN row for each objective to solve
+        (``HullEstimator.certificates``). Objectives not solved are not logged."""
 
     def set_window(
         self, k: int, y: FloatArray, u: FloatArray, prior_lo: FloatArray, prior_hi: FloatArray, use_current: bool
@@ -467,15 +472,18 @@ class _CondensedLP:
         n, ncol, nrow = self.n, self.ncol, self.nrow
         signs = np.tile([1.0, -1.0], n)
         costs = signs[:, None] * np.repeat(self.objectives[self.length], 2, axis=0)
+        given = self.reuse(self, costs) if self.reuse is not None else np.full((2 * n, nrow), np.nan)
+        solve = np.isnan(given[:, 0])
         starts = self._start_bases(key, costs)
-        duals = np.zeros((2 * n, nrow))
+        duals = np.where(solve[:, None], 0.0, given)
         values = np.zeros((2 * n, ncol + nrow))
         basics: list[NDArray[np.int64] | None] = [None] * (2 * n)
         usable = np.ones(2 * n, dtype=bool)
         workers = len(self.solvers)
 
         def solve_group(w: int) -> list[tuple[int, _Solved]]:
-            return [(r, self._solve_one(self.solvers[w], costs[r], starts[r])) for r in range(w, 2 * n, workers)]
+            rows = [r for r in range(w, 2 * n, workers) if solve[r]]
+            return [(r, self._solve_one(self.solvers[w], costs[r], starts[r])) for r in rows]
 
         groups = [solve_group(0)] if self._pool is None else list(self._pool.map(solve_group, range(workers)))
         for r, (optimal, basic, value, dual) in sorted((i for g in groups for i in g), key=lambda i: i[0]):
@@ -500,7 +508,7 @@ class _CondensedLP:
                 if again > bounds[r]:
                     bounds[r], duals[r], usable[r] = again, dual, True
         if self.dual_log is not None:
-            for r in np.flatnonzero(usable).tolist():
+            for r in np.flatnonzero(usable & solve).tolist():
                 self.dual_log.append((r // 2, float(signs[r]), duals[r].copy(), self.length, not self.full))
         return bounds[0::2], bounds[1::2]
 
@@ -941,7 +949,12 @@ class HullEstimator(Observer):
         return lower, upper
 
     def certificates(
-        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, first_rows: bool = False
+        self,
+        t: ArrayLike,
+        y: ArrayLike,
+        u: ArrayLike | None = None,
+        first_rows: bool = False,
+        reuse: Callable[[Any, FloatArray], FloatArray] | None = None,
     ) -> dict[tuple[int, float] | tuple[int, float, int], FloatArray]:
         r"""The duality certificates of the window LPs of a record: one FIR weight set per bound.
 
@@ -961,6 +974,13 @@ class HullEstimator(Observer):
         first_rows : bool
             Also return the certificates of the first rows' windows (``k ≤ H``: the ``L = k`` steps from
             the prior of ``x_0``; row ``j`` is the weight of ``y_j``).
+        reuse : callable, optional
+            Called before the solves of every window with the window LP (its ``row_lo``, ``row_hi``, ``col_lo``,
+            ``col_hi``, ``length``, ``full`` and ``dual_log`` set) and the ``2n`` costs (rows ``2i``: lower bound of
+            component ``i``, ``2i + 1``: upper); returns multipliers ``(2n, rows)`` to bound those objectives with
+            instead of solving them (any multipliers give a sound bound), a NaN row for each objective to solve.
+            Only solved objectives give certificates (:meth:`FiniteMemoryObserver.learn
+            <intervalobs.observers.fir.FiniteMemoryObserver.learn>` skips bounds its bank already attains).
 
         Returns
         -------
@@ -980,12 +1000,12 @@ class HullEstimator(Observer):
         if ys.ndim != 2:
             raise DimensionError(f"y: expected one record of shape (T, {self.p}), got shape {ys.shape}")
         lp = self._condensed
-        lp.dual_log = []
+        lp.dual_log, lp.reuse = [], reuse
         try:
             self._loop(times, ys, us)
             log = lp.dual_log
         finally:
-            lp.dual_log = None
+            lp.dual_log, lp.reuse = None, None
         shape = (lp.horizon + 1, self.p)
         found: dict[tuple[int, float] | tuple[int, float, int], list[FloatArray]] = {
             (i, sign): [] for i in range(self.n) for sign in (1.0, -1.0)

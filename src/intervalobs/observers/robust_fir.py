@@ -192,6 +192,8 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         fallback: Observer | None = None,
         filtered: bool = False,
         state_size: ArrayLike | None = None,
+        tolerance: float | None = None,
+        selection: str = "random",
     ) -> RobustFiniteMemoryObserver:
         """A bank: the centre model's learned certificates plus the robust worst-case filter.
 
@@ -214,6 +216,10 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
             As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`.
         state_size : array_like, shape (n,), optional
             State magnitude of the robust worst-case filter (see :meth:`design`).
+        tolerance : float, optional
+            As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`.
+        selection : {"random", "cover"}
+            As in :meth:`FiniteMemoryObserver.learn <intervalobs.observers.fir.FiniteMemoryObserver.learn>`.
 
         Returns
         -------
@@ -224,7 +230,18 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         if fallback is None:
             fallback = IntervalObserver.design(system, full, h=h)
         nominal = FiniteMemoryObserver.learn(
-            centre, full, window, records, steps, seed, size, h=h, fallback=fallback, filtered=filtered
+            centre,
+            full,
+            window,
+            records,
+            steps,
+            seed,
+            size,
+            h=h,
+            fallback=fallback,
+            filtered=filtered,
+            tolerance=tolerance,
+            selection=selection,
         )
         robust, elapsed = _robust_gains(system, centre, full, window, h, state_size)
         if filtered:  # a predicted filter is a filtered one with no weight on y_k
