@@ -345,7 +345,7 @@ def _product_hull(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatA
     """:func:`product_bounds` for ends that may be infinite: ``0 * inf = 0`` (a NaN product)."""
     with np.errstate(invalid="ignore"):
         low, high = product_bounds(alo, ahi, blo, bhi)
-    if np.isnan(low.sum() + high.sum()):
+    if np.isnan(low).any() or np.isnan(high).any():
         with np.errstate(invalid="ignore"):
             p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (alo * blo, alo * bhi, ahi * blo, ahi * bhi))
         low = np.minimum(np.minimum(p1, p2), np.minimum(p3, p4))
@@ -509,7 +509,7 @@ class Interval:
         c = np.asarray(other, dtype=float)
         with np.errstate(invalid="ignore"):
             a, b = c * self.lower, c * self.upper
-        if not np.isfinite(a.sum() + b.sum()):  # an infinite end: 0 * inf = 0
+        if not (np.isfinite(a).all() and np.isfinite(b).all()):  # an infinite end: 0 * inf = 0
             a, b = np.where(np.isnan(a), 0.0, a), np.where(np.isnan(b), 0.0, b)
         return Interval._raw(*round_outward(np.minimum(a, b), np.maximum(a, b)))
 
