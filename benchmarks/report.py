@@ -212,7 +212,9 @@ def lp_free_rows(data: dict[str, Any]) -> list[str]:
     for name, per in data.items():
         labels = [k[: -len(" learn s")] for k in per if k.startswith(fir) and k.endswith(" learn s")]
         for label in labels:
-            kind = f"learn(size={per['fir size']})" if label != fir else "all filters"
+            kind = "all filters"
+            if label != fir:
+                kind = f"learn(size={per['fir size']}, selection={per.get('fir selection', 'random')!r})"
             bank = f"{kind} ({per[f'{label} filters per component']})"
             for key in ("ΔA at a vertex", "ΔA at a random point"):
                 runs = list(per.get(key, {}).values())
