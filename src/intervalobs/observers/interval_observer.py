@@ -100,8 +100,10 @@ class IntervalObserver(Observer):
     :math:`L_g` runs its own centre and tube, and the box is the intersection
     :math:`[\max_g(\hat x_g - \rho_g), \min_g(\hat x_g + \rho_g)]`, never wider than any single gain's
     box at any step. In the identity coordinates every tube's :math:`\delta\Phi` term bounds :math:`|x_k|`
-    by that intersection, :math:`\max(|\underline{x}_k|, |\overline{x}_k|) \le |\hat x_g| + \rho_g`,
-    so each tube is also never wider than it is alone (the recursion is monotone in :math:`d_k`).
+    by the reported box (that intersection, each gain's box widened by its rounding margin),
+    :math:`|x_k| \le \max(|\underline{x}_k|, |\overline{x}_k|) \le |\hat x_g| + \rho_g` (plus that margin),
+    so each tube is also never wider than it is alone (the recursion is monotone in :math:`d_k`), and the
+    bound holds whatever the rounding of the other gains' recursions.
 
     Each step follows from the inclusion of the previous one, so both hold for every admissible noise
     realisation, inside the sampling intervals too.
@@ -383,6 +385,7 @@ class IntervalObserver(Observer):
             terms[g, horizon:] = 0.0
         self._terms = terms.transpose(0, 1, 3, 2).reshape(len(horizons), longest * count, count)
         self._lags = np.asarray(horizons)
+        self._lag = self._abs_powers[np.arange(len(horizons)), self._lags]  # |M_g^{J_g}|, from step J_g on
         self._oldest = longest - self._lags  # queue position of ρ_{k+1-J_g}
 
     def _default_radius(self, steps: int) -> FloatArray:
@@ -425,8 +428,8 @@ class IntervalObserver(Observer):
         if self.method == "framer":
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
             return np.asarray(radius + x_abs @ self._K_phi.T + inputs)
-        if self._identity:  # |x_k| from the intersection of the gains' boxes (class docstring)
-            lower, upper = np.max(z_c - z_r, axis=-2), np.min(z_c + z_r, axis=-2)
+        if self._identity:  # |x_k| from the box the observer reports: the gains' boxes intersected
+            lower, upper = self._x_box(z_c, z_r)
             x_abs = np.maximum(np.abs(lower), np.abs(upper))
             return np.asarray(radius + (x_abs @ self._K_phi.T + inputs)[..., None, :])
         # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
@@ -451,17 +454,17 @@ class IntervalObserver(Observer):
         )
         k = internal["k"]
         queue, history = internal["rho_queue"], internal["d_history"]
-        # A batched y or u (or a batched ΔA disturbance) gives the queues their leading axes.
-        lead = np.broadcast_shapes(np.shape(disturbance)[:-2], z_r.shape[:-2], new_c.shape[:-2])
-        gains, count = self._Ms.shape[0], self.norms.count
-        disturbance = np.broadcast_to(disturbance, (*lead, gains, count))
+        # A batched y or u (or state) gives the centres, and then the queues, their leading axes.
+        lead, gains = new_c.shape[:-2], self._Ms.shape[0]
+        if np.shape(disturbance)[:-2] != lead:
+            disturbance = np.broadcast_to(disturbance, (*lead, gains, self.norms.count))
         if queue.shape[:-3] != lead:  # the first step of a batch from the shared prior
             history = np.broadcast_to(history, (*lead, *history.shape[-3:]))
             queue = np.broadcast_to(queue, (*lead, *queue.shape[-3:]))
         # history[i] = d_{k-i}, i < J_max; queue[j] = ρ_{k+1-J_max+j} (ρ₀ before the record)
         history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
         index = np.arange(gains)
-        lag = self._abs_powers[index, np.minimum(k + 1, self._lags)]
+        lag = self._lag if k + 1 >= history.shape[-2] else self._abs_powers[index, np.minimum(k + 1, self._lags)]
         oldest = queue[..., index, self._oldest, :]
         flat = history.reshape(*lead, gains, 1, -1)
         new_r = np.einsum("gjl,...gl->...gj", lag, oldest) + (flat @ self._terms)[..., 0, :]
@@ -470,6 +473,8 @@ class IntervalObserver(Observer):
 
     def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The x box of a z box; for the tube the intersection of the gains' boxes (axis -2 of ``z_c``)."""
+        if self._identity:  # the products with T⁻¹ = I below are exact: skip them (once a step for the tube)
+            return self._intersected(*inflate(z_c - z_r, z_c + z_r, self.margin, scale=np.abs(z_c) + z_r))
         x_c = z_c @ self.T_inv.T
         if self.norms.singleton:
             x_r = z_r @ self._abs_T_inv.T
@@ -477,7 +482,10 @@ class IntervalObserver(Observer):
         else:
             x_r = z_r @ self._back.T
             scale = np.abs(z_c) @ self._abs_T_inv.T + x_r
-        lower, upper = inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale)
+        return self._intersected(*inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale))
+
+    def _intersected(self, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The tube's boxes intersected over the gain axis (axis -2); the framer's box as it is."""
         if self.method == "framer":
             return lower, upper
         return np.max(lower, axis=-2), np.min(upper, axis=-2)
