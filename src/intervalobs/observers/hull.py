@@ -286,6 +286,16 @@ CERTIFICATE_GAP = 1e-7
 """Relative gap between a solve's optimal value and its certified bound above which the condensed window
 LP is solved again from scratch (a tolerance of the check, not a pad: either certificate is valid)."""
 
+ROW_RELAX = 1e-9
+"""Relative widening of the measurement rows in the LP that HiGHS solves again when a solve fails.
+
+Vertex noise makes the window's feasible set thin (on the 6-tank cascade with i.i.d. vertex noise, a window
+whose largest inscribed slack is -1e-11): the exact LP then ends "unknown", from a restored basis and from
+scratch, and the multipliers of such a solve certify up to a few percent (of the width) less than the optimum.
+The widened LP is well posed; its multipliers, evaluated on the exact rows by ``dual_bounds``, certify at least
+its optimum, i.e. at most ``ROW_RELAX (1 + |b|) ‖λ‖₁`` below the exact one. (Not used for every solve: on the
+first windows from the wide prior of ``x_0`` the multipliers are large and that loss shows.)"""
+
 _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
 """Basis status codes of the bases kept by :class:`_CondensedLP` (``_ZERO``: a nonbasic free row)."""
 
@@ -310,8 +320,13 @@ class _CondensedLP:
     had *at the same time* (the active measurements are a property of the data, not of the lag); the
     noise entering at the new end starts at the bound its cost prefers. This needs 4–5× fewer simplex
     pivots than restoring the basis column by column. A shifted basis with the wrong number of basic
-    variables is passed as alien (HiGHS completes it); when no optimum is reached from a restored
-    basis, the LP is solved again from scratch.
+    variables is passed as alien (HiGHS completes it).
+
+    **Failed solves.** HiGHS runs without scaling (the entries of :math:`C\Phi^j` are of one size; on the
+    30-tank cascade its scaling made each restored basis about ten times more expensive to set up, and the
+    solves took more pivots). When a solve ends without an optimum — a thin feasible set under vertex noise,
+    see ``ROW_RELAX`` — the LP with its measurement rows widened by ``ROW_RELAX`` is solved (from the basis
+    reached, then from scratch) and its multipliers are certified on the exact rows.
 
     **Centred prior.** The first state is written :math:`x_s = c + z` with :math:`c` the centre of its
     prior box and :math:`z` in the centred box (ends rounded outward), and :math:`\Phi^j c` joins the
@@ -381,6 +396,10 @@ class _CondensedLP:
         for solver in self.solvers:
             # Devex pricing: after each restored basis, steepest-edge weights would be recomputed (3-7 % slower).
             solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
+            # No scaling: the rows and columns are already of similar size (entries of C Φ^j), and HiGHS's
+            # scaling costs more than the pivots at n = 30 (setup of a restored basis 10x slower) and leads to
+            # more pivots (see _solve_one for the scaled fallback).
+            solver.setOptionValue("simplex_scale_strategy", 0)
             solver.passModel(lp)
         self._cols = np.arange(self.ncol, dtype=np.int32)
         self._rows = np.arange(self.nrow, dtype=np.int32)
@@ -518,13 +537,22 @@ class _CondensedLP:
         if start is not None:
             solver.setBasis(start)
         run_highs(solver)
-        if start is not None and solver.getModelStatus() != self._optimal:
-            solver.clearSolver()  # the restored basis did not lead to an optimum: solve from scratch
+        widened = solver.getModelStatus() != self._optimal
+        if widened:
+            # No optimum (a thin feasible set, see ROW_RELAX): solve the widened LP, from the basis reached and
+            # then from scratch; its multipliers are certified on the exact rows like any others.
+            relax = ROW_RELAX * (1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi)))
+            solver.changeRowsBounds(self.nrow, self._rows, self.row_lo - relax, self.row_hi + relax)
             run_highs(solver)
+            if solver.getModelStatus() != self._optimal:
+                solver.clearSolver()
+                run_highs(solver)
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
         basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
         value = np.concatenate([solution.col_value, solution.row_value]) if optimal else None
+        if widened:
+            solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
         return optimal, basic, value, np.asarray(solution.row_dual, dtype=float)
 
     def _keep_bases(self, key: int, values: FloatArray, basics: list[NDArray[np.int64] | None]) -> None:
