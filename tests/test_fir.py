@@ -398,6 +398,7 @@ def test_learn_with_a_tolerance_solves_only_where_the_bank_falls_short() -> None
     windows = records * (steps - 1) + first_records * window  # hull steps of the records: one window LP each
     assert training["solved"] + training["reused"] == 2 * system.n * windows
     assert training["reused"] > 0 and full.meta()["training"] == {}
+    assert 0.0 <= training["gap"] < np.inf
     assert bank.K.shape[1] < full.K.shape[1]
     t = np.arange(STEPS, dtype=float)
     u = np.sin(t)[:, None]

@@ -155,9 +155,11 @@ class FiniteMemoryObserver(Observer):
         self.K = k
         self.fallback = fallback
         self.lp_seconds = float(lp_seconds)
-        self.training: dict[str, int] = {}
-        """Training LPs of :meth:`learn` with a ``tolerance``: ``solved`` and ``reused`` (bounded by a stored
-        certificate instead)."""
+        self.training: dict[str, float] = {}
+        """Training of :meth:`learn` with a ``tolerance`` or ``selection="cover"``: ``solved`` and ``reused`` LPs
+        (bounded by a stored certificate instead), and ``gap``: the full windows' shortfall of the stored
+        certificates on the windows they had not seen (median over the bounds of their mean over the last 10 solves,
+        relative to the component's width): what more training could still gain."""
         noise = _noise_channels(system, self.bounds, model)
         output = (system.C, system.F, self.bounds.centre("v"), self.bounds.radius("v"))
         self._bank = _FilterBank(k, self.window, model.Phi, model.Gamma, noise, output)
@@ -347,7 +349,7 @@ class FiniteMemoryObserver(Observer):
             if coverage is not None:
                 coverage.settle()  # the record's last window
         elapsed += time.perf_counter() - start
-        training = {} if coverage is None else {"solved": coverage.solved, "reused": coverage.reused}
+        training = {} if coverage is None else coverage.summary()
         if cover and coverage is not None and size is not None:
             gains = coverage.select(worst, size)
         else:
@@ -758,6 +760,12 @@ class _Coverage:
             members.append(filters)
         count = max(m.shape[0] for m in members)
         return np.stack([np.concatenate([m, np.repeat(m[:1], count - m.shape[0], 0)]) for m in members])
+
+    def summary(self) -> dict[str, float]:
+        """``solved`` and ``reused`` LPs, and the median over the full windows' bounds of their recent mean gap."""
+        recent = [np.mean(gaps[-COVERAGE_PATIENCE:]) for key, gaps in self.gaps.items() if key[0][1]]
+        gap = float(np.median(recent)) if recent else float("nan")
+        return {"solved": self.solved, "reused": self.reused, "gap": gap}
 
     def settle(self) -> None:
         """Gaps and storage of the certificates solved on the pending window (logged since the last call)."""
