@@ -12,7 +12,7 @@ from scipy.optimize import linprog
 
 from conftest import random_system
 from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
-from intervalobs.errors import IntervalObserverError
+from intervalobs.errors import DataError, IntervalObserverError
 from intervalobs.observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 
 STEPS = 40
@@ -388,7 +388,16 @@ def test_condensed_window_with_a_shared_noise_channel_is_the_window_lp() -> None
         assert est.lower[k, i] >= low - 1e-7 and est.upper[k, i] <= high + 1e-7
 
 
-@pytest.mark.parametrize("options", [{"horizon": 5, "filtered": True}, {"horizon": 5, "window_boxes": True}], ids=str)
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"horizon": 5, "filtered": True},
+        {"horizon": 5, "window_boxes": True},
+        {"horizon": 5, "processes": 2},
+        {"horizon": None, "filtered": True, "processes": 3},
+    ],
+    ids=str,
+)
 def test_monte_carlo_runs_equal_separate_estimators(options: dict) -> None:
     """A run's boxes depend on its data only: ``init`` forgets the warm starts of earlier runs."""
     system, bounds = small_discrete()
@@ -433,3 +442,10 @@ def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_w
     tol = 1e-6 * scale(b.lower, b.upper)
     assert np.all(np.abs(a.lower - b.lower) <= tol) and np.all(np.abs(a.upper - b.upper) <= tol)
     assert np.sum(a.upper - a.lower) <= np.sum(b.upper - b.lower) * (1.0 + 1e-7)
+
+
+@pytest.mark.parametrize("processes", [0, 1.5, True])
+def test_processes_must_be_a_positive_integer(processes: object) -> None:
+    system, bounds = small_discrete()
+    with pytest.raises(DataError, match="processes: expected a positive integer"):
+        HullEstimator.design(system, bounds, processes=processes)  # type: ignore[arg-type]

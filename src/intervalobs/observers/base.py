@@ -215,7 +215,7 @@ class Observer(ABC):
         times, ys, us = self._signals(t, y, u)
         if self.batched or ys.ndim == 2:
             return self._loop(times, ys, us)[0]
-        runs = [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
+        runs = self._separate_runs(times, ys, us)
 
         def stacked(name: str) -> FloatArray | None:
             values = [getattr(r, name) for r in runs]
@@ -223,6 +223,10 @@ class Observer(ABC):
 
         lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
         return Estimate(times, lower, upper, stacked("input_lower"), stacked("input_upper"), runs[0].meta)
+
+    def _separate_runs(self, times: FloatArray, ys: FloatArray, us: FloatArray) -> list[Estimate]:
+        """The Monte Carlo runs of an unbatched observer (leading axis of ``ys``, ``us``), one after another."""
+        return [self._loop(times, ys[i], us[i])[0] for i in range(ys.shape[0])]
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate` of :meth:`run`.

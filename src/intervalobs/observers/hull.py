@@ -38,8 +38,9 @@ estimator**, never an estimate (it is not an :class:`~intervalobs.estimate.Estim
 
 from __future__ import annotations
 
+import multiprocessing
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,6 +51,7 @@ from scipy.linalg import expm
 
 from ..design.certified_lp import dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, DataError, DimensionError
+from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
@@ -713,6 +715,10 @@ class HullEstimator(Observer):
         HiGHS instances solving the ``2n`` LPs of a step in parallel threads (condensed LP only; HiGHS
         releases the GIL while it solves). The bounds do not depend on it; use at most the number of
         free cores.
+    processes : int
+        Worker processes for the Monte Carlo runs of :meth:`run` (a leading axis of ``y``): the runs are
+        split into ``processes`` contiguous chunks, each run by a fresh estimator in its own process. A run's
+        boxes depend on its data only (:meth:`init` forgets the warm starts), so they do not depend on it.
 
     Notes
     -----
@@ -724,7 +730,7 @@ class HullEstimator(Observer):
     ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead of 16 and 63
     with the sparse window LP. Every bound is certified
     by weak duality (module docstring), so the box is sound whatever the solver's accuracy. A Monte
-    Carlo axis of ``y`` is processed run by run (LPs do not vectorise).
+    Carlo axis of ``y`` is processed run by run (LPs do not vectorise), in ``processes`` worker processes.
     """
 
     summary_fields = ("horizon",)
@@ -741,6 +747,7 @@ class HullEstimator(Observer):
         filtered: bool = False,
         window_boxes: bool = False,
         workers: int = 1,
+        processes: int = 1,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -762,6 +769,10 @@ class HullEstimator(Observer):
         if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
             raise DataError(f"workers: expected a positive integer, got {workers!r}")
         self.workers = int(workers)
+        if isinstance(processes, bool) or not isinstance(processes, (int, np.integer)) or processes < 1:
+            raise DataError(f"processes: expected a positive integer, got {processes!r}")
+        self.processes = int(processes)
+        self._given = (system, bounds, horizon, h, filtered, window_boxes, workers)
         self.model = _outer_model(system, self.bounds, h)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, _Window] = {}
@@ -781,6 +792,7 @@ class HullEstimator(Observer):
         filtered: bool = False,
         window_boxes: bool = False,
         workers: int = 1,
+        processes: int = 1,
     ) -> HullEstimator:
         """Build the estimator (there is no gain: the window LP of each step is the estimator).
 
@@ -800,6 +812,8 @@ class HullEstimator(Observer):
             Bound every state of the window by its earlier box.
         workers : int
             HiGHS instances solving a step's LPs in parallel threads.
+        processes : int
+            Worker processes for the Monte Carlo runs of :meth:`run`.
 
         Returns
         -------
@@ -810,7 +824,16 @@ class HullEstimator(Observer):
         AssumptionError
             If the system has an interval ``dA`` (the consistent set is not convex).
         """
-        return cls(system, bounds, horizon=horizon, h=h, filtered=filtered, window_boxes=window_boxes, workers=workers)
+        return cls(
+            system,
+            bounds,
+            horizon=horizon,
+            h=h,
+            filtered=filtered,
+            window_boxes=window_boxes,
+            workers=workers,
+            processes=processes,
+        )
 
     def condensed_allowed(self) -> bool:
         """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ).
@@ -965,6 +988,18 @@ class HullEstimator(Observer):
             upper[i] = min(upper[i], -sparse_lp.certified_min(col, -1.0, key + i))
         return self._consistent(k, lower, upper)
 
+    def _separate_runs(self, times: FloatArray, ys: FloatArray, us: FloatArray) -> list[Estimate]:
+        """The Monte Carlo runs, in ``processes`` worker processes when there are several."""
+        count = ys.shape[0]
+        if self.processes == 1 or count == 1:
+            return super()._separate_runs(times, ys, us)
+        chunks = np.array_split(np.arange(count), min(self.processes, count))
+        # fork where the platform has it: a spawned worker would import the package first (about a second).
+        method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+        tasks = [(self._given, times, ys[chunk], us[chunk]) for chunk in chunks]
+        with ProcessPoolExecutor(len(chunks), mp_context=multiprocessing.get_context(method)) as pool:
+            return [estimate for part in pool.map(_hull_runs, tasks) for estimate in part]
+
     @staticmethod
     def _consistent(k: int, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Inflate the box, and refuse an empty one (the data contradict the bounds)."""
@@ -1063,6 +1098,12 @@ class HullEstimator(Observer):
             "transient_s": 0.0,
             "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
         }
+
+
+def _hull_runs(task: tuple[tuple[Any, ...], FloatArray, FloatArray, FloatArray]) -> list[Estimate]:
+    """Worker of :meth:`HullEstimator.run` with ``processes``: a chunk of runs on a fresh estimator."""
+    given, times, ys, us = task
+    return HullEstimator(*given)._separate_runs(times, ys, us)
 
 
 @dataclass(frozen=True)
