@@ -54,6 +54,8 @@ def test_uncertain_system_gets_a_labelled_lower_bound(tmp_path: Path) -> None:
         samples=0,
         truth=(sim.dA, sim.x),
         fir_window=5,
+        mccormick_horizon=5,
+        mccormick_steps=30,
     )
     assert isinstance(result.reference, HullLowerBound)
     report = summary["tightness"]
@@ -64,11 +66,23 @@ def test_uncertain_system_gets_a_labelled_lower_bound(tmp_path: Path) -> None:
     assert fir["enclosure"] == report["observers"]["tube"]["enclosure"] == 1.0
     assert fir["reference_inside"] and fir["ratio"] >= 1.0 and fir["ms_per_step"] > 0 and fir["learn_s"] > 0
     assert fir["mean_width"] <= report["observers"]["tube"]["mean_width"]  # intersected with IntervalObserver
+    # the McCormick window LP on the first 30 steps only: compared with the lower bound on those steps
+    tight = report["observers"]["RobustHullEstimator McCormick"]
+    assert tight["enclosure"] == 1.0 and tight["reference_inside"] and tight["ratio"] >= 1.0
+    assert tight["ms_per_step"] > 0 and tight["horizon"] == 5
+    assert tight["steps"] == [0, 29] and tight["steps_used"] == 30
+    bound = np.sum(result.widths["lower bound (no sound estimator below)"], axis=-1)
+    assert tight["reference_mean_width"] == pytest.approx(np.mean(bound[:30]), rel=1e-12)
+    assert tight["ratio"] == pytest.approx(tight["mean_width"] / tight["reference_mean_width"], rel=1e-12)
+    assert np.all(np.isnan(result.widths["RobustHullEstimator McCormick"][30:]))
+    assert "steps" not in report["observers"]["tube"]  # the whole record
+    assert "RobustHullEstimator McCormick * " in format_tightness(report)
     assert "oracle_hull" in report
     # the widths figure's data, drawn by the caller (this module writes no files)
     assert set(result.widths) == {
         "tube",
         "RobustFiniteMemoryObserver",
+        "RobustHullEstimator McCormick",
         "lower bound (no sound estimator below)",
         "hull if ΔA were known",
     }

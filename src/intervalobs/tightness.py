@@ -5,11 +5,11 @@ HullEstimator`) for a model without :math:`\Delta A`, and otherwise the **lower 
 :func:`~intervalobs.observers.robust_hull.robust_hull_lower_bound` (consistent states of fixed
 :math:`\Delta A` candidates over the full history, improved by sequential LP), which no sound
 estimator can beat. For a model with :math:`\Delta A`, :func:`add_tightness` also runs the
-data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` (window LP) and its
-LP-free counterpart :class:`~intervalobs.observers.robust_fir.RobustFiniteMemoryObserver` (learned
-filter bank) and reports them next to the observers, with the cost per step of each estimator that was
-timed and, given the truth, the enclosure of every estimator. For each observer the report
-gives the mean over the steps
+data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` (window LP, split or
+with McCormick envelopes) and its LP-free counterpart
+:class:`~intervalobs.observers.robust_fir.RobustFiniteMemoryObserver` (learned filter bank) and reports
+them next to the observers, with the cost per step of each estimator that was timed and, given the
+truth, the enclosure of every estimator. For each observer the report gives the mean over the steps
 :math:`k \ge` ``start`` of the summed widths :math:`\sum_i (\overline{x}_{k,i} - \underline{x}_{k,i})`
 and its ratio to the reference's (≥ 1 for every sound observer: a ratio below 1 is a bug in one of the
 two, and the report says so in ``reference_inside``).
@@ -38,6 +38,9 @@ __all__ = ["Tightness", "add_tightness", "format_tightness", "tightness_referenc
 FloatArray = NDArray[np.float64]
 
 _INSIDE_TOL = 1e-9
+
+MCCORMICK = "RobustHullEstimator McCormick"
+"""Report key of ``RobustHullEstimator(mccormick=True)`` (:func:`add_tightness`'s ``mccormick_horizon``)."""
 
 
 @dataclass(frozen=True)
@@ -133,7 +136,9 @@ def tightness_report(
     t : array_like, shape (T,)
         Sample times.
     estimates : mapping of str to Estimate
-        The observers' bounds (one run each).
+        The observers' bounds (one run each). One that covers only the first rows of ``t`` is compared
+        with the reference on those rows (its row then gives its ``steps``, ``steps_used`` and the
+        reference's mean width there, ``reference_mean_width``).
     reference : Estimate or HullLowerBound
         From :func:`tightness_reference`.
     start : int
@@ -156,19 +161,26 @@ def tightness_report(
     ref_mean = float(np.mean(ref_width[defined])) if defined.any() else float("nan")
     observers: dict[str, Any] = {}
     for name, est in estimates.items():
+        rows = est.lower.shape[-2]  # an estimate of the first rows only is compared on those
         width = np.sum(est.upper - est.lower, axis=-1)[start:]
-        mean = float(np.mean(width[defined])) if defined.any() else float("nan")
-        finite = np.all(np.isfinite(ref_lo), axis=-1) & np.all(np.isfinite(ref_hi), axis=-1)
-        scale = 1.0 + np.abs(ref_lo[finite]) + np.abs(ref_hi[finite])
+        used = defined[: width.shape[-1]]
+        mean = float(np.mean(width[used])) if used.any() else float("nan")
+        ref_here = float(np.mean(ref_width[: width.shape[-1]][used])) if used.any() else float("nan")
+        finite = np.all(np.isfinite(ref_lo[:rows]), axis=-1) & np.all(np.isfinite(ref_hi[:rows]), axis=-1)
+        scale = 1.0 + np.abs(ref_lo[:rows][finite]) + np.abs(ref_hi[:rows][finite])
         inside = bool(
-            np.all(est.lower[finite] <= ref_lo[finite] + _INSIDE_TOL * scale)
-            and np.all(est.upper[finite] >= ref_hi[finite] - _INSIDE_TOL * scale)
+            np.all(est.lower[finite] <= ref_lo[:rows][finite] + _INSIDE_TOL * scale)
+            and np.all(est.upper[finite] >= ref_hi[:rows][finite] - _INSIDE_TOL * scale)
         )
         observers[name] = {
             "mean_width": mean,
-            "ratio": mean / ref_mean if ref_mean > 0 else float("nan"),
+            "ratio": mean / ref_here if ref_here > 0 else float("nan"),
             "reference_inside": inside,
         }
+        if rows < times.size:
+            observers[name]["steps"] = [int(start), rows - 1]
+            observers[name]["steps_used"] = int(np.count_nonzero(used))
+            observers[name]["reference_mean_width"] = ref_here
         if costs is not None and name in costs:
             observers[name]["ms_per_step"] = float(costs[name])
     best = min(observers, key=lambda k: observers[k]["ratio"]) if observers else None
@@ -215,10 +227,19 @@ def format_tightness(report: Mapping[str, Any], title: str = "") -> str:
         lines.append(f"(the {ref['steps_used']} steps where the reference is computed)")
     lines.append(f"{'estimator':40s} {'mean width':>11s} {'ratio':>7s} {'ms/step':>8s}  reference inside")
     lines.append(f"{kind:40s} {ref['mean_width']:11.4g} {1.0:7.3f}")
+    notes = []
     for name, row in report["observers"].items():
         inside = "yes" if row["reference_inside"] else "NO (bug in one of the two)"
         cost = f"{row['ms_per_step']:8.3g}" if "ms_per_step" in row else f"{'-':>8s}"
-        lines.append(f"{name:40s} {row['mean_width']:11.4g} {row['ratio']:7.3f} {cost}  {inside}")
+        label = name
+        if "steps" in row:  # run on the first rows only
+            label = f"{name} *"
+            notes.append(
+                f"* {name}: run on steps 0-{row['steps'][1]} only; mean over the {row['steps_used']} steps of "
+                f"the reference among {row['steps'][0]}-{row['steps'][1]} (reference {row['reference_mean_width']:.4g})"
+            )
+        lines.append(f"{label:40s} {row['mean_width']:11.4g} {row['ratio']:7.3f} {cost}  {inside}")
+    lines.extend(notes)
     oracle = report.get("oracle_hull")
     if oracle:
         lines.append(f"hull if ΔA were known: mean width {oracle['mean_width']:.4g}; ratios to it:")
@@ -244,6 +265,8 @@ def add_tightness(
     robust_horizon: int | None = None,
     stride: int = 1,
     fir_window: int | None = None,
+    mccormick_horizon: int | None = None,
+    mccormick_steps: int | None = None,
 ) -> Tightness:
     """The hook a reproduction calls before writing its files: ``summary["tightness"]`` and the widths.
 
@@ -290,6 +313,15 @@ def add_tightness(
         with :meth:`IntervalObserver.design <intervalobs.observers.interval_observer.IntervalObserver.design>`
         of the model (reported as ``"RobustFiniteMemoryObserver"``, timed per step with its
         IntervalObserver; ``learn_s`` is its design time).
+    mccormick_horizon : int, optional
+        With interval ``ΔA``: also run ``RobustHullEstimator(mccormick=True)`` (the window LP with the
+        products ``δ_l x_{j,b}`` bounded by McCormick envelopes, no identification, as
+        benchmarks/robust_tightness.py) with this window, reported as ``"RobustHullEstimator McCormick"``
+        (timed, with its ``horizon``).
+    mccormick_steps : int, optional
+        Run it on the first ``mccormick_steps`` samples only (a subsample, where its LPs would cost too
+        much over the whole record): its mean width and ratio are then over the reference's steps among
+        them (``steps`` and ``steps_used`` in its row).
 
     Returns
     -------
@@ -318,6 +350,14 @@ def add_tightness(
             estimates["RobustHullEstimator"] = robust.run(t, y, u)
             costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
             candidates = robust.extremal_deltas(t.size)
+        if mccormick_horizon is not None:
+            tight = RobustHullEstimator.design(
+                system, bounds, horizon=mccormick_horizon, h=h, identify=False, mccormick=True
+            )
+            part = t.size if mccormick_steps is None else min(int(mccormick_steps), t.size)
+            clock_run = time.perf_counter()
+            estimates[MCCORMICK] = tight.run(t[:part], y[:part], None if u is None else u[:part])
+            costs[MCCORMICK] = 1e3 * (time.perf_counter() - clock_run) / max(part, 1)
         if fir_window is not None:
             clock_learn = time.perf_counter()
             fallback = IntervalObserver.design(system, bounds, h=h)
@@ -335,9 +375,11 @@ def add_tightness(
     report["reference"]["runtime_s"] = reference_s
     if learn_s is not None:
         report["observers"]["RobustFiniteMemoryObserver"]["learn_s"] = learn_s
+    if MCCORMICK in report["observers"]:
+        report["observers"][MCCORMICK]["horizon"] = mccormick_horizon
     if truth is not None:
         for key, est in estimates.items():
-            report["observers"][key]["enclosure"] = est.enclosure(truth[1]).fraction
+            report["observers"][key]["enclosure"] = est.enclosure(truth[1][: est.t.size]).fraction
     oracle = None
     if system.dA is not None and truth is not None:
         known = LTISystem(
@@ -355,7 +397,10 @@ def add_tightness(
     report["runtime_s"] = time.perf_counter() - clock
     summary["tightness"] = report
     name = "hull" if report["reference"]["kind"] == "hull" else "lower bound (no sound estimator below)"
-    widths: dict[str, FloatArray] = {k: e.width() for k, e in estimates.items()}
+    widths: dict[str, FloatArray] = {}
+    for key, est in estimates.items():  # NaN (not drawn) after the rows of an estimate of the first rows only
+        widths[key] = np.full((t.size, est.lower.shape[-1]), np.nan)
+        widths[key][: est.t.size] = est.width()
     widths[name] = reference.upper - reference.lower
     if oracle is not None:
         widths["hull if ΔA were known"] = oracle.width()

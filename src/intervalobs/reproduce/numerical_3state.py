@@ -51,6 +51,8 @@ ROBUST_HORIZON = 40
 """Window of the RobustHullEstimator in the tightness report (steps)."""
 FIR_WINDOW = 10
 """Window of the learned RobustFiniteMemoryObserver in the tightness report (as benchmarks/robust_tightness.py)."""
+MCCORMICK_HORIZON = 20
+"""Window of RobustHullEstimator(mccormick=True) in the tightness report (as benchmarks/robust_tightness.py)."""
 BOUND_STRIDE = 45
 """The ΔA lower bound (full-history LPs) is computed every BOUND_STRIDE steps of the tightness report."""
 SEED_FILE = "002_a6311576c67046f0.txt"
@@ -252,6 +254,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         robust_horizon=ROBUST_HORIZON,
         stride=BOUND_STRIDE,
         fir_window=FIR_WINDOW,
+        mccormick_horizon=MCCORMICK_HORIZON,
     )
     if plots:
         out_dir.mkdir(parents=True, exist_ok=True)
