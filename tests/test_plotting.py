@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from intervalobs import Bounds, DimensionError, Estimate, IntervalObserver, LTISystem, simulate
-from intervalobs.plotting import plot_estimate
+from intervalobs.plotting import plot_estimate, plot_widths
 
 RUNS = 5
 
@@ -131,3 +131,15 @@ def test_plot_psi_labels_the_axes_with_the_campaign_units() -> None:
     assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) == ("fault (N·m)", "level (%)", "demo")
     with pytest.raises(DimensionError, match=r"^psi: expected shape \(1, 2\), got \(2,\)"):
         plot_psi([0.5, 1.0], [0.1], [1.0, 2.0], "demo")
+
+
+def test_widths_known_at_a_few_steps_get_markers_and_equal_widths_stay_visible() -> None:
+    t = np.arange(10.0)
+    sparse = np.full((10, 2), np.nan)
+    sparse[[3, 7]] = 0.5
+    dense = np.ones((10, 2))
+    fig = plot_widths(t, {"a": dense, "b": dense, "bound": sparse})
+    lines = fig.axes[0].get_lines()
+    assert [line.get_marker() for line in lines] == ["None", "None", "o"]
+    assert lines[0].get_linestyle() != lines[1].get_linestyle()
+    plt.close(fig)

@@ -173,6 +173,9 @@ def plot_widths(
 ) -> Figure:
     """Total width (sum over components) of several estimates against time.
 
+    Each series gets its own line style, so equal widths stay visible; a series known at isolated steps
+    only (NaN elsewhere, e.g. a lower bound computed at a few steps) is drawn with markers.
+
     Parameters
     ----------
     t : array_like, shape (T,)
@@ -191,8 +194,15 @@ def plot_widths(
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
-    for name, width in widths.items():
-        ax.plot(t, np.sum(np.asarray(width), axis=-1), label=name)
+    styles = ("-", "--", ":", "-.")  # equal widths stay visible on top of each other
+    for index, (name, width) in enumerate(widths.items()):
+        total = np.sum(np.asarray(width), axis=-1)
+        finite = np.isfinite(total)
+        neighbour = np.zeros_like(finite)
+        neighbour[1:] |= finite[:-1]
+        neighbour[:-1] |= finite[1:]
+        isolated = bool(np.any(finite & ~neighbour))  # values at a few steps only: a line would not show them
+        ax.plot(t, total, ls=styles[index % len(styles)], marker="o" if isolated else None, ms=4, label=name)
     for name, level in (reference or {}).items():
         ax.axhline(level, ls="--", lw=0.8, color="gray", label=name)
     if log:
