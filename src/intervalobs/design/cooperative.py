@@ -58,6 +58,8 @@ _RATE_FRACTIONS = (0.25, 0.5, 0.8)
 _POLE_SCALES = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 _POLE_SPREADS = (1.3, 2.0, 3.0)
 _PLACED_KEPT = 3
+_PRUNE_MARGIN = 1e-9
+"""Relative margin by which a candidate's noise floor must exceed the best sum for its LPs to be skipped."""
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,8 @@ class FramerDesign:
     coordinates : str
         Which candidate coordinates won.
     tried : dict of str to float
-        Smallest sum of steady-state radius bounds reached in each candidate coordinates (``inf``: no gain).
+        Smallest sum of steady-state radius bounds reached in each candidate coordinates (``inf``: no gain,
+        or skipped because no gain in those coordinates can beat the best sum found before them).
     """
 
     L: FloatArray
@@ -390,6 +393,17 @@ def _steady_radius(
     return rho, np.abs(np.linalg.inv(T)) @ z_radius
 
 
+def _noise_floor(model: SampledModel, T: FloatArray) -> float:
+    """A lower bound of the steady radius sum of every gain in coordinates ``T``: ``Σ |T⁻¹| |T| r_w``.
+
+    The steady z-radius ``(I - N)⁻¹ b`` is at least ``b ≥ |T| r_w`` (``N ≥ 0``, ``|LF| v_r ≥ 0``), so the
+    x-radius ``|T⁻¹|(I - N)⁻¹ b`` is at least ``|T⁻¹||T| r_w`` whatever ``L``. A candidate whose floor is
+    not below the best sum found (by a relative ``_PRUNE_MARGIN``, far above the rounding of either sum)
+    cannot win, and its LPs are skipped: the design is the same, at the cost of the LPs that can win.
+    """
+    return float(np.sum(np.abs(np.linalg.inv(T)) @ (np.abs(T) @ model.noise_radius)))
+
+
 def design_framer(
     model: SampledModel,
     C: FloatArray,
@@ -425,6 +439,9 @@ def design_framer(
     best: FramerDesign | None = None
     tried: dict[str, float] = {}
     for name, T in candidates.items():
+        if best is not None and _noise_floor(model, T) >= float(np.sum(best.steady_radius)) * (1 + _PRUNE_MARGIN):
+            tried[name] = np.inf  # no gain in these coordinates can beat the best (see _noise_floor)
+            continue
         p = np.ones(T.shape[0])
         top_rate, gain = -np.inf, None
         for _ in range(_PERRON_ITERATIONS):
