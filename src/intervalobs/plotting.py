@@ -193,7 +193,7 @@ def plot_widths(
     """
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig, ax = plt.subplots(figsize=(9, 3.5))
     styles = ("-", "--", ":", "-.")  # equal widths stay visible on top of each other
     for index, (name, width) in enumerate(widths.items()):
         total = np.sum(np.asarray(width), axis=-1)
@@ -209,7 +209,7 @@ def plot_widths(
         ax.set_yscale("log")
     ax.set_xlabel("t")
     ax.set_ylabel("sum of widths")
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))  # outside: never over a curve
     fig.tight_layout()
     return fig
 
