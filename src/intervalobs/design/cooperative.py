@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import sparse
 from scipy.optimize import linprog
 from scipy.signal import place_poles
 
@@ -324,21 +325,17 @@ def _solve_lp(
     nh = n * F.shape[1]
     # variables: vec(L) (row-major), vec(G), vec(H) (H >= |L F|), scalar s
     nvar = nl + ng + nh + 1
-    rows: list[FloatArray] = []
+    # The four blocks of n² and n·nv rows are stored sparse (dense, they are O(n⁴) numbers at n² + 2np columns).
+    rows: list[sparse.csr_array | FloatArray] = []
     rhs: list[float] = []
-    lc = np.einsum("ia,bj->ijab", T, c_z).reshape(ng, nl)  # vec(T L C T^-1) = lc @ vec(L)
+    lc = sparse.kron(sparse.csr_array(T), sparse.csr_array(c_z.T), format="csr")  # vec(T L C T^-1) = lc @ vec(L)
     for sign in (1.0, -1.0):  # sign*(phi_z - T L C T^-1) <= G
-        block = np.zeros((ng, nvar))
-        block[:, :nl] = -sign * lc
-        block[:, nl : nl + ng] = -np.eye(ng)
-        rows.append(block)
+        rows.append(sparse.hstack([-sign * lc, -sparse.eye_array(ng), sparse.csr_array((ng, nh + 1))], format="csr"))
         rhs.extend(-sign * phi_z.ravel())
-    lf = np.einsum("ia,bj->ijab", np.eye(n), F).reshape(nh, nl)  # vec(L F) = lf @ vec(L)
+    lf = sparse.kron(sparse.eye_array(n), sparse.csr_array(F.T), format="csr")  # vec(L F) = lf @ vec(L)
     for sign in (1.0, -1.0):
-        block = np.zeros((nh, nvar))
-        block[:, :nl] = sign * lf
-        block[:, nl + ng : nl + ng + nh] = -np.eye(nh)
-        rows.append(block)
+        zeros = sparse.csr_array((nh, ng))
+        rows.append(sparse.hstack([sign * lf, zeros, -sparse.eye_array(nh), sparse.csr_array((nh, 1))], format="csr"))
         rhs.extend(np.zeros(nh))
     # rate rows, scaled by 1/h: ((G - I) p + K p)/h + s p <= 0   (s = rate when maximised)
     rate_rows = np.zeros((n, nvar))
@@ -365,7 +362,8 @@ def _solve_lp(
         rhs.extend(-(np.abs(T) @ model.noise_radius) / h)
         cost = np.zeros(nvar)
         cost[-1] = 1.0
-    a_ub = np.vstack(rows)
+    a_ub = sparse.vstack(rows, format="csc")
+    a_ub.eliminate_zeros()  # the same matrix HiGHS gets from the dense one
     scale = _GAIN_LIMIT
     bounds = [(-scale, scale)] * nl + [(0, None)] * (ng + nh) + [(None, 1e6 / h if rate is None else None)]
     res = linprog(cost, A_ub=a_ub, b_ub=np.asarray(rhs), bounds=bounds, method="highs")
