@@ -324,9 +324,10 @@ class _CondensedLP:
     pivots than restoring the basis column by column. A shifted basis with the wrong number of basic
     variables is passed as alien (HiGHS completes it).
 
-    **Failed solves.** HiGHS runs without scaling (the entries of :math:`C\Phi^j` are of one size; on the
-    30-tank cascade its scaling made each restored basis about ten times more expensive to set up, and the
-    solves took more pivots). When a solve ends without an optimum — a thin feasible set under vertex noise,
+    **Failed solves.** HiGHS keeps its default scaling (without it, learning a bank on the 12-tank cascade,
+    whose training windows are thin, took over 7 CPU minutes instead of 31 s, although on the 30-tank hull
+    record scaling made each restored basis about ten times more expensive to set up). When a solve ends
+    without an optimum — a thin feasible set under vertex noise,
     see ``ROW_RELAX`` — the LP with its measurement rows widened by ``ROW_RELAX`` is solved (from the basis
     reached, then from scratch) and its multipliers are certified on the exact rows.
 
@@ -398,10 +399,6 @@ class _CondensedLP:
         for solver in self.solvers:
             # Devex pricing: after each restored basis, steepest-edge weights would be recomputed (3-7 % slower).
             solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
-            # No scaling: the rows and columns are already of similar size (entries of C Φ^j), and HiGHS's
-            # scaling costs more than the pivots at n = 30 (setup of a restored basis 10x slower) and leads to
-            # more pivots (see _solve_one for the scaled fallback).
-            solver.setOptionValue("simplex_scale_strategy", 0)
             solver.passModel(lp)
         self._cols = np.arange(self.ncol, dtype=np.int32)
         self._rows = np.arange(self.nrow, dtype=np.int32)
