@@ -441,7 +441,10 @@ def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_w
     # agree to the solver tolerance 1e-9 times the multipliers' size, here 1e-6 of (1 + |x|).
     tol = 1e-6 * scale(b.lower, b.upper)
     assert np.all(np.abs(a.lower - b.lower) <= tol) and np.all(np.abs(a.upper - b.upper) <= tol)
-    assert np.sum(a.upper - a.lower) <= np.sum(b.upper - b.lower) * (1.0 + 1e-7)
+    # Not systematically looser: on average a bound within the feasibility tolerance 1e-9 times multipliers
+    # of size 10 (1e4 only on the thinnest windows). Seen: 5.3e-6 in 38.4 (1.4e-7 relative) with and
+    # without HiGHS's scaling, a fifth of this.
+    assert np.sum(a.upper - a.lower) <= np.sum(b.upper - b.lower) + 1e-8 * np.sum(2.0 * scale(b.lower, b.upper))
 
 
 @pytest.mark.parametrize("processes", [0, 1.5, True])
