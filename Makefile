@@ -55,6 +55,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/tightness.py
 	$(BIN)/python benchmarks/robust_tightness.py
 	$(BIN)/python benchmarks/scale.py
+	$(BIN)/python benchmarks/shapes.py
 	$(BIN)/python benchmarks/report.py
 
 # API reference + pages into docs/_build/html; fresh environment (-E) and warnings as errors (-W).

@@ -1,4 +1,4 @@
-"""Write docs/benchmarks.md from the JSON results of the benchmarks (results, tightness, robust_tightness, scale).
+"""Write docs/benchmarks.md from the benchmarks' JSON results (results, tightness, robust_tightness, scale, shapes).
 
 ``make bench`` runs it after the benchmarks; ``make docs`` and a test only check that the committed page
 matches the JSON files (building the docs never writes a tracked file). Usage: ``python benchmarks/report.py``.
@@ -266,6 +266,62 @@ def scale_section() -> list[str]:
     return [*lines, ""]
 
 
+def _range(values: list[Any], spec: str) -> str:
+    """``min–max`` of ``values`` in format ``spec`` (one number when they print alike)."""
+    low, high = f"{min(values):{spec}}", f"{max(values):{spec}}"
+    return low if low == high else f"{low}–{high}"
+
+
+def shapes_section() -> list[str]:
+    """Vehicle, pedestrian and short record against the exact hull (benchmarks/shapes.py), with the issue's verdicts."""
+    results = HERE / "shapes.json"
+    lines = ["## Other shapes: width against the exact hull", "", *_docstring(HERE / "shapes.py").splitlines(), ""]
+    if not results.exists():
+        return [*lines, "No results yet: run `make bench`.", ""]
+    data = json.loads(results.read_text())
+    cases: dict[str, list[dict[str, Any]]] = {}
+    for row in data["rows"]:
+        cases.setdefault(row["case"], []).append(row)
+    columns = {  # field -> (heading, format)
+        "exact hull s": ("exact hull s", ".3g"),
+        "hull ms/step": (f"hull H = {data['settings']['H']} ms/step", ".3g"),
+        "hull / exact": ("hull / exact", ".5f"),
+        "bank learn s": ("bank learn s", ".3g"),
+        "bank filters": ("bank filters", "d"),
+        "bank ms/step": ("bank ms/step", ".3g"),
+        "bank / exact": ("bank / exact", ".4f"),
+        "tube design s": ("tube design s", ".3g"),
+        "tube ms/step": ("tube ms/step", ".3g"),
+        "tube / exact": ("tube / exact", ".3f"),
+        "inside": ("inside", ".2g"),
+    }
+    seeds = ", ".join(str(s) for s in data["settings"]["seeds"])
+    lines += [
+        f"Settings: {_cell(data['settings'])}. Ranges over the seeds {seeds} (min–max).",
+        "",
+        "| case (n, p, m, noise generators) | steps (widths from) | "
+        + " | ".join(heading for heading, _ in columns.values())
+        + " |",
+        "|" + "---|" * (len(columns) + 2),
+    ]
+    for name, runs in cases.items():
+        first = runs[0]
+        shape = f"{name} ({first['n']}, {first['p']}, {first['m']}, {first['noise generators']})"
+        cells = [_range([r[field] for r in runs], spec) for field, (_, spec) in columns.items()]
+        lines.append(f"| {shape} | {first['steps']} ({first['widths from step']}) | " + " | ".join(cells) + " |")
+    verdicts = [
+        ("bank within 1.1× of the exact hull", "bank / exact", 1.1, ".4f"),
+        (f"hull (H = {data['settings']['H']}) within 1.02× of the exact hull", "hull / exact", 1.02, ".5f"),
+        ("hull ≤ 5 ms/step (n ≤ 6)", "hull ms/step", 5.0, ".3g"),
+    ]
+    lines += ["", "Targets of issue 21 on these runs (the worst seed in parentheses):", ""]
+    for label, field, limit, spec in verdicts:
+        worst = {name: max(r[field] for r in runs) for name, runs in cases.items()}
+        parts = [f"{name} {'yes' if value <= limit else 'NO'} ({value:{spec}})" for name, value in worst.items()]
+        lines.append(f"- {label}: " + ", ".join(parts))
+    return [*lines, ""]
+
+
 def render() -> str:
     """The whole page.
 
@@ -275,9 +331,9 @@ def render() -> str:
     """
     lines = ["# Benchmarks", "", "`make bench` runs the benchmarks below and rewrites this page.", ""]
     return (
-        "\n".join([*lines, *recursion_section(), *tightness_section(), *robust_section(), *scale_section()]).rstrip(
-            "\n"
-        )
+        "\n".join(
+            [*lines, *recursion_section(), *tightness_section(), *robust_section(), *scale_section(), *shapes_section()]
+        ).rstrip("\n")
         + "\n"
     )
 
