@@ -42,6 +42,7 @@ import multiprocessing
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -308,6 +309,9 @@ _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
 """Basis status codes of the bases kept by :class:`_CondensedLP` (``_ZERO``: a nonbasic free row)."""
 
 
+_DUAL_SIMPLEX, _PRIMAL_SIMPLEX = 1, 4
+"""HiGHS ``simplex_strategy`` values."""
+
 _Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArray]
 """One objective's outcome: optimal?, basic variables, primal values (columns, rows), row duals."""
 
@@ -323,12 +327,19 @@ class _CondensedLP:
     (the first steps, ``s = 0``) uses the same LP with ``w_L … w_{H-1}`` fixed at 0 and the rows after
     its last state free.
 
-    **Warm start.** The optimal basis of each objective is kept. When the window has moved by one step,
-    it is shifted by one step before being restored, so that each variable and row keeps the status it
-    had *at the same time* (the active measurements are a property of the data, not of the lag); the
-    noise entering at the new end starts at the bound its cost prefers. This needs 4–5× fewer simplex
-    pivots than restoring the basis column by column. A shifted basis with the wrong number of basic
-    variables is passed as alien (HiGHS completes it).
+    **Warm start.** The ``2n`` objectives of a window are solved as a chain: the lower bounds of
+    components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`). The first objective of the
+    chain starts from its own optimal basis of the previous step, shifted by one step (each variable and
+    row keeps the status it had *at the same time*: the active measurements are a property of the data,
+    not of the lag; the noise entering at the new end starts at the bound its cost prefers), by the dual
+    simplex; a shifted basis with the wrong number of basic variables is passed as alien (HiGHS completes
+    it). Every later objective starts from the optimum of the one before it, which is feasible for the
+    same window, by the primal simplex with nothing restored: a restored basis costs HiGHS a
+    refactorisation (about 170 µs a solve on the vehicle of :mod:`intervalobs.examples.scale_cases`,
+    against about 6 µs a pivot). On the tank cascades (``benchmarks/scale.py``, H = 10) this took the hull
+    from 7.6 to 5.3 ms a step at 6 tanks, 41 to 21 at 12 and 832 to 482 at 30, same widths. A chained
+    solve that ends without an optimum is solved again from the kept basis by the dual simplex (then the
+    failed-solve path below).
 
     **Scaling.** HiGHS solves the LP unscaled. Its default scaling is computed again after every restored
     basis: without it the 30-tank hull record is 2.0× faster (1457 ms a step scaled, 738 unscaled, same widths
@@ -398,7 +409,7 @@ class _CondensedLP:
         self.abs_matrix_t = np.abs(self.matrix_t)
         self.col_nnz = self.nrow  # dense products: every row counts in the rounding of a reduced cost
         self.e_max = np.abs(noise_map) @ np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
-        # One HiGHS instance per worker; objective r is always solved by instance r % workers.
+        # One HiGHS instance per worker, each solving a contiguous part of the chain.
         self.solvers = [new_highs() for _ in range(workers)]
         self.solver = self.solvers[0]
         self._pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 else None
@@ -421,6 +432,8 @@ class _CondensedLP:
             _core.HighsBasisStatus.kUpper,
             _core.HighsBasisStatus.kZero,
         ]
+        self.chain = np.concatenate([np.arange(0, 2 * n, 2), np.arange(2 * n - 1, 0, -2)])
+        """The order of the objectives (row ``2i``: lower bound of component ``i``, ``2i + 1``: upper)."""
         self._bases: dict[int, tuple[NDArray[np.int8], NDArray[np.bool_], int]] = {}
         """Per key: status codes of the last bases of the ``2n`` objectives, which are optimal (the others
         are not restored), and the window start."""
@@ -486,7 +499,7 @@ class _CondensedLP:
     def certified_bounds(self, key: int) -> tuple[FloatArray, FloatArray]:
         """Rigorous lower bounds of ``(x_k)_i - (q_L)_i`` and of ``(q_L)_i - (x_k)_i`` for every ``i``.
 
-        Solves the ``2n`` LPs of the window (each warm-started from its kept basis), then evaluates
+        Solves the ``2n`` LPs of the window along the chain (class docstring, "Warm start"), then evaluates
         every weak-duality bound at once (:func:`~intervalobs.design.certified_lp.dual_bounds`).
 
         Parameters
@@ -504,19 +517,26 @@ class _CondensedLP:
         costs = signs[:, None] * np.repeat(self.objectives[self.length], 2, axis=0)
         given = self.reuse(self, costs) if self.reuse is not None else np.full((2 * n, nrow), np.nan)
         solve = np.isnan(given[:, 0])
-        starts = self._start_bases(key, costs)
+        starts = self._start_codes(key, costs)
         duals = np.where(solve[:, None], 0.0, given)
         values = np.zeros((2 * n, ncol + nrow))
         basics: list[NDArray[np.int64] | None] = [None] * (2 * n)
         usable = np.ones(2 * n, dtype=bool)
-        workers = len(self.solvers)
+        parts = np.array_split(self.chain[solve[self.chain]], len(self.solvers))
 
-        def solve_group(w: int) -> list[tuple[int, _Solved]]:
-            rows = [r for r in range(w, 2 * n, workers) if solve[r]]
-            return [(r, self._solve_one(self.solvers[w], costs[r], starts[r])) for r in rows]
+        def solve_part(w: int) -> list[tuple[int, _Solved]]:
+            solver, out, chained = self.solvers[w], [], False
+            for r in parts[w].tolist():
+                solved = self._solve_one(solver, costs[r], partial(self._start_basis, starts, r), chained)
+                out.append((r, solved))
+                chained = solved[0]
+            return out
 
-        groups = [solve_group(0)] if self._pool is None else list(self._pool.map(solve_group, range(workers)))
-        for r, (optimal, basic, value, dual) in sorted((i for g in groups for i in g), key=lambda i: i[0]):
+        if self._pool is None:
+            outcomes = [item for w in range(len(parts)) for item in solve_part(w)]
+        else:
+            outcomes = [item for part in self._pool.map(solve_part, range(len(parts))) for item in part]
+        for r, (optimal, basic, value, dual) in outcomes:
             if optimal:
                 basics[r], values[r] = basic, value
             if dual.shape != (nrow,) or not np.all(np.isfinite(dual)):
@@ -525,14 +545,15 @@ class _CondensedLP:
             duals[r] = dual
         self._keep_bases(key, values, basics)
         bounds = np.where(usable, dual_bounds(self, costs, duals), -np.inf)
-        # A restored basis can end in an optimal but ill-conditioned one whose multipliers certify much less
-        # than the optimum: those objectives are solved again from scratch and the better certificate kept.
+        # An optimum can have an ill-conditioned basis whose multipliers certify much less than its value: those
+        # objectives are solved again from scratch and the better certificate kept.
         solved = np.array([b is not None for b in basics])
         primal = np.einsum("rc,rc->r", costs, values[:, :ncol])
-        for r in np.flatnonzero(solved & (primal - bounds > CERTIFICATE_GAP * (1.0 + np.abs(primal)))).tolist():
-            solver = self.solvers[r % workers]
+        loose = solved & (primal - bounds > CERTIFICATE_GAP * (1.0 + np.abs(primal)))
+        for r in np.flatnonzero(loose).tolist():
+            solver = self.solvers[0]
             solver.clearSolver()
-            _, _, _, dual = self._solve_one(solver, costs[r], None)
+            _, _, _, dual = self._solve_one(solver, costs[r], lambda: None, False)
             if dual.shape == (nrow,) and np.all(np.isfinite(dual)):
                 again = dual_bounds(self, costs[r : r + 1], dual[None, :])[0]
                 if again > bounds[r]:
@@ -542,11 +563,23 @@ class _CondensedLP:
                 self.dual_log.append((r // 2, float(signs[r]), duals[r].copy(), self.length, not self.full))
         return bounds[0::2], bounds[1::2]
 
-    def _solve_one(self, solver: Any, cost: FloatArray, start: Any) -> _Solved:
-        """Solve one objective on one HiGHS instance from a kept basis (or from scratch)."""
+    def _solve_one(self, solver: Any, cost: FloatArray, start: Callable[[], Any], chained: bool) -> _Solved:
+        """Solve one objective on one HiGHS instance.
+
+        ``chained``: the instance holds the optimum of the previous objective of this window, a feasible
+        basis, and the primal simplex goes on from it. Otherwise, or when that ends without an optimum, the
+        dual simplex starts from the basis ``start()`` (None: from scratch).
+        """
         solver.changeColsCost(self.ncol, self._cols, cost)
-        if start is not None:
-            solver.setBasis(start)
+        if chained:
+            solver.setOptionValue("simplex_strategy", _PRIMAL_SIMPLEX)
+            run_highs(solver)
+            solver.setOptionValue("simplex_strategy", _DUAL_SIMPLEX)
+            if solver.getModelStatus() == self._optimal:
+                return self._outcome(solver, widened=False)
+        basis = start()
+        if basis is not None:
+            solver.setBasis(basis)
         run_highs(solver)
         widened = solver.getModelStatus() != self._optimal
         if widened:
@@ -558,6 +591,10 @@ class _CondensedLP:
             if solver.getModelStatus() != self._optimal:
                 solver.clearSolver()
                 run_highs(solver)
+        return self._outcome(solver, widened)
+
+    def _outcome(self, solver: Any, widened: bool) -> _Solved:
+        """The solver's outcome; restores the exact rows after a widened solve."""
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
         basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
@@ -580,31 +617,33 @@ class _CondensedLP:
                 codes[r, np.where(basic >= 0, basic, self.ncol - 1 - basic)] = _BASIC
         self._bases[key] = (codes, kept, self.start)
 
-    def _start_bases(self, key: int, costs: FloatArray) -> list[Any]:
-        """The kept bases of the ``2n`` objectives, shifted by one step if the window has moved by one."""
+    def _start_codes(self, key: int, costs: FloatArray) -> tuple[NDArray[np.int8], NDArray[np.bool_]] | None:
+        """Status codes of the kept bases of the ``2n`` objectives, shifted by one step if the window has moved
+        by one, and which of them to use (None: no kept bases)."""
         kept = self._bases.get(key)
         if kept is None:
-            return [None] * costs.shape[0]
+            return None
         codes, valid, start = kept
         n, nw, p, ncol = self.n, self.nw, self.p, self.ncol
         if start + 1 == self.start:
             entering = np.where(costs[:, ncol - nw :] >= 0.0, _LOWER, _UPPER).astype(np.int8)
             fresh_rows = np.full((codes.shape[0], p), _BASIC, dtype=np.int8)
             codes = np.hstack([codes[:, :n], codes[:, n + nw : ncol], entering, codes[:, ncol + p :], fresh_rows])
-        alien = np.count_nonzero(codes == _BASIC, axis=1) != self.nrow  # HiGHS completes an alien basis
+        return codes, valid
+
+    def _start_basis(self, starts: tuple[NDArray[np.int8], NDArray[np.bool_]] | None, r: int) -> Any:
+        """The HiGHS basis of objective ``r`` from :meth:`_start_codes` (None: solve from scratch)."""
+        if starts is None or not starts[1][r]:
+            return None
         from highspy import _core
 
-        bases: list[Any] = []
-        for r, row in enumerate(codes.tolist()):
-            if not valid[r]:
-                bases.append(None)
-                continue
-            statuses = [self._statuses[c] for c in row]
-            basis = _core.HighsBasis()
-            basis.col_status, basis.row_status = statuses[:ncol], statuses[ncol:]
-            basis.valid, basis.alien = True, bool(alien[r])
-            bases.append(basis)
-        return bases
+        row = starts[0][r].tolist()
+        statuses = [self._statuses[c] for c in row]
+        basis = _core.HighsBasis()
+        basis.col_status, basis.row_status = statuses[: self.ncol], statuses[self.ncol :]
+        basis.valid = True
+        basis.alien = row.count(_BASIC) != self.nrow  # HiGHS completes an alien basis
+        return basis
 
 
 class _Window:
@@ -731,13 +770,14 @@ class HullEstimator(Observer):
 
     Notes
     -----
-    Each step solves ``2n`` LPs with HiGHS (dual simplex, warm-started per objective from the previous
-    step's basis; the model is built once per window length and only bounds and costs change). With a
-    finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the condensed LP at every step
-    (states eliminated, :class:`_CondensedLP`; the first ``H`` steps as shorter windows from ``x_0``):
-    the same set with ``H + 1`` rows, and bases restored aligned by time: on seed 002's (68) with
-    ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead of 16 and 63
-    with the sparse window LP. Every bound is certified
+    Each step solves ``2n`` LPs with HiGHS (the model is built once per window length and only bounds and
+    costs change). With a finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the
+    condensed LP at every step (states eliminated, :class:`_CondensedLP`; the first ``H`` steps as shorter
+    windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on seed
+    002's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead
+    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain: the first by the
+    dual simplex from its basis of the previous step, each next one by the primal simplex from the optimum
+    of the one before (no basis restored, no refactorisation). Every bound is certified
     by weak duality (module docstring), so the box is sound whatever the solver's accuracy. A Monte
     Carlo axis of ``y`` is processed run by run (LPs do not vectorise), in ``processes`` worker processes.
     """
