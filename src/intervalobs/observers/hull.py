@@ -532,10 +532,8 @@ class _CondensedLP:
                 chained = solved[0]
             return out
 
-        if self._pool is None:
-            outcomes = [item for w in range(len(parts)) for item in solve_part(w)]
-        else:
-            outcomes = [item for part in self._pool.map(solve_part, range(len(parts))) for item in part]
+        run_parts = map if self._pool is None else self._pool.map
+        outcomes = [item for part in run_parts(solve_part, range(len(parts))) for item in part]
         for r, (optimal, basic, value, dual) in outcomes:
             if optimal:
                 basics[r], values[r] = basic, value
@@ -550,8 +548,8 @@ class _CondensedLP:
         solved = np.array([b is not None for b in basics])
         primal = np.einsum("rc,rc->r", costs, values[:, :ncol])
         loose = solved & (primal - bounds > CERTIFICATE_GAP * (1.0 + np.abs(primal)))
+        solver = self.solvers[0]
         for r in np.flatnonzero(loose).tolist():
-            solver = self.solvers[0]
             solver.clearSolver()
             _, _, _, dual = self._solve_one(solver, costs[r], lambda: None, False)
             if dual.shape == (nrow,) and np.all(np.isfinite(dual)):
