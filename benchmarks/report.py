@@ -254,11 +254,17 @@ def scale_section() -> list[str]:
         ("hull ≤ 50 ms/step at n = 30, p = 21", [rows.get(30, {}).get("hull ms/step")], 50.0),
         ("bank ≤ 1 ms/step at n = 30", [rows.get(30, {}).get("bank ms/step")], 1.0),
         ("learn ≤ 60 s at n = 30", [rows.get(30, {}).get("bank learn s")], 60.0),
+        ("bank within 1.1× of the window hull", [row.get("bank / hull") for row in rows.values()], 1.1),
+        (
+            f"hull within 1.02× of the exact hull (first {data['settings'].get('exact_steps')} steps)",
+            [row["hull / exact"] for row in rows.values() if "hull / exact" in row],
+            1.02,
+        ),
     ]
     lines += ["Targets of issue 21 on these runs:", ""]
     for label, values, limit in targets:
         numbers = [v for v in values if isinstance(v, float)]
-        if len(numbers) < len(values):
+        if not values or len(numbers) < len(values):
             verdict = "not measured (see the table)"
         else:
             verdict = ("met" if max(numbers) <= limit else "NOT met") + f" ({', '.join(f'{v:.4g}' for v in numbers)})"

@@ -4,8 +4,12 @@ For n = 3, 6, 12, 30, 60 tanks (``p = round(0.7 n)`` level sensors, ``n // 2`` p
 ``intervalobs.examples.scale_cases.tank_cascade``), one record of ``STEPS`` samples with i.i.d. vertex
 noise (seed 0), and on it:
 
-- ``HullEstimator(horizon=H)``: the exact window hull (the reference; its width ratio is 1 by
-  construction), its cost per step;
+- ``HullEstimator(horizon=H)``: the exact window hull (the reference of the other columns), its cost per
+  step;
+- for n ≤ ``EXACT_MAX_N``, the exact hull of the record's first ``EXACT_STEPS`` steps (the condensed LP
+  anchored at ``x_0``, ``HullEstimator(horizon=EXACT_STEPS)``): its CPU seconds for those steps and the window
+  hull's width against it over the steps ``H … EXACT_STEPS - 1``. Both are certified outer bounds, so a ratio
+  below 1 is an exact-hull certificate that falls short of its LP's optimum;
 - ``FiniteMemoryObserver.learn(window=H, records=RECORDS, steps=TRAIN_STEPS)``: learn time (the hull's
   certificates on simulated records plus the worst-case filter LP), cost per step, width / hull;
 - ``IntervalObserver.design()`` (error tube): design time, cost per step, width / hull.
@@ -36,6 +40,8 @@ STEPS = 60
 RECORDS = 4
 TRAIN_STEPS = 50
 HULL_BUDGET_S = 300.0
+EXACT_STEPS = 25
+EXACT_MAX_N = 30
 LEARN_BUDGET_S = 600.0
 
 
@@ -77,6 +83,11 @@ def size_row(n: int) -> dict[str, Any]:
     row["hull ms/step"] = hull_ms
     row["hull steps"] = done if done == STEPS else f"{done} of {STEPS} (> {HULL_BUDGET_S:g} s projected)"
     row["hull mean width"] = reference
+    if n <= EXACT_MAX_N:
+        exact_hull = HullEstimator.design(case.system, case.bounds, horizon=EXACT_STEPS)
+        exact, exact_s = cpu(lambda: exact_hull.run(case.t[:EXACT_STEPS], sim.y[:EXACT_STEPS], case.u[:EXACT_STEPS]))
+        row["exact hull s"] = exact_s
+        row["hull / exact"] = mean_width(lower, upper, EXACT_STEPS) / mean_width(exact.lower, exact.upper, EXACT_STEPS)
     tube, design_s = cpu(lambda: IntervalObserver.design(case.system, case.bounds))
     estimate, run_s = cpu(lambda: tube.run(case.t, sim.y, case.u))
     row["tube design s"] = design_s
@@ -100,7 +111,7 @@ def size_row(n: int) -> dict[str, Any]:
 
 
 def main() -> None:
-    settings = {"H": H, "steps": STEPS, "records": RECORDS, "train_steps": TRAIN_STEPS}
+    settings = {"H": H, "steps": STEPS, "records": RECORDS, "train_steps": TRAIN_STEPS, "exact_steps": EXACT_STEPS}
     results: dict[str, Any] = {"settings": settings, "rows": []}
     out = Path(__file__).with_name("scale.json")
     for n in TANK_SIZES:
