@@ -307,11 +307,12 @@ certified on the exact rows (``dual_bounds``), which loses at most ``MEASUREMENT
 
 Under vertex noise the truth lies on many measurement faces at once and the exact feasible set is thin: on 30
 steps of the 30-tank cascade, HiGHS ended 634 of 2 800 runs "infeasible", 182 "unknown" and 99 with a solve error,
-and those failures took two thirds of the time (1.07 s a step). With the rows widened by 1e-10 (about 6e-10 on
-levels near 5) and the primal simplex's bound perturbation off (:class:`_CondensedLP`, "Thin windows"), the hull
-took 0.24 s a step and its mean summed width went from 2.7247 to 2.7234: the failed solves' fallbacks
-(``ROW_RELAX``, from scratch) had certified less than the widened solves do. A factor of 1e-9 loses width (2.7279);
-with 2e-12 the failures come back (0.83 s a step, the perturbation on)."""
+and those failures took two thirds of the time (1.07 s a step). With the rows widened by 1e-10 (about 1.1e-10
+absolute: the rows are residuals of about 0.1 once the prior's centre is taken out) and the primal simplex's
+bound perturbation off (:class:`_CondensedLP`, "Thin windows"), the hull took 0.24 s a step and its mean summed
+width went from 2.7247 to 2.7234: the failed solves' fallbacks (``ROW_RELAX``, from scratch) had certified less
+than the widened solves do. A factor of 1e-9 loses width (2.7279); with 2e-12 the failures come back (0.83 s a
+step, the perturbation on)."""
 
 ITERATION_LIMIT = 4
 """Simplex pivots allowed to one solve of the condensed window LP, per row and column. A solve that reaches
