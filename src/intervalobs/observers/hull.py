@@ -58,7 +58,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_positive, as_signal, as_time
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, _one_blas_thread
 
 __all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
 
@@ -307,12 +307,20 @@ certified on the exact rows (``dual_bounds``), which loses at most ``MEASUREMENT
 
 Under vertex noise the truth lies on many measurement faces at once and the exact feasible set is thin: on 30
 steps of the 30-tank cascade, HiGHS ended 634 of 2 800 runs "infeasible", 182 "unknown" and 99 with a solve error,
-and those failures took two thirds of the time (1.07 s a step). With the rows widened by 1e-10 (about 1.1e-10
-absolute: the rows are residuals of about 0.1 once the prior's centre is taken out) and the primal simplex's
-bound perturbation off (:class:`_CondensedLP`, "Thin windows"), the hull took 0.24 s a step and its mean summed
-width went from 2.7247 to 2.7234: the failed solves' fallbacks (``ROW_RELAX``, from scratch) had certified less
-than the widened solves do. A factor of 1e-9 loses width (2.7279); with 2e-12 the failures come back (0.83 s a
-step, the perturbation on)."""
+and those failures took two thirds of the time. The rows are residuals of about 0.1 once the prior's centre is
+taken out, so the widening is about 1.1e-10 there. Measured with the primal simplex's bound perturbation off but
+HiGHS's default ``small_matrix_value``: a factor of 1e-9 lost width (mean summed width 2.7279 against 2.7234
+with 1e-10); with 2e-12 the failures came back (0.83 s a step, the perturbation on)."""
+
+SMALL_MATRIX_VALUE = 1e-12
+"""Matrix entries HiGHS drops from the condensed window LP (its option ``small_matrix_value``, default 1e-9).
+
+The powers of the sampled matrix give many small entries (on the 30-tank cascade, 14 743 of the 34 881 nonzeros
+are below 1e-12 times the largest). Dropping those below 1e-9 moved the rows by up to 8.4e-10 at the truth, more
+than a window thinned by vertex noise is wide: on the growing windows of a 30-step record (``k`` = 5 … 9) HiGHS
+then found no feasible point at all (primal infeasibility 0.38 from scratch), about 80 failed runs a step. With
+1e-12 (the smallest value HiGHS accepts) none failed on that record. The certificates use the full matrix either
+way."""
 
 ITERATION_LIMIT = 4
 """Simplex pivots allowed to one solve of the condensed window LP, per row and column. A solve that reaches
@@ -364,11 +372,13 @@ class _CondensedLP:
 
     **Thin windows.** Under vertex noise the truth sits on many measurement faces at once and the window's
     feasible set is thin. HiGHS solves every LP with its measurement rows widened by ``MEASUREMENT_RELAX``
-    (relative), and its multipliers are certified on the exact rows; the primal simplex runs without its random
-    bound perturbation, which on such a set often makes it end "infeasible". On the 30-tank cascade (two records
-    of 30 and 40 steps of vertex noise) the two took the hull from 1066 and 483 ms a step to 239 and 198, and its
-    mean summed width from 2.72469 and 2.71030 to 2.72341 and 2.70590: the fallbacks of the failed solves had
-    certified less. On the vehicle the widening costs 6e-5 of the width.
+    (relative), and its multipliers are certified on the exact rows; it keeps matrix entries down to
+    ``SMALL_MATRIX_VALUE`` (its default drops entries below 1e-9, which moved the rows by more than such a set is
+    wide); and the primal simplex runs without its random bound perturbation, which on such a set often made it
+    end "infeasible". On the 30-tank cascade (records of 30 and 40 steps of vertex noise, one BLAS thread) the
+    three took the hull from 1023 and 399 ms a step to 111 and 126, with no failed solve left, and its mean summed
+    width from 2.72565 and 2.71030 to 2.72287 and 2.70532: the fallbacks of the failed solves had certified less.
+    On the vehicle the widening costs 6e-5 of the width.
 
     **Failed solves.** When a solve still ends without an optimum, the LP with its measurement rows widened
     by ``ROW_RELAX`` more is solved (from the basis reached, then from scratch) and its multipliers are
@@ -444,8 +454,10 @@ class _CondensedLP:
             solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
             # No scaling (see "Scaling" above): HiGHS's own is set up again for every restored basis.
             solver.setOptionValue("simplex_scale_strategy", 0)
-            # No random bound perturbation in the primal simplex (see "Thin windows" above).
+            # No random bound perturbation in the primal simplex, and only entries below 1e-12 dropped from the
+            # matrix (HiGHS's smallest setting; default 1e-9): see "Thin windows" above.
             solver.setOptionValue("primal_simplex_bound_perturbation_multiplier", 0.0)
+            solver.setOptionValue("small_matrix_value", SMALL_MATRIX_VALUE)
             solver.setOptionValue("simplex_iteration_limit", ITERATION_LIMIT * (self.nrow + self.ncol))
             solver.passModel(lp)
         self._cols = np.arange(self.ncol, dtype=np.int32)
@@ -967,11 +979,14 @@ class HullEstimator(Observer):
         }
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
 
+    @_one_blas_thread
     def step(self, state: ObserverState, y: ArrayLike, u: ArrayLike | None = None) -> ObserverState:
         """Consume ``y_k``, ``u_k``: the hull of ``x_{k+1}`` given ``y_0 … y_k`` (of ``x_k`` when ``filtered``).
 
         With a finite horizon the state keeps the last ``horizon`` samples only, so a step costs the
-        same time and memory at every ``k``; the given state is not modified.
+        same time and memory at every ``k``; the given state is not modified. Like :meth:`run`, a step runs
+        on one BLAS thread: on the 30-tank cascade OpenBLAS's default two threads took twice the CPU time
+        (205 against 88 ms a step), spinning between the small products of the certificates.
 
         Parameters
         ----------
@@ -1085,6 +1100,7 @@ class HullEstimator(Observer):
             )
         return lower, upper
 
+    @_one_blas_thread
     def certificates(
         self,
         t: ArrayLike,
