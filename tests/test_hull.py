@@ -411,6 +411,31 @@ def test_monte_carlo_runs_equal_separate_estimators(options: dict) -> None:
         np.testing.assert_array_equal(together.upper[i], alone.upper)
 
 
+def test_thin_growing_windows_of_30_tanks_solve_at_the_first_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The growing windows from ``x_0`` of this record (``k`` = 5 … 9) are so thin that with HiGHS's default
+    ``small_matrix_value`` (1e-9, dropping entries of the powers of Φ) HiGHS found no feasible point in them, even
+    from scratch: about 80 failed runs a step. With ``SMALL_MATRIX_VALUE``, the widened rows and no primal bound
+    perturbation every run ends optimal, so no objective goes through the fallbacks."""
+    from highspy import _core
+
+    from intervalobs.examples.scale_cases import tank_cascade
+    from intervalobs.observers import hull as hull_module
+
+    case = tank_cascade(30, steps=30)
+    sim = case.simulate(seed=0, noise="vertex")
+    statuses: list[bool] = []
+    run = hull_module.run_highs
+
+    def counted(solver: object) -> None:
+        run(solver)
+        statuses.append(solver.getModelStatus() == _core.HighsModelStatus.kOptimal)  # type: ignore[attr-defined]
+
+    monkeypatch.setattr(hull_module, "run_highs", counted)
+    estimate = HullEstimator.design(case.system, case.bounds, horizon=10).run(case.t[:12], sim.y[:12], case.u[:12])
+    assert estimate.enclosure(sim.x[:12]).max_violation == 0.0
+    assert len(statuses) >= 11 * 2 * 30 and all(statuses)  # one run per objective and step, all optimal
+
+
 def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_window() -> None:
     """Vertex noise makes windows of the 6-tank cascade thin (inscribed slack about -1e-11): every solve must
     still end optimal (the widened LP of ``ROW_RELAX`` when the exact one does not), so no box keeps the loose
