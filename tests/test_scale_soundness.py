@@ -24,7 +24,7 @@ STEPS = 40
 """Record length of the tests (the hull solves ``2n`` LPs a step)."""
 
 LARGE_STEPS = 25
-"""Record length from 30 states on (the hull's 60 LPs a step cost about 0.5 CPU s): still 15 steps of full
+"""Record length from 30 states on (the hull's 60 LPs a step cost about 0.12 CPU s): still 15 steps of full
 windows after the first ``H = 10``."""
 
 FAST = ["tanks-3", "tanks-6", "vehicle", "pedestrian", "short-record"]
@@ -93,7 +93,7 @@ def test_every_estimator_encloses_the_truth_at_scale(name: str) -> None:
 def test_the_hull_and_the_tube_enclose_the_truth_on_60_tanks() -> None:
     """The 60-tank cascade (60 states, 42 outputs, 30 pumps), one run per noise kind: the window hull and the
     tube only. Designing the worst-case FIR filter (window 20) takes about 4 CPU minutes there (checked once
-    outside this suite: fraction 1.0, no violation) and learning a bank about 8 (not checked at this size)."""
+    outside this suite: fraction 1.0, no violation) and learning a bank about 2 (not checked at this size)."""
     case = scale_cases.tank_cascade(60, steps=LARGE_STEPS)
     tube = IntervalObserver.design(case.system, case.bounds)
     hull = HullEstimator.design(case.system, case.bounds, horizon=10)

@@ -522,7 +522,8 @@ class _CondensedLP:
         self.col_lo = np.concatenate([z_lo, np.tile(m.w_lo, L), idle])
         self.col_hi = np.concatenate([z_hi, np.tile(m.w_hi, L), idle])
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()  # exact: what the certificates are evaluated on
-        relax = MEASUREMENT_RELAX * (1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi)))
+        self.row_scale = 1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi))  # of the relative widenings
+        relax = MEASUREMENT_RELAX * self.row_scale
         self.solve_lo, self.solve_hi = self.row_lo - relax, self.row_hi + relax  # what HiGHS solves
         for solver in self.solvers:
             solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
@@ -622,7 +623,7 @@ class _CondensedLP:
         if widened:
             # No optimum (a thin feasible set, see ROW_RELAX): solve the widened LP, from the basis reached and
             # then from scratch; its multipliers are certified on the exact rows like any others.
-            relax = ROW_RELAX * (1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi)))
+            relax = ROW_RELAX * self.row_scale
             solver.changeRowsBounds(self.nrow, self._rows, self.solve_lo - relax, self.solve_hi + relax)
             run_highs(solver)
             if solver.getModelStatus() != self._optimal:
