@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from scipy import sparse
 
 __all__ = [
+    "FEASIBILITY_TOLERANCE",
     "INNER_SHRINK",
     "DenseLP",
     "dual_bounds",
@@ -40,6 +41,10 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 _EPS = float(np.finfo(float).eps)
+
+FEASIBILITY_TOLERANCE = 1e-9
+"""Primal and dual feasibility tolerance of the LP solves (:func:`new_highs`; HiGHS's default is 1e-7): the
+certified bounds are then within about this much, times the multipliers, of the optimum."""
 
 INNER_SHRINK = 1e-6
 """Relative inward margin of inner (lower-bound) hulls: covers the solver's primal tolerance (1e-7)."""
@@ -64,9 +69,8 @@ def new_highs() -> Any:
     # One thread: the default (0) makes every run() count the physical cores from sysfs twice (≈ 35 µs,
     # a third of the run time of a warm-started window LP). See run_highs for the fallback.
     solver.setOptionValue("threads", 1)
-    # Tighter than the defaults (1e-7): the certified bounds are then within ~1e-9 of the optimum.
-    solver.setOptionValue("primal_feasibility_tolerance", 1e-9)
-    solver.setOptionValue("dual_feasibility_tolerance", 1e-9)
+    solver.setOptionValue("primal_feasibility_tolerance", FEASIBILITY_TOLERANCE)
+    solver.setOptionValue("dual_feasibility_tolerance", FEASIBILITY_TOLERANCE)
     return solver
 
 

@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.linalg import expm
 
-from ..design.certified_lp import dual_bounds, highs_model, new_highs, run_highs, shrink_inward
+from ..design.certified_lp import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
@@ -332,9 +332,6 @@ _LOWER, _BASIC, _UPPER, _ZERO = 0, 1, 2, 3
 """Basis status codes of the bases kept by :class:`_CondensedLP` (``_ZERO``: a nonbasic free row)."""
 
 
-_DUAL_SIMPLEX, _PRIMAL_SIMPLEX = 1, 4
-"""HiGHS ``simplex_strategy`` values."""
-
 _Solved = tuple[bool, "NDArray[np.int64] | None", "FloatArray | None", FloatArray]
 """One objective's outcome: optimal?, basic variables, primal values (columns, rows), row duals."""
 
@@ -351,18 +348,19 @@ class _CondensedLP:
     its last state free.
 
     **Warm start.** The ``2n`` objectives of a window are solved as a chain: the lower bounds of
-    components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`). The first objective of the
-    chain starts from its own optimal basis of the previous step, shifted by one step (each variable and
-    row keeps the status it had *at the same time*: the active measurements are a property of the data,
-    not of the lag; the noise entering at the new end starts at the bound its cost prefers), by the dual
-    simplex; a shifted basis with the wrong number of basic variables is passed as alien (HiGHS completes
-    it). Every later objective starts from the optimum of the one before it, which is feasible for the
-    same window, by the primal simplex with nothing restored: a restored basis costs HiGHS a
-    refactorisation (about 170 µs a solve on the vehicle of :mod:`intervalobs.examples.scale_cases`,
-    against about 6 µs a pivot). On the tank cascades (``benchmarks/scale.py``, H = 10) this took the hull
-    from 7.6 to 5.3 ms a step at 6 tanks, 41 to 21 at 12 and 832 to 482 at 30, same widths. A chained
-    solve that ends without an optimum is solved again from the kept basis by the dual simplex (then the
-    failed-solve path below).
+    components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`), by the dense simplex of
+    :class:`~intervalobs.design.dense_simplex.DenseSimplex`, which keeps the basis inverse from one objective to
+    the next (HiGHS spends a fixed time on every ``run()``: about 0.7 ms on the 30-tank cascade, against about
+    40 µs a pivot and 15 pivots a solve). The first objective of the chain starts from its own optimal basis of
+    the previous step, shifted by one step (each variable and row keeps the status it had *at the same time*:
+    the active measurements are a property of the data, not of the lag; the noise entering at the new end starts
+    at the bound its cost prefers), made square and nonsingular, by the dual simplex. Every later objective
+    starts from the optimum of the one before it, which is feasible for the same window, by the primal simplex.
+    An objective the dense simplex gives up on (pivot limit, an inaccurate or singular basis) is solved by
+    HiGHS's dual simplex, from the basis the dense simplex reached or from the shifted one, and the chain goes on
+    from that optimum. Measured on a 30-tank record (30 and 40 steps of vertex noise, one core): 112 and 121 ms a
+    step when HiGHS solved the whole chain (its primal simplex from one optimum to the next), 58 and 64 with the
+    dense simplex, mean summed widths 2.72286796 → 2.72286782 and 2.70532032 → 2.70531995.
 
     **Scaling.** HiGHS solves the LP unscaled. Its default scaling is computed again after every restored
     basis: without it the 30-tank hull record is 2.0× faster (1457 ms a step scaled, 738 unscaled, same widths
@@ -408,6 +406,8 @@ class _CondensedLP:
     def __init__(self, model: _LinearModel, horizon: int, workers: int = 1) -> None:
         from highspy import _core
 
+        from ..design.dense_simplex import DenseSimplex  # Numba: loaded (80 MB, 0.4 s) only where it is used
+
         self.model, self.horizon = model, horizon
         n, p = model.C.shape[1], model.C.shape[0]
         H = horizon
@@ -442,8 +442,11 @@ class _CondensedLP:
         self.abs_matrix_t = np.abs(self.matrix_t)
         self.col_nnz = self.nrow  # dense products: every row counts in the rounding of a reduced cost
         self.e_max = np.abs(noise_map) @ np.maximum(np.abs(model.w_lo), np.abs(model.w_hi))
-        # One HiGHS instance per worker, each solving a contiguous part of the chain.
+        # One HiGHS instance and one dense simplex per worker, each solving a contiguous part of the chain.
         self.solvers = [new_highs() for _ in range(workers)]
+        # A dense solve that needs more pivots than variables (degenerate cycling, mostly) goes to HiGHS instead.
+        limit = self.nrow + self.ncol
+        self.dense = [DenseSimplex(matrix, FEASIBILITY_TOLERANCE, FEASIBILITY_TOLERANCE, limit) for _ in range(workers)]
         self.solver = self.solvers[0]
         self._pool = ThreadPoolExecutor(max_workers=workers) if workers > 1 else None
         self.inf = float(self.solver.getInfinity())
@@ -565,11 +568,24 @@ class _CondensedLP:
         parts = np.array_split(self.chain[solve[self.chain]], len(self.solvers))
 
         def solve_part(w: int) -> list[tuple[int, _Solved]]:
-            solver, out, chained = self.solvers[w], [], False
+            solver, dense = self.solvers[w], self.dense[w]
+            out: list[tuple[int, _Solved]] = []
+            dense.ready = False
             for r in parts[w].tolist():
-                solved = self._solve_one(solver, costs[r], partial(self._start_basis, starts, r), chained)
+                start = partial(self._start_basis, starts, r)
+                if not dense.ready and starts is not None and starts[1][r]:
+                    dense.start_from_statuses(self.col_lo, self.col_hi, self.solve_lo, self.solve_hi, starts[0][r])
+                if dense.ready:
+                    optimal, _ = dense.solve(costs[r])
+                    if optimal:
+                        out.append((r, (True, dense.basic_variables(), dense.values(), dense.row_duals(costs[r]))))
+                        continue
+                    start = partial(self._highs_basis, dense.statuses())
+                solved = self._solve_one(solver, costs[r], start)
+                if solved[0]:
+                    assert solved[1] is not None and solved[2] is not None
+                    dense.start(self.col_lo, self.col_hi, self.solve_lo, self.solve_hi, solved[1], solved[2])
                 out.append((r, solved))
-                chained = solved[0]
             return out
 
         run_parts = map if self._pool is None else self._pool.map
@@ -591,7 +607,7 @@ class _CondensedLP:
         solver = self.solvers[0]
         for r in np.flatnonzero(loose).tolist():
             solver.clearSolver()
-            _, _, _, dual = self._solve_one(solver, costs[r], lambda: None, False)
+            _, _, _, dual = self._solve_one(solver, costs[r], lambda: None)
             if dual.shape == (nrow,) and np.all(np.isfinite(dual)):
                 again = dual_bounds(self, costs[r : r + 1], dual[None, :])[0]
                 if again > bounds[r]:
@@ -601,20 +617,10 @@ class _CondensedLP:
                 self.dual_log.append((r // 2, float(signs[r]), duals[r].copy(), self.length, not self.full))
         return bounds[0::2], bounds[1::2]
 
-    def _solve_one(self, solver: Any, cost: FloatArray, start: Callable[[], Any], chained: bool) -> _Solved:
-        """Solve one objective on one HiGHS instance.
-
-        ``chained``: the instance holds the optimum of the previous objective of this window, a feasible
-        basis, and the primal simplex goes on from it. Otherwise, or when that ends without an optimum, the
-        dual simplex starts from the basis ``start()`` (None: from scratch).
-        """
+    def _solve_one(self, solver: Any, cost: FloatArray, start: Callable[[], Any]) -> _Solved:
+        """Solve one objective with HiGHS's dual simplex from the basis ``start()`` (None: from the instance's
+        current basis, or from scratch after ``clearSolver``)."""
         solver.changeColsCost(self.ncol, self._cols, cost)
-        if chained:
-            solver.setOptionValue("simplex_strategy", _PRIMAL_SIMPLEX)
-            run_highs(solver)
-            solver.setOptionValue("simplex_strategy", _DUAL_SIMPLEX)
-            if solver.getModelStatus() == self._optimal:
-                return self._outcome(solver, widened=False)
         basis = start()
         if basis is not None:
             solver.setBasis(basis)
@@ -673,14 +679,19 @@ class _CondensedLP:
         """The HiGHS basis of objective ``r`` from :meth:`_start_codes` (None: solve from scratch)."""
         if starts is None or not starts[1][r]:
             return None
+        return self._highs_basis(starts[0][r])
+
+    def _highs_basis(self, codes: NDArray[np.integer]) -> Any:
+        """The HiGHS basis of the status codes ``codes`` (columns, then rows); alien when it has the wrong number
+        of basic variables (HiGHS completes it)."""
         from highspy import _core
 
-        row = starts[0][r].tolist()
+        row = codes.tolist()
         statuses = [self._statuses[c] for c in row]
         basis = _core.HighsBasis()
         basis.col_status, basis.row_status = statuses[: self.ncol], statuses[self.ncol :]
         basis.valid = True
-        basis.alien = row.count(_BASIC) != self.nrow  # HiGHS completes an alien basis
+        basis.alien = row.count(_BASIC) != self.nrow
         return basis
 
 
@@ -813,9 +824,9 @@ class HullEstimator(Observer):
     condensed LP at every step (states eliminated, :class:`_CondensedLP`; the first ``H`` steps as shorter
     windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on seed
     002's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead
-    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain: the first by the
-    dual simplex from its basis of the previous step, each next one by the primal simplex from the optimum
-    of the one before (no basis restored, no refactorisation). Every bound is certified
+    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain: the first by
+    HiGHS's dual simplex from its basis of the previous step, each next one by a dense primal simplex from the
+    optimum of the one before (:class:`~intervalobs.design.dense_simplex.DenseSimplex`). Every bound is certified
     by weak duality (module docstring), so the box is sound whatever the solver's accuracy. A Monte
     Carlo axis of ``y`` is processed run by run (LPs do not vectorise), in ``processes`` worker processes.
     """
