@@ -13,15 +13,15 @@ each record:
 - ``IntervalObserver.design()`` (error tube): design time, cost per step, width / exact hull.
 
 The bank and the tube are designed once per case and run on both records. Widths: mean over the steps
-``first … T - 1`` of the summed width of the box, ``first = H`` on the 200-step records and 0 on the short
-record (its first rows are the point of the case). Every row is the box of ``x_k`` given
-``y_0 … y_{k-1}``. Times are CPU seconds of this process (the machine is shared; every solver runs on one
-thread). *Inside*: the largest amount by which a bound of any of the three estimators lies inside the exact
-hull's box. Every bound is certified by weak duality, so a positive value is a bound of the reference that
-falls short of its LP's optimum, not an estimator tighter than the hull: on the vehicle, a full-history LP
-whose feasible set vertex noise makes thin (widening its measurement rows by 5e-10 moves a bound by 5e-3)
-solved to HiGHS's feasibility tolerance of 1e-9. Writes benchmarks/shapes.json; ``python benchmarks/shapes.py``.
-"""
+``first … T - 1`` of the summed width of the box, ``first = H`` on the 200-step records and 0 on the short record
+(its first rows are the point of the case). Every row is the box of ``x_k`` given ``y_0 … y_{k-1}``. Times are
+CPU seconds of this process (the machine is shared; every solver runs on one thread; the hull's compiled
+simplex is loaded before anything is timed). *Inside*: the largest amount by which a bound of any of the three
+estimators lies inside the exact hull's box. Every bound is certified by weak duality, so a positive value is a
+bound of the reference that falls short of its LP's optimum, not an estimator tighter than the hull: on the
+vehicle, a full-history LP whose feasible set vertex noise makes thin (widening its measurement rows by 5e-10
+moves a bound by 5e-3) solved to HiGHS's feasibility tolerance of 1e-9. Writes benchmarks/shapes.json;
+``python benchmarks/shapes.py``."""
 
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from intervalobs import IntervalObserver
+from intervalobs.design.dense_simplex import load_kernels
 from intervalobs.estimate import Estimate
 from intervalobs.examples.scale_cases import ScaleCase, pedestrian, short_record, vehicle
 from intervalobs.observers.fir import FiniteMemoryObserver
@@ -102,6 +103,7 @@ def case_rows(make: Callable[[], ScaleCase], first: int) -> list[dict[str, Any]]
 def main() -> None:
     settings = {"H": H, "seeds": list(SEEDS), "records": RECORDS, "train_steps": TRAIN_STEPS}
     results: dict[str, Any] = {"settings": settings, "rows": []}
+    load_kernels()  # the hull's compiled simplex, loaded once before anything is timed
     out = Path(__file__).with_name("shapes.json")
     for make, first in CASES:
         for row in case_rows(make, first):

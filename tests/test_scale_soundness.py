@@ -24,7 +24,7 @@ STEPS = 40
 """Record length of the tests (the hull solves ``2n`` LPs a step)."""
 
 LARGE_STEPS = 25
-"""Record length from 30 states on (the hull's 60 LPs a step cost about 0.12 CPU s): still 15 steps of full
+"""Record length from 30 states on (the hull's 60 LPs a step cost about 0.05 CPU s): still 15 steps of full
 windows after the first ``H = 10``."""
 
 FAST = ["tanks-3", "tanks-6", "vehicle", "pedestrian", "short-record"]

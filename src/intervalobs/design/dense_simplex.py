@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import qr
 
-__all__ = ["DenseSimplex"]
+__all__ = ["DenseSimplex", "load_kernels"]
 
 FloatArray = NDArray[np.float64]
 
@@ -361,8 +361,88 @@ def _row_duals(matrix_t: Any, cost: Any, basic: Any, inverse: Any) -> Any:  # pr
     return duals + residual @ inverse
 
 
+@numba.njit(cache=True, nogil=True)
+def _fresh_inverse(matrix_t: Any, basic: Any, x: Any) -> Any:  # pragma: no cover - compiled
+    """``B⁻¹`` from the inverse of its square block ``K`` (:meth:`DenseSimplex._refactor`), and the basic values
+    from the nonbasic ones (``x`` updated). Raises ``numpy.linalg.LinAlgError`` when ``K`` is singular."""
+    cols, rows = matrix_t.shape
+    spanned = np.ones(rows, dtype=np.bool_)  # rows whose activity is nonbasic
+    structural = 0
+    for i in range(rows):
+        if basic[i] < cols:
+            structural += 1
+        else:
+            spanned[basic[i] - cols] = False
+    z_pos, s_pos = np.empty(structural, np.int64), np.empty(rows - structural, np.int64)
+    a = b = 0
+    for i in range(rows):
+        if basic[i] < cols:
+            z_pos[a] = i
+            a += 1
+        else:
+            s_pos[b] = i
+            b += 1
+    r_rows = np.flatnonzero(spanned)
+    block = np.empty((structural, structural))
+    for a in range(structural):
+        for b in range(structural):
+            block[a, b] = matrix_t[basic[z_pos[b]], r_rows[a]]
+    block_inverse = np.linalg.inv(block)
+    other = np.empty((rows - structural, structural))
+    for i in range(rows - structural):
+        for b in range(structural):
+            other[i, b] = matrix_t[basic[z_pos[b]], basic[s_pos[i]] - cols]
+    lower_block = other @ block_inverse
+    inverse = np.zeros((rows, rows))
+    for a in range(structural):
+        for b in range(structural):
+            inverse[z_pos[a], r_rows[b]] = block_inverse[a, b]
+    for i in range(rows - structural):
+        for b in range(structural):
+            inverse[s_pos[i], r_rows[b]] = lower_block[i, b]
+        inverse[s_pos[i], basic[s_pos[i]] - cols] = -1.0
+    for i in range(rows):
+        x[basic[i]] = 0.0
+    residual = matrix_t.T @ x[:cols] - x[cols:]
+    values = inverse @ residual
+    for i in range(rows):
+        x[basic[i]] = -values[i]
+    return inverse
+
+
+@numba.njit(cache=True, nogil=True)
+def _solve_once(
+    primal: bool,
+    matrix_t: Any,
+    cost: Any,
+    lower: Any,
+    upper: Any,
+    x: Any,
+    status: Any,
+    basic: Any,
+    inverse: Any,
+    dual_tol: float,
+    primal_tol: float,
+    max_pivots: int,
+) -> tuple[int, int, bool, Any]:  # pragma: no cover - compiled; covered through DenseSimplex
+    """One pass of :meth:`DenseSimplex.solve` in one call: the primal (or the dual) simplex, then at an optimum the
+    refined values' feasibility and, if feasible, the row duals. Returns ``(outcome, pivots, feasible, duals)``."""
+    kernel_arguments = (matrix_t, cost, lower, upper, x, status, basic, inverse, dual_tol, primal_tol, max_pivots)
+    if primal:
+        outcome, pivots = _primal_simplex(*kernel_arguments)
+    else:
+        outcome, pivots = _dual_simplex(*kernel_arguments)
+    feasible = False
+    duals = np.zeros(matrix_t.shape[1])
+    if outcome == OPTIMAL:
+        feasible = _refined_feasible(matrix_t, lower, upper, x, basic, inverse, primal_tol)
+        if feasible:
+            duals = _row_duals(matrix_t, cost, basic, inverse)
+    return outcome, pivots, feasible, duals
+
+
 class DenseSimplex:
-    """The primal simplex of the module docstring on ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi``.
+    """The simplex method of the module docstring on ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi``.
 
     Parameters
     ----------
@@ -378,8 +458,6 @@ class DenseSimplex:
     def __init__(self, matrix: FloatArray, dual_tol: float, primal_tol: float, pivot_limit: int) -> None:
         self.rows, self.cols = matrix.shape
         self.matrix_t = np.ascontiguousarray(matrix.T, dtype=float)
-        self.standard = np.hstack([matrix, -np.eye(self.rows)])
-        """``[A, -I]``: the columns of ``z`` and of the row activities."""
         self.dual_tol, self.primal_tol, self.pivot_limit = dual_tol, primal_tol, pivot_limit
         self.lower = np.zeros(self.cols + self.rows)
         self.upper = np.zeros(self.cols + self.rows)
@@ -389,6 +467,8 @@ class DenseSimplex:
         self.inverse = np.eye(self.rows)
         self.ready = False
         """Whether a basis is loaded (:meth:`start`) and usable by the next solve."""
+        self.duals = np.zeros(self.rows)
+        """The row multipliers of the last optimum (:meth:`row_duals`)."""
         self.feasible = False
         """Whether the current basic values are within their bounds (the primal simplex goes on from them; the
         dual simplex otherwise)."""
@@ -513,26 +593,13 @@ class DenseSimplex:
         (rows: the basis positions of ``Z``, then of ``S``; columns: the rows ``R``, then ``S``), so only ``K`` is
         inverted.
         """
-        rows, cols, index = self.rows, self.cols, self.basic
-        z_pos, s_pos = np.flatnonzero(index < cols), np.flatnonzero(index >= cols)
-        z_cols, s_rows = index[z_pos], index[s_pos] - cols
-        others = np.ones(rows, dtype=bool)
-        others[s_rows] = False
-        r_rows = np.flatnonzero(others)
-        matrix = self.matrix_t.T
         try:
-            k_inverse = np.linalg.inv(matrix[np.ix_(r_rows, z_cols)])
+            inverse = _fresh_inverse(self.matrix_t, self.basic, self.x)
         except np.linalg.LinAlgError:
             return None
-        inverse = np.zeros((rows, rows))
-        inverse[np.ix_(z_pos, r_rows)] = k_inverse
-        inverse[np.ix_(s_pos, r_rows)] = matrix[np.ix_(s_rows, z_cols)] @ k_inverse
-        inverse[s_pos, s_rows] = -1.0
         if not np.all(np.isfinite(inverse)):
             return None
         self.inverse = inverse
-        self.x[index] = 0.0
-        self.x[index] = -inverse @ (self.standard @ self.x)
         return self._feasible()
 
     def _feasible(self) -> bool:
@@ -570,8 +637,9 @@ class DenseSimplex:
         cost = np.asarray(cost, dtype=float)
         total = 0
         for _ in range(REFACTORISATIONS):
-            kernel = _primal_simplex if self.feasible else _dual_simplex
-            outcome, pivots = kernel(
+            primal = self.feasible
+            outcome, pivots, feasible, duals = _solve_once(
+                primal,
                 self.matrix_t,
                 cost,
                 self.lower,
@@ -586,36 +654,30 @@ class DenseSimplex:
             )
             total += int(pivots)
             if outcome == OPTIMAL:
-                self.feasible = _refined_feasible(
-                    self.matrix_t, self.lower, self.upper, self.x, self.basic, self.inverse, self.primal_tol
-                )
-                if self.feasible and kernel is _primal_simplex:
+                self.feasible = feasible
+                if feasible and primal:
+                    self.duals = duals
                     return True, total
-                if self.feasible:
+                if feasible:
                     continue  # the dual simplex's optimum: confirmed by the primal pricing
             elif outcome != INACCURATE:
                 break
-            feasible = self._refactor()
-            if feasible is None:
+            fresh = self._refactor()
+            if fresh is None:
                 break
-            self.feasible = feasible
+            self.feasible = fresh
         self.ready = False
         return False, total
 
-    def row_duals(self, cost: FloatArray) -> FloatArray:
-        """The row multipliers of the current basis, refined once against the residual of ``λ B = c_B``.
-
-        Parameters
-        ----------
-        cost : numpy.ndarray, shape (cols,)
-            The objective's coefficients of ``z``.
+    def row_duals(self) -> FloatArray:
+        """The row multipliers of the last optimum, refined once against the residual of ``λ B = c_B``.
 
         Returns
         -------
         numpy.ndarray, shape (rows,)
             ``λ`` with ``c - Aᵀλ`` the columns' reduced costs (HiGHS's sign convention of row duals).
         """
-        return np.asarray(_row_duals(self.matrix_t, np.asarray(cost, dtype=float), self.basic, self.inverse))
+        return self.duals.copy()
 
     def statuses(self) -> NDArray[np.int64]:
         """The status of every variable.
@@ -647,3 +709,15 @@ class DenseSimplex:
             The columns' values, then the rows' (``A z``).
         """
         return self.x.copy()
+
+
+def load_kernels() -> None:
+    """Load the compiled kernels now, from Numba's cache (compiling them on a fresh install, about 10 s).
+
+    Otherwise the first :meth:`DenseSimplex.start` and :meth:`DenseSimplex.solve` of a process pay it; a benchmark
+    calls this before it times anything.
+    """
+    simplex = DenseSimplex(np.ones((1, 1)), 1e-9, 1e-9, pivot_limit=10)
+    one = np.ones(1)
+    simplex.start(-one, one, -one, one, np.array([0]), np.zeros(2))
+    simplex.solve(one)

@@ -359,8 +359,8 @@ class _CondensedLP:
     An objective the dense simplex gives up on (pivot limit, an inaccurate or singular basis) is solved by
     HiGHS's dual simplex, from the basis the dense simplex reached or from the shifted one, and the chain goes on
     from that optimum. Measured on a 30-tank record (30 and 40 steps of vertex noise, one core): 112 and 121 ms a
-    step when HiGHS solved the whole chain (its primal simplex from one optimum to the next), 58 and 64 with the
-    dense simplex, mean summed widths 2.72286796 → 2.72286782 and 2.70532032 → 2.70531995.
+    step when HiGHS solved the whole chain (its primal simplex from one optimum to the next), 44–56 with the
+    dense simplex (repeated runs), mean summed widths 2.72286796 → 2.72286703 and 2.70532032 → 2.70533071.
 
     **Scaling.** HiGHS solves the LP unscaled. Its default scaling is computed again after every restored
     basis: without it the 30-tank hull record is 2.0× faster (1457 ms a step scaled, 738 unscaled, same widths
@@ -578,7 +578,7 @@ class _CondensedLP:
                 if dense.ready:
                     optimal, _ = dense.solve(costs[r])
                     if optimal:
-                        out.append((r, (True, dense.basic_variables(), dense.values(), dense.row_duals(costs[r]))))
+                        out.append((r, (True, dense.basic_variables(), dense.values(), dense.row_duals())))
                         continue
                     start = partial(self._highs_basis, dense.statuses())
                 solved = self._solve_one(solver, costs[r], start)
