@@ -10,14 +10,14 @@ from one objective to the next and pivots on it in compiled code (Numba).
 
 **Method.** The standard form has the row activities as variables, :math:`[A\;\; -I]\,(z, s) = 0` with the row
 bounds on :math:`s`; a basis :math:`B` (``rows`` of the ``cols + rows`` columns) is held as its explicit inverse,
-updated by one elimination step per pivot (the product form, Dantzig 1963, ch. 8) and computed afresh from the
-square block of its structural columns (:meth:`DenseSimplex._refactor`). The primal simplex prices by Devex
-(Harris 1973; reference weights reset at each objective) and uses Harris's two-pass ratio test; the dual simplex
-(from a basis whose values violate their bounds) first makes the basis dual feasible by putting every boxed
-nonbasic variable on the bound its reduced cost prefers, then removes the largest violation first, with the
-same two-pass test on the reduced costs. Each pivot is checked by computing the pivot element twice (from
-the column and from the row); a disagreement, or an optimum whose refined values violate a bound, makes the
-inverse computed afresh.
+updated by one elimination step per pivot (the product form of the inverse, Dantzig & Orchard-Hays 1954) and
+computed afresh from the square block of its structural columns (:meth:`DenseSimplex._refactor`). The primal
+simplex prices by Devex (Harris 1973; reference weights reset at each objective) and uses Harris's two-pass ratio
+test; the dual simplex (from a basis whose values violate their bounds) first makes the basis dual feasible by
+putting every boxed nonbasic variable on the bound its reduced cost prefers, then removes the largest violation
+first, with the same two-pass test on the reduced costs. Each pivot is checked by computing the pivot element
+twice (from the column and from the row); a disagreement, or an optimum whose refined values violate a bound,
+makes the inverse computed afresh.
 
 **What is guaranteed.** Nothing here is trusted for soundness: the caller takes every bound from weak duality with
 the row duals :meth:`DenseSimplex.row_duals` (:func:`~intervalobs.design.certified_lp.dual_bounds`), which is valid
@@ -47,7 +47,8 @@ column and from the row disagree, and the inverse has to be computed afresh)."""
 
 PIVOT_AGREEMENT = 1e-9
 """Relative disagreement of the two computations of a pivot (from the updated column and from the updated row)
-above which the basis inverse is computed afresh (the test of HiGHS and of most simplex codes)."""
+above which the basis inverse is computed afresh (the same test as HiGHS's and most simplex codes', with their own
+thresholds)."""
 
 RANK_TOLERANCE = 1e-12
 """Relative size of the pivots of a QR factorisation below which a basis kept from another LP is taken as rank
