@@ -713,7 +713,7 @@ class DenseSimplex:
 
 
 def load_kernels() -> None:
-    """Load the compiled kernels now, from Numba's cache (compiling them on a fresh install, about 10 s).
+    """Load the compiled kernels now, from Numba's cache (compiling them on a fresh install, 10–15 s).
 
     Otherwise the first :meth:`DenseSimplex.start` and :meth:`DenseSimplex.solve` of a process pay it; a benchmark
     calls this before it times anything.
