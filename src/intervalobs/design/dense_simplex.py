@@ -59,14 +59,20 @@ REFACTORISATIONS = 8
 
 
 @numba.njit(cache=True, nogil=True)
+def _basic_costs(cost: Any, basic: Any, cols: int) -> Any:  # pragma: no cover - compiled
+    """``c_B``: the costs of the basic variables (those of the row activities are 0)."""
+    cost_basic = np.empty(basic.shape[0])
+    for i in range(basic.shape[0]):
+        j = basic[i]
+        cost_basic[i] = cost[j] if j < cols else 0.0
+    return cost_basic
+
+
+@numba.njit(cache=True, nogil=True)
 def _reduced_costs(matrix_t: Any, cost: Any, basic: Any, inverse: Any) -> Any:  # pragma: no cover - compiled
     """Reduced costs of every variable (0 for the basic ones) for ``cost`` on ``z``."""
     cols, rows = matrix_t.shape
-    cost_basic = np.empty(rows)
-    for i in range(rows):
-        j = basic[i]
-        cost_basic[i] = cost[j] if j < cols else 0.0
-    duals = cost_basic @ inverse
+    duals = _basic_costs(cost, basic, cols) @ inverse
     reduced = np.empty(cols + rows)
     reduced[:cols] = cost - matrix_t @ duals
     reduced[cols:] = duals  # the column of row r's activity is -e_r, its cost 0
@@ -349,10 +355,7 @@ def _refined_feasible(
 def _row_duals(matrix_t: Any, cost: Any, basic: Any, inverse: Any) -> Any:  # pragma: no cover - compiled
     """``λ`` solving ``λ B = c_B``, refined once against its residual."""
     cols, rows = matrix_t.shape
-    cost_basic = np.empty(rows)
-    for i in range(rows):
-        j = basic[i]
-        cost_basic[i] = cost[j] if j < cols else 0.0
+    cost_basic = _basic_costs(cost, basic, cols)
     duals = cost_basic @ inverse
     column_terms = matrix_t @ duals
     residual = np.empty(rows)
@@ -506,8 +509,7 @@ class DenseSimplex:
             an optimum of slightly wider rows) are left to the dual simplex.
         """
         cols = self.cols
-        self.lower[:cols], self.upper[:cols] = col_lo, col_hi
-        self.lower[cols:], self.upper[cols:] = row_lo, row_hi
+        self._set_bounds(col_lo, col_hi, row_lo, row_hi)
         at_upper = np.abs(values - self.upper) < np.abs(values - self.lower)  # False where both are infinite
         status = np.where(at_upper, _UPPER, _LOWER)
         status[np.where(basic >= 0, basic, cols - 1 - basic)] = _BASIC
@@ -543,10 +545,13 @@ class DenseSimplex:
         bool
             Whether the completed basis is nonsingular (:attr:`ready`).
         """
-        cols = self.cols
-        self.lower[:cols], self.upper[:cols] = col_lo, col_hi
-        self.lower[cols:], self.upper[cols:] = row_lo, row_hi
+        self._set_bounds(col_lo, col_hi, row_lo, row_hi)
         return self._load(np.asarray(statuses, dtype=np.int64))
+
+    def _set_bounds(self, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray) -> None:
+        """The bounds of every variable: the columns', then the rows' (of ``A z``)."""
+        self.lower[: self.cols], self.upper[: self.cols] = col_lo, col_hi
+        self.lower[self.cols :], self.upper[self.cols :] = row_lo, row_hi
 
     def _load(self, status: NDArray[np.int64]) -> bool:
         """Take ``status`` (bounds already set): complete the basis to ``rows`` variables, put every nonbasic one on

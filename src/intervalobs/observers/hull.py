@@ -457,8 +457,9 @@ class _CondensedLP:
             solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)
             # No scaling (see "Scaling" above): HiGHS's own is set up again for every restored basis.
             solver.setOptionValue("simplex_scale_strategy", 0)
-            # No random bound perturbation in the primal simplex, and only entries below 1e-12 dropped from the
-            # matrix (HiGHS's smallest setting; default 1e-9): see "Thin windows" above.
+            # No random bound perturbation in HiGHS's primal simplex (now only its clean-up after the dual simplex),
+            # and only entries below 1e-12 dropped from the matrix (HiGHS's smallest setting; default 1e-9): see
+            # "Thin windows" above.
             solver.setOptionValue("primal_simplex_bound_perturbation_multiplier", 0.0)
             solver.setOptionValue("small_matrix_value", SMALL_MATRIX_VALUE)
             solver.setOptionValue("simplex_iteration_limit", ITERATION_LIMIT * (self.nrow + self.ncol))
@@ -819,15 +820,16 @@ class HullEstimator(Observer):
 
     Notes
     -----
-    Each step solves ``2n`` LPs with HiGHS (the model is built once per window length and only bounds and
-    costs change). With a finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the
+    Each step solves ``2n`` LPs (the model is built once per window length and only bounds and costs
+    change). With a finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the
     condensed LP at every step (states eliminated, :class:`_CondensedLP`; the first ``H`` steps as shorter
     windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on seed
     002's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead
-    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain: the first by
-    HiGHS's dual simplex from its basis of the previous step, each next one by a dense primal simplex from the
-    optimum of the one before (:class:`~intervalobs.design.dense_simplex.DenseSimplex`). Every bound is certified
-    by weak duality (module docstring), so the box is sound whatever the solver's accuracy. A Monte
+    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain by a dense simplex of
+    our own (:class:`~intervalobs.design.dense_simplex.DenseSimplex`): the first by the dual simplex from its
+    basis of the previous step, each next one by the primal simplex from the optimum of the one before; HiGHS
+    solves what it gives up on, and the sparse window LP. Every bound is certified by weak duality (module
+    docstring), so the box is sound whatever the solver's accuracy. A Monte
     Carlo axis of ``y`` is processed run by run (LPs do not vectorise), in ``processes`` worker processes.
     """
 
