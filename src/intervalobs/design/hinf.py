@@ -43,6 +43,7 @@ from scipy.optimize import linprog
 
 from ..errors import AssumptionError, DesignError, DimensionError
 from ..validation import as_matrix
+from .certified_lp import LP_OPTIONS
 from .lmi import solve_lmi, verify_definite
 
 __all__ = [
@@ -430,7 +431,9 @@ def _monotone_projection(a: FloatArray, c: FloatArray, gain: FloatArray) -> Floa
     scale = max(1.0, float(np.abs(a).max()))
     for delta in (0.0, 1e-13, 1e-11, 1e-9, 1e-7):
         b_ub = np.concatenate([a.ravel() - delta * scale * seen, gain.ravel(), -gain.ravel()])
-        res = linprog(np.r_[np.zeros(nv), 1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * nv + [(0, None)])
+        res = linprog(
+            np.r_[np.zeros(nv), 1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * nv + [(0, None)], options=LP_OPTIONS
+        )
         if res.status != 0:
             return None
         out = np.asarray(res.x[:nv], dtype=float).reshape(n, p)

@@ -50,10 +50,19 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.linalg import expm
 
-from ..design.certified_lp import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
+from ..design.certified_lp import (
+    FEASIBILITY_TOLERANCE,
+    basic_variables,
+    dual_bounds,
+    highs_model,
+    new_highs,
+    run_highs,
+    shrink_inward,
+)
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
+from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
@@ -642,7 +651,7 @@ class _CondensedLP:
         """The solver's outcome; restores the rows of :meth:`set_window` after a ``ROW_RELAX``-widened solve."""
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
-        basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
+        basic = basic_variables(solver) if optimal else None
         value = np.concatenate([solution.col_value, solution.row_value]) if optimal else None
         if widened:
             solver.changeRowsBounds(self.nrow, self._rows, self.solve_lo, self.solve_hi)
@@ -873,7 +882,13 @@ class HullEstimator(Observer):
             raise DataError(f"processes: expected a positive integer, got {processes!r}")
         self.processes = int(processes)
         self._given = (system, bounds, horizon, h, filtered, window_boxes, workers)
-        self.model = _outer_model(system, self.bounds, h)
+        # States in very different units: the LPs are solved in balanced coordinates x_b = S x (exact: S is
+        # a diagonal of powers of two, systems/balancing.py); every box crosses between the two in _step.
+        scales = state_scales(system, self.bounds)
+        self.scales = np.ones(self.n) if scales is None else scales
+        """``s`` of the balanced coordinates ``x_b = diag(s) x`` the LPs are solved in (ones: none)."""
+        solved = (system, self.bounds) if scales is None else balanced(system, self.bounds, scales)
+        self.model = _outer_model(*solved, h)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, _Window] = {}
         self._condensed: _CondensedLP | None = None
@@ -984,7 +999,7 @@ class HullEstimator(Observer):
             self._condensed.forget_bases()
         internal: dict[str, Any] = {
             "k": 0,
-            "x0": (lo.copy(), hi.copy()),
+            "x0": (lo * self.scales, hi * self.scales),
             "start": 0,
             "y": np.zeros((0, self.p)),
             "u": np.zeros((0, self.m)),
@@ -1022,7 +1037,7 @@ class HullEstimator(Observer):
             raise DimensionError(f"y: expected one sample of shape ({self.p},) (LPs do not batch), got {y.shape}")
         old = state.internal
         k, start, x0 = int(old["k"]), int(old["start"]), old["x0"]
-        lo, hi = state.lower, state.upper
+        lo, hi = state.lower * self.scales, state.upper * self.scales  # internal boxes: balanced coordinates
         if self.filtered and k > 0:  # state: the filtered box of x_{k-1}; predict x_k from y_0 … y_{k-1}
             nlo, nhi = self.model.propagate(lo, hi, old["u"][-1])
             lo, hi = self._hull(k, start, old["y"], old["u"], old["box_lo"], old["box_hi"], nlo, nhi, False, x0)
@@ -1043,7 +1058,7 @@ class HullEstimator(Observer):
             "box_lo": box_lo[drop:],
             "box_hi": box_hi[drop:],
         }
-        return ObserverState(lo, hi, internal=internal)
+        return ObserverState(lo / self.scales, hi / self.scales, internal=internal)
 
     def _hull(
         self,
@@ -1177,7 +1192,8 @@ class HullEstimator(Observer):
         found: dict[tuple[int, float] | tuple[int, float, int], list[FloatArray]] = {
             (i, sign): [] for i in range(self.n) for sign in (1.0, -1.0)
         }
-        for i, sign, duals, length, anchored in log:
+        for i, sign, balanced_duals, length, anchored in log:
+            duals = balanced_duals / self.scales[i]  # multipliers of (x_b)_i = s_i (x)_i
             if anchored and first_rows:
                 found.setdefault((i, sign, length), []).append(duals.reshape(shape))
             elif not anchored:
