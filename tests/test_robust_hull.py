@@ -73,7 +73,7 @@ def test_sound_and_never_wider_than_the_interval_observer(seed: int, continuous:
     h = H_CONTINUOUS if continuous else None
     interval = IntervalObserver.design(system, bounds, h=h)
     base = interval.run(t, sim.y, u)
-    alone = RobustHullEstimator.design(system, bounds, horizon=10, h=h).run(t, sim.y, u)
+    alone = RobustHullEstimator.design(system, bounds, horizon=10, h=h, fallback=False).run(t, sim.y, u)
     robust = RobustHullEstimator.design(system, bounds, horizon=10, h=h, fallback=interval).run(t, sim.y, u)
     assert alone.enclosure(sim.x).max_violation == 0.0
     assert robust.enclosure(sim.x).max_violation == 0.0
@@ -183,8 +183,10 @@ def test_mccormick_sound_and_inside_the_split_window(seed: int, continuous: bool
     horizon = 4 if steps != 40 else 6 if continuous else 10  # continuous: n_δ n products per step
     interval = IntervalObserver.design(system, bounds, h=h)
     base = interval.run(t, y, u)
-    split = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h).run(t, y, u)
-    alone = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, mccormick=True).run(t, y, u)
+    split = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, fallback=False).run(t, y, u)
+    alone = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, mccormick=True, fallback=False).run(
+        t, y, u
+    )
     robust = RobustHullEstimator.design(system, bounds, horizon=horizon, h=h, mccormick=True, fallback=interval)
     both = robust.run(t, y, u)
     assert alone.meta["mccormick"] is True

@@ -145,9 +145,10 @@ class IntervalObserver(Observer):
         self.gains = np.stack([as_matrix("L", gain, (self.n, self.p)) for gain in gains])
         self.L = self.gains[0]
         self.T = np.eye(self.n) if T is None else as_matrix("T", T, (self.n, self.n))
-        if np.linalg.cond(self.T) > 1e12:
+        if _equilibrated_condition(self.T) > 1e12:
             raise DimensionError(
-                f"T: expected an invertible coordinate change, got cond(T) = {np.linalg.cond(self.T):.3g}"
+                "T: expected an invertible coordinate change, got a condition number of "
+                f"{_equilibrated_condition(self.T):.3g} (after scaling its columns)"
             )
         self.T_inv = np.linalg.inv(self.T)
         self.norms = BlockNorms((1,) * self.n if blocks is None or len(blocks) == 0 else blocks)
@@ -237,7 +238,7 @@ class IntervalObserver(Observer):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         method = as_choice("method", options.get("method", "tube"), METHODS)
         full = bounds.resolve(system)
-        scales = state_scales(system, full)
+        scales = state_scales(system, full, powers_of_two=False)  # the observer is verified as built
         if scales is None:
             result = _design(system, full, h, method, options.get("candidates"))
         else:  # states in very different units: designed in balanced coordinates (systems/balancing.py)
@@ -566,3 +567,16 @@ def _unbalanced(result: FramerDesign | TubeDesign, scales: FloatArray) -> Framer
         companions = tuple(gain / column for gain in result.companions)
         return replace(result, L=L, T=T, steady_radius=steady, companions=companions)
     return replace(result, L=L, T=T, steady_radius=steady)
+
+
+def _equilibrated_condition(T: FloatArray) -> float:
+    """Condition number of ``T`` with its columns scaled to norms in [1, 2) by powers of two.
+
+    A coordinate change ``T = T_b S`` with a diagonal ``S`` of powers of two (a design in balanced
+    coordinates, systems/balancing.py) is inverted as accurately as ``T_b``: LU with partial pivoting picks the
+    same pivots and the scaling is exact. Its plain condition number counts the units' spread instead.
+    """
+    norms = np.linalg.norm(T, axis=0)
+    if not np.all(np.isfinite(norms)) or np.any(norms == 0):
+        return float("inf")
+    return float(np.linalg.cond(T * np.ldexp(1.0, -np.floor(np.log2(norms)).astype(int))))

@@ -70,14 +70,14 @@ with an optional fallback observer's box (so it is never wider than that observe
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 
 from ..design.certified_lp import DenseLP, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
-from ..errors import AssumptionError, BoundsError, DataError, DimensionError
+from ..errors import AssumptionError, BoundsError, DataError, DesignError, DimensionError
 from ..interval import inflate, product_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -85,6 +85,7 @@ from ..systems.sampling import DeltaLinearisation, delta_linearisation, sampled_
 from ..validation import as_positive, as_signal, as_time
 from .base import Observer, ObserverState
 from .hull import CERTIFICATE_GAP, HullLowerBound, inner_model
+from .interval_observer import IntervalObserver
 
 __all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
 
@@ -187,7 +188,7 @@ class RobustHullEstimator(Observer):
         *,
         horizon: int = 40,
         identify: bool = True,
-        fallback: Observer | None = None,
+        fallback: Observer | Literal[False] | None = None,
         mccormick: bool = False,
     ) -> RobustHullEstimator:
         """Build the estimator (there is no gain: the window LP of each step is the estimator).
@@ -204,8 +205,11 @@ class RobustHullEstimator(Observer):
             Window length ``H`` in steps.
         identify : bool
             Also bound the uncertain entries of ``ΔA`` at each step (class docstring).
-        fallback : Observer, optional
-            A sound observer whose box the estimate is intersected with.
+        fallback : Observer or False, optional
+            A sound observer whose box the estimate is intersected with; default
+            :meth:`IntervalObserver.design` of ``system`` (where a gain exists), so that the estimator never
+            returns a box wider than the default observer's on the same data (the window LP's linearisation
+            in ``ΔA`` can be the looser one for ``‖A‖h`` of a few units); ``False``: the window LP alone.
         mccormick : bool
             Bound the products ``δ_l x_{j,b}`` by their McCormick envelopes (class docstring).
 
@@ -218,7 +222,14 @@ class RobustHullEstimator(Observer):
         AssumptionError
             If the system has no interval ``dA`` (use :class:`~intervalobs.observers.hull.HullEstimator`).
         """
-        return cls(system, bounds, horizon=horizon, h=h, identify=identify, fallback=fallback, mccormick=mccormick)
+        given = fallback if isinstance(fallback, Observer) else None
+        estimator = cls(system, bounds, horizon=horizon, h=h, identify=identify, fallback=given, mccormick=mccormick)
+        if fallback is None:
+            try:
+                estimator.fallback = IntervalObserver.design(system, bounds, h=h)
+            except DesignError:  # no bounded observer for this model: the window LP alone
+                pass
+        return estimator
 
     # -- the window LP ---------------------------------------------------------------------------
     def _window(

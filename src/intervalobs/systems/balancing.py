@@ -14,7 +14,15 @@ in floating point (an exponent change, barring overflow and underflow, which :fu
 rules out), and so are the boxes mapped back, :math:`x = S^{-1}x_b`. The balanced model is therefore
 the same model, not an approximation of it: every bound computed for it is a bound for the original,
 with nothing to round. For a box :math:`[\ell, u]` of :math:`x_b`, :math:`[\ell/s, u/s]` is the exact
-box of :math:`x` because :math:`S^{-1}` is diagonal and positive.
+box of :math:`x` because :math:`S^{-1}` is diagonal and positive. That is how
+:class:`~intervalobs.HullEstimator` solves its LPs.
+
+:class:`~intervalobs.IntervalObserver` only *designs* in balanced coordinates and is then built, and
+verified, on the original model with the gain and coordinates mapped back (:math:`L = S^{-1}L_b`,
+:math:`T = T_bS`), so its scales need not be exact: it takes :math:`s_i = 1/\text{size}_i` itself, which
+balances a model and every rescaling :math:`z = Dx` of it to the same coordinates (up to rounding), and so
+gives the same observer in the original coordinates (tested to 1e-9 at :math:`D` over
+:math:`10^{\pm 3}` and :math:`10^{\pm 6}`).
 """
 
 from __future__ import annotations
@@ -37,8 +45,8 @@ _EXPONENT_LIMIT = 400
 scaled entry over- or underflows unless the model's own entries were within 2^±600 of it."""
 
 
-def state_scales(system: LTISystem, bounds: ResolvedBounds) -> FloatArray | None:
-    """Powers of two ``s`` with ``s_i x_i`` of order one, or None when the states need no balancing.
+def state_scales(system: LTISystem, bounds: ResolvedBounds, powers_of_two: bool = True) -> FloatArray | None:
+    """Scales ``s`` with ``s_i x_i`` of order one, or None when the states need no balancing.
 
     A state's magnitude is the radius of its prior box (the user's own statement of its size); where the
     prior is a point, the radius of the process noise that enters it (``|E| r_w``); where both are zero,
@@ -50,6 +58,11 @@ def state_scales(system: LTISystem, bounds: ResolvedBounds) -> FloatArray | None
         The model.
     bounds : ResolvedBounds
         Its boxes.
+    powers_of_two : bool
+        Round the scales to powers of two (default), so that the balanced model is exactly the original
+        (module docstring). False gives ``1 / magnitude`` itself (relative to the median state): a model and
+        any rescaling of it then balance to the same coordinates up to rounding, which is what a design
+        that is verified afterwards in the original coordinates wants (:class:`~intervalobs.IntervalObserver`).
 
     Returns
     -------
@@ -63,12 +76,14 @@ def state_scales(system: LTISystem, bounds: ResolvedBounds) -> FloatArray | None
     if np.count_nonzero(known) < 2:
         return None
     exponents = np.zeros(system.n)
-    exponents[known] = -np.round(np.log2(size[known]))
+    exponents[known] = -np.log2(size[known])
     exponents[~known] = np.median(exponents[known])
     exponents = np.clip(exponents - np.median(exponents), -_EXPONENT_LIMIT, _EXPONENT_LIMIT)
     if exponents.max() - exponents.min() <= np.log2(BALANCE_SPREAD):
         return None
-    return np.ldexp(1.0, exponents.astype(int))
+    if powers_of_two:
+        return np.ldexp(1.0, np.round(exponents).astype(int))
+    return np.asarray(np.exp2(exponents))
 
 
 def balanced(system: LTISystem, bounds: ResolvedBounds, scales: FloatArray) -> tuple[LTISystem, ResolvedBounds]:
@@ -81,7 +96,8 @@ def balanced(system: LTISystem, bounds: ResolvedBounds, scales: FloatArray) -> t
     bounds : ResolvedBounds
         Its boxes.
     scales : numpy.ndarray, shape (n,)
-        Powers of two, e.g. from :func:`state_scales`.
+        Positive scales, e.g. from :func:`state_scales` (exact for powers of two; otherwise the balanced
+        model carries the rounding of one product per entry).
 
     Returns
     -------
