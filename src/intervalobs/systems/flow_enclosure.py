@@ -24,7 +24,8 @@ would lose. One step of length :math:`\tau` maps it to a zonotope containing :ma
    :math:`[0,\tau]F` (not of the set, whose size is irrelevant here); when it is not found the step
    is halved.
 2. **The trajectory of the centre.** Let :math:`\hat z` start at :math:`c` with the same
-   :math:`w(\cdot)`, and :math:`\hat Z` its a priori box. Since
+   :math:`w(\cdot)`, and :math:`\hat Z` its a priori box (computed without the domain: the centre
+   may lie outside it). Since
    :math:`\tilde f(\hat z(s)) - \tilde f(c) = J(s)(\hat z(s) - c)` with :math:`J(s) \in [J_{\hat Z}]`
    (the interval Jacobian over :math:`\hat Z`, :mod:`intervalobs.interval_dual`; the mean-value
    theorem row by row) and :math:`\hat z(s) - c \in s\,F(\hat Z)` (convexity),
@@ -34,8 +35,9 @@ would lose. One step of length :math:`\tau` maps it to a zonotope containing :ma
    (:math:`\int_0^\tau s\,q(s)\,ds \in \tfrac{\tau^2}{2}Q` for :math:`q(s) \in Q` convex).
 3. **The spread around it** (a first-order Taylor model of the variational equation). The difference
    :math:`\delta = z - \hat z` of two trajectories with the same :math:`w` obeys
-   :math:`\dot\delta = J(s)\delta` with :math:`J(s) \in [J] = J(\tilde Z)` (both trajectories stay in
-   :math:`\tilde Z`): the disturbance cancels. So :math:`\delta(\tau) = \Phi(\tau)\delta(0)`, with
+   :math:`\dot\delta = J(s)\delta` with :math:`J(s) \in [J] = J(\tilde Z \cup \hat Z)` (the Jacobian
+   over the hull of both a priori boxes, which contain the two trajectories): the disturbance
+   cancels. So :math:`\delta(\tau) = \Phi(\tau)\delta(0)`, with
    :math:`\Phi = I + \int J\Phi`. Grönwall bounds :math:`\Phi(s)` on :math:`[0, \tau]` by a box
    :math:`\tilde\Phi` (:func:`_fundamental_a_priori`, which treats the state and parameter columns
    separately so that the parameters' units do not enter the state's bound), and substituting
@@ -229,7 +231,7 @@ def _within(box: Interval, low: FloatArray, high: FloatArray) -> Interval:
 
 
 def a_priori(
-    system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, start: Interval, tau: float
+    system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, start: Interval, tau: float, domain: bool = True
 ) -> Interval | None:
     """A box containing every trajectory from ``start`` on ``[0, tau]`` (step 1 of the module), or None.
 
@@ -244,14 +246,18 @@ def a_priori(
         Box of the augmented state at the start.
     tau : float
         Step length.
+    domain : bool
+        Use the state domain (for the true trajectories, which never leave it); False for the
+        trajectory of the set's centre, which may start outside it.
 
     Returns
     -------
     Interval or None
         None when epsilon-inflation found no box (the caller halves the step).
     """
-    free = np.full(system.n_params, np.inf)
-    low, high = np.concatenate([system.domain[0], -free]), np.concatenate([system.domain[1], free])
+    free = np.full(system.n, np.inf) if not domain else None
+    low = np.concatenate([system.domain[0] if free is None else -free, np.full(system.n_params, -np.inf)])
+    high = np.concatenate([system.domain[1] if free is None else free, np.full(system.n_params, np.inf)])
     span = Interval._raw(np.zeros(()), np.asarray(tau, dtype=float))
     guess = start + span * _right_side(system, u, w, start)
     for _ in range(_PICARD_ITERATIONS):
@@ -299,12 +305,13 @@ def _step(
     """Steps 1-4 of the module over ``[0, tau]``; None when an a priori enclosure is not found."""
     tilde = a_priori(system, u, w, zset.box(), tau)
     point = Interval._wrap(zset.centre)
-    hat = a_priori(system, u, w, point, tau)
+    hat = a_priori(system, u, w, point, tau, domain=False)
     if tilde is None or hat is None:
         return None
     jacobian_function, _ = system.jacobians(u)
     size = zset.centre.shape[-1]
-    jac = Interval._raw(*interval_matrix(jacobian_function, tilde.lower, tilde.upper, (size, size)))
+    both = Interval._raw(np.minimum(tilde.lower, hat.lower), np.maximum(tilde.upper, hat.upper))
+    jac = Interval._raw(*interval_matrix(jacobian_function, both.lower, both.upper, (size, size)))
     jac_hat = Interval._raw(*interval_matrix(jacobian_function, hat.lower, hat.upper, (size, size)))
     half_square = 0.5 * tau * tau
     centre_end = (
