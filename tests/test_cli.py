@@ -141,7 +141,7 @@ FRACTION = "expected a fraction in [0, 1) (0.05 means ±5 %)"
 BAD_INPUT = {
     "seed-negative": ([*REPRODUCE, "--seed", "-1"], "argument --seed: expected an integer >= 0, got -1"),
     "seed-text": ([*REPRODUCE, "--seed", "x"], "argument --seed: expected an integer >= 0, got 'x' (str)"),
-    "name": (["reproduce", "no-such-example"], "argument NAME: expected one of 'spring-mass-lti'"),
+    "name": (["reproduce", "no-such-example"], "argument NAME: expected one of 'chemostat', 'spring-mass-lti'"),
     "out-file": ([*REPRODUCE, "--out", "{file}"], "argument --out: expected a folder to write into"),
     "out-under-file": ([*REPRODUCE, "--out", "{file}/sub"], "argument --out: expected a folder to write into"),
     "out-unwritable": ([*REPRODUCE, "--out", "/proc/intervalobs"], "argument --out: expected a writable folder"),

@@ -27,6 +27,7 @@ from .estimate import EnclosureReport, Estimate
 from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
 from .interval import Interval, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
+from .observers.continuous_nonlinear import ContinuousNonlinearObserver
 from .observers.fir import FiniteMemoryObserver
 from .observers.gsisio import GSISIO
 from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
@@ -48,6 +49,8 @@ from .systems import (
     delta_linearisation,
     sampled_model,
 )
+from .systems.continuous_nonlinear import ContinuousNonlinearSystem
+from .systems.flow_enclosure import FlowEnclosure, flow_enclosure
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem
 from .tightness import format_tightness, tightness_reference, tightness_report
@@ -153,4 +156,13 @@ __all__ += [
     "gsisio_design",
     "jacobian_bounds",
     "simulate_nonlinear",
+]
+
+# issue 32: continuous-time nonlinear systems
+
+__all__ += [
+    "ContinuousNonlinearObserver",
+    "ContinuousNonlinearSystem",
+    "FlowEnclosure",
+    "flow_enclosure",
 ]

@@ -1,6 +1,7 @@
 """Observers, one module per family, all on the protocol of :mod:`intervalobs.observers.base`."""
 
 from .base import Observer, ObserverState
+from .continuous_nonlinear import ContinuousNonlinearObserver
 from .fir import FiniteMemoryObserver
 from .gsisio import GSISIO
 from .hgio import HighGainIntervalObserver
@@ -16,6 +17,7 @@ from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
     "GSISIO",
+    "ContinuousNonlinearObserver",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",

@@ -1,6 +1,8 @@
 """Model classes, one module per kind of model; every shape and bound is validated on construction."""
 
 from .bounds import Bounds, ResolvedBounds
+from .continuous_nonlinear import ContinuousNonlinearSystem
+from .flow_enclosure import FlowEnclosure, StateZonotope, flow_enclosure
 from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from .lti import LTISystem
 from .nonlinear import NonlinearSystem
@@ -9,7 +11,9 @@ from .sampling import DeltaLinearisation, SampledModel, delta_linearisation, sam
 
 __all__ = [
     "Bounds",
+    "ContinuousNonlinearSystem",
     "DeltaLinearisation",
+    "FlowEnclosure",
     "LPVSystem",
     "LTISystem",
     "NonlinearSystem",
@@ -17,7 +21,9 @@ __all__ = [
     "SampledLPVModel",
     "SampledModel",
     "SampledSystem",
+    "StateZonotope",
     "StepEnclosure",
     "delta_linearisation",
+    "flow_enclosure",
     "sampled_model",
 ]

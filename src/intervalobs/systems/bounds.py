@@ -32,9 +32,9 @@ __all__ = ["Bounds", "BoxPair", "ResolvedBounds"]
 FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
 """``(lower, upper)`` arrays of one box."""
-BoxName = Literal["x0", "w", "v"]
+BoxName = Literal["x0", "w", "v", "p"]
 
-_SIZE_OF = {"x0": "n", "w": "nw", "v": "nv"}
+_SIZE_OF = {"x0": "n", "w": "nw", "v": "nv", "p": "n_params"}
 
 
 class _UnknownSizes(Protocol):
@@ -60,7 +60,7 @@ def _describe(value: object) -> str:
 
 def _size(system: _UnknownSizes, name: str, length: int | None) -> int:
     """The model's length of box ``name``; a given ``length`` must equal it."""
-    size = int(getattr(system, _SIZE_OF[name]))
+    size = int(getattr(system, _SIZE_OF[name], 0))
     if length is not None and length != size:
         raise DimensionError(f"bounds.{name}: expected length {size} (the model's {_SIZE_OF[name]}), got {length}")
     return size
@@ -109,6 +109,10 @@ class Bounds:
         ``(lower, upper)`` of the process disturbance (default: zero).
     v : tuple of array_like, optional
         ``(lower, upper)`` of the measurement noise (default: zero).
+    p : tuple of array_like, optional
+        ``(lower, upper)`` of the uncertain constant parameters of a model that has them
+        (:class:`~intervalobs.systems.continuous_nonlinear.ContinuousNonlinearSystem`); refused by
+        :meth:`resolve` for a model without parameters.
 
     Raises
     ------
@@ -130,16 +134,19 @@ class Bounds:
     x0: BoxPair
     w: BoxPair | None
     v: BoxPair | None
+    p: BoxPair | None
 
     def __init__(
         self,
         x0: tuple[ArrayLike, ArrayLike],
         w: tuple[ArrayLike, ArrayLike] | None = None,
         v: tuple[ArrayLike, ArrayLike] | None = None,
+        p: tuple[ArrayLike, ArrayLike] | None = None,
     ) -> None:
         object.__setattr__(self, "x0", _pair("x0", x0))
         object.__setattr__(self, "w", None if w is None else _pair("w", w))
         object.__setattr__(self, "v", None if v is None else _pair("v", v))
+        object.__setattr__(self, "p", None if p is None else _pair("p", p))
 
     def resolve(self, system: _UnknownSizes) -> ResolvedBounds:
         """The boxes for ``system``: scalars broadcast, absent noises zero, every size checked.
@@ -156,10 +163,11 @@ class Bounds:
         Raises
         ------
         DimensionError
-            A box's length differs from the model's.
+            A box's length differs from the model's, or a parameter box is given for a model without
+            parameters.
         """
         boxes = []
-        for name, box in (("x0", self.x0), ("w", self.w), ("v", self.v)):
+        for name, box in (("x0", self.x0), ("w", self.w), ("v", self.v), ("p", self.p)):
             if box is None:
                 size = _size(system, name, None)
                 boxes.append((np.zeros(size), np.zeros(size)))
@@ -177,7 +185,8 @@ class Bounds:
         def show(box: BoxPair | None) -> str:
             return "None" if box is None else f"({box[0].tolist()}, {box[1].tolist()})"
 
-        return f"{type(self).__name__}(x0={show(self.x0)}, w={show(self.w)}, v={show(self.v)})"
+        extra = "" if self.p is None or self.p[0].size == 0 else f", p={show(self.p)}"
+        return f"{type(self).__name__}(x0={show(self.x0)}, w={show(self.w)}, v={show(self.v)}{extra})"
 
 
 @dataclass(frozen=True, init=False, eq=False)
@@ -191,14 +200,18 @@ class ResolvedBounds(Bounds):
     ----------
     x0, w, v : tuple of numpy.ndarray
         ``(lower, upper)`` vectors of the initial state, the disturbance and the measurement noise.
+    p : tuple of numpy.ndarray, optional
+        ``(lower, upper)`` of the parameters (default: empty, a model without parameters).
     """
 
     x0: BoxPair
     w: BoxPair
     v: BoxPair
+    p: BoxPair
 
-    def __init__(self, x0: BoxPair, w: BoxPair, v: BoxPair) -> None:
-        for name, box in (("x0", x0), ("w", w), ("v", v)):
+    def __init__(self, x0: BoxPair, w: BoxPair, v: BoxPair, p: BoxPair | None = None) -> None:
+        empty = (np.zeros(0), np.zeros(0))
+        for name, box in (("x0", x0), ("w", w), ("v", v), ("p", empty if p is None else p)):
             lower, upper = _pair(name, box)
             if lower.ndim != 1:
                 raise DimensionError(f"{name}: expected vectors for a resolved box, got shape {lower.shape}")
@@ -216,7 +229,7 @@ class ResolvedBounds(Bounds):
         -------
         ResolvedBounds
         """
-        for name, box in (("x0", self.x0), ("w", self.w), ("v", self.v)):
+        for name, box in (("x0", self.x0), ("w", self.w), ("v", self.v), ("p", self.p)):
             _size(system, name, box[0].size)
         return self
 
@@ -225,7 +238,7 @@ class ResolvedBounds(Bounds):
 
         Parameters
         ----------
-        name : {"x0", "w", "v"}
+        name : {"x0", "w", "v", "p"}
             Which box.
 
         Returns
@@ -240,7 +253,7 @@ class ResolvedBounds(Bounds):
 
         Parameters
         ----------
-        name : {"x0", "w", "v"}
+        name : {"x0", "w", "v", "p"}
             Which box.
 
         Returns

@@ -1,0 +1,287 @@
+r"""Reproduction ``chemostat``: guaranteed biomass bounds of a Monod chemostat from substrate samples.
+
+.. math::
+
+    \dot X = (\mu(S) - D)X,\qquad \dot S = D(S_{in} - S) - \mu(S)X/Y,\qquad
+    \mu(S) = \mu_{max}S/(K_s + S),
+
+with :math:`S` measured :math:`\pm 0.02` g/L every 0.1 h, :math:`\mu_{max}` and :math:`K_s` known to
+:math:`\pm 5\,\%`, :math:`X_0 \in [1, 3]`, :math:`S_0 \in [0.3, 0.8]` (the case of issue 32).
+
+Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`:
+
+* **as written** (states :math:`X, S`, the prior split in 8 parts along :math:`X`): sound, but the
+  first-order validated step loses the set within hours (``direct`` in the summary: when, and the
+  warning). Its interval Jacobian cannot see that :math:`\mu X/Y` enters :math:`\dot X/Y` and
+  :math:`\dot S` with opposite signs, so the error of each step is as wide as the kinetics are
+  uncertain, and the biomass is seen only through that cancellation.
+* **in reaction-invariant coordinates** (Bastin & Dochain 1990): :math:`Z = X/Y + S` obeys
+  :math:`\dot Z = D(S_{in} - Z)` whatever the kinetics, so the model written in :math:`(Z, S)` —
+  the same model, no approximation — has an exact linear row; the bounds of :math:`X = Y(Z - S)` are
+  the recommended ones.
+
+The reference is a lower bound of the consistent set: the inner hull of trajectories simulated
+exactly (RK4, 10 steps per sample) from initial states and parameters of their boxes that stay within
+the noise of every sample, found by bisection along rays from the true ones.
+
+**References.**
+
+* G. Bastin, D. Dochain, *On-line Estimation and Adaptive Control of Bioreactors*, Elsevier, 1990.
+* J.-L. Gouzé, A. Rapaport, M. Z. Hadj-Sadok, "Interval observers for uncertain biological
+  systems", *Ecological Modelling* 133(1-2):45-56, 2000.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..estimate import Estimate
+from ..interval import Interval
+from ..observers.continuous_nonlinear import ContinuousNonlinearObserver
+from ..plotting import plot_estimate, plot_widths, save_figure
+from ..systems.bounds import Bounds
+from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
+from .contract import Example, base_summary, write_reproduction
+
+FloatArray = NDArray[np.float64]
+
+NAME = "chemostat"
+DILUTION, INLET, YIELD = 0.2, 5.0, 0.5
+"""Dilution rate (1/h), inlet substrate (g/L), yield (g biomass per g substrate)."""
+TRUE_PARAMETERS = np.array([0.51, 0.29])
+"""True μmax (1/h) and Ks (g/L), inside their ±5 % boxes around 0.5 and 0.3."""
+PARAMETER_BOX = (np.array([0.475, 0.285]), np.array([0.525, 0.315]))
+X0_BOX = (np.array([1.0, 0.3]), np.array([3.0, 0.8]))
+NOISE = 0.02
+STEP, T_FINAL = 0.1, 60.0
+DIRECT_HOURS = 3.0
+"""Length of the run in the coordinates as written (it loses its set within it)."""
+RAYS, BISECTIONS = 24, 10
+"""Directions and bisection steps of the consistent-set lower bound."""
+
+
+def _growth(s: Any, p: Any) -> Any:
+    return p[0] * s / (p[1] + s)
+
+
+def direct_model() -> ContinuousNonlinearSystem:
+    """The chemostat as written: states (X, S), parameters (μmax, Ks), S measured.
+
+    Returns
+    -------
+    ContinuousNonlinearSystem
+    """
+
+    def f(x: Any, u: Any, p: Any) -> tuple[Any, Any]:
+        growth = _growth(x[1], p)
+        return (growth - DILUTION) * x[0], DILUTION * (INLET - x[1]) - growth * x[0] / YIELD
+
+    return ContinuousNonlinearSystem(
+        f, lambda x, u: (x[1],), n=2, n_params=2, domain=(0.0, np.inf), state_names=["X", "S"]
+    )
+
+
+def invariant_model() -> ContinuousNonlinearSystem:
+    """The same chemostat in reaction-invariant coordinates: states (Z = X/Y + S, S).
+
+    Returns
+    -------
+    ContinuousNonlinearSystem
+    """
+
+    def f(z: Any, u: Any, p: Any) -> tuple[Any, Any]:
+        return DILUTION * (INLET - z[0]), DILUTION * (INLET - z[1]) - _growth(z[1], p) * (z[0] - z[1])
+
+    return ContinuousNonlinearSystem(
+        f, lambda x, u: (x[1],), n=2, n_params=2, domain=(0.0, np.inf), state_names=["Z", "S"]
+    )
+
+
+def _rates(x: FloatArray, p: FloatArray) -> FloatArray:
+    growth = p[..., 0] * x[..., 1] / (p[..., 1] + x[..., 1])
+    return np.stack(
+        [(growth - DILUTION) * x[..., 0], DILUTION * (INLET - x[..., 1]) - growth * x[..., 0] / YIELD], axis=-1
+    )
+
+
+def simulate_exact(x0: FloatArray, p: FloatArray, t: FloatArray, substeps: int = 10) -> FloatArray:
+    """Classical RK4 of the chemostat (points; leading axes of starts and parameters carried).
+
+    Parameters
+    ----------
+    x0 : numpy.ndarray, shape (..., 2)
+        Initial states.
+    p : numpy.ndarray, shape (..., 2)
+        Parameters.
+    t : numpy.ndarray, shape (T,)
+        Uniform sample times.
+    substeps : int
+        RK4 steps per sample.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., T, 2)
+    """
+    x = np.array(x0, dtype=float)
+    out = [x.copy()]
+    dt = (t[1] - t[0]) / substeps
+    for _ in range(t.size - 1):
+        for _ in range(substeps):
+            k1 = _rates(x, p)
+            k2 = _rates(x + 0.5 * dt * k1, p)
+            k3 = _rates(x + 0.5 * dt * k2, p)
+            k4 = _rates(x + dt * k3, p)
+            x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out.append(x.copy())
+    return np.stack(out, axis=-2)
+
+
+def consistent_inner_hull(t: FloatArray, y: FloatArray, truth: FloatArray, rng: np.random.Generator) -> FloatArray:
+    """Lower bound of the consistent set: the hull of exact trajectories that stay within the noise of every sample.
+
+    From the true start and parameters (consistent by construction), along ``RAYS`` random directions
+    of the box of (X0, S0, μmax, Ks), the farthest consistent point is found by bisection; every
+    trajectory kept is consistent with the whole record, so their hull lies inside the consistent set.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Sample times.
+    y : numpy.ndarray, shape (T,)
+        Measured substrate.
+    truth : numpy.ndarray, shape (4,)
+        True (X0, S0, μmax, Ks).
+    rng : numpy.random.Generator
+        Directions.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2, T, 2)
+        Lower and upper ends of the inner hull of (X, S).
+    """
+    low = np.concatenate([X0_BOX[0], PARAMETER_BOX[0]])
+    high = np.concatenate([X0_BOX[1], PARAMETER_BOX[1]])
+    directions = rng.normal(size=(RAYS, 4)) * (high - low)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        limits = np.where(directions > 0, (high - truth) / directions, (low - truth) / directions)
+    reach = np.min(np.where(np.isfinite(limits), limits, np.inf), axis=1)
+    inside, outside = np.zeros(RAYS), reach
+    kept = [simulate_exact(truth[None, :2], truth[None, 2:], t)]
+    for _ in range(BISECTIONS):
+        trial = 0.5 * (inside + outside)
+        points = truth + trial[:, None] * directions
+        paths = simulate_exact(points[:, :2], points[:, 2:], t)
+        good = np.all(np.abs(paths[..., 1] - y) <= NOISE, axis=1)
+        kept.append(paths[good])
+        inside, outside = np.where(good, trial, inside), np.where(good, outside, trial)
+    every = np.concatenate(kept)
+    return np.stack([every.min(axis=0), every.max(axis=0)])
+
+
+def _biomass_bounds(estimate: Estimate) -> tuple[FloatArray, FloatArray]:
+    """(X, S) bounds from the invariant run: X = Y(Z - S) in outward-rounded interval arithmetic."""
+    z = Interval._raw(estimate.lower[:, 0], estimate.upper[:, 0])
+    s = Interval._raw(estimate.lower[:, 1], estimate.upper[:, 1])
+    x = (z - s) * YIELD
+    return np.stack([x.lower, s.lower], axis=-1), np.stack([x.upper, s.upper], axis=-1)
+
+
+def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
+    """The model as written, over the first ``DIRECT_HOURS``: when its bounds are lost, and the warning."""
+    short = t <= DIRECT_HOURS + 1e-9
+    observer = ContinuousNonlinearObserver(direct_model(), bounds, STEP, splits=(8, 1))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        estimate = observer.run(t[short], y[short, None])
+    lost = ~np.all(np.isfinite(estimate.upper), axis=1)
+    return {
+        "splits": [8, 1],
+        "bounds_lost_at_h": float(t[short][lost][0]) if lost.any() else None,
+        "diverging": estimate.meta["diverging"],
+        "warning": str(caught[0].message) if caught else None,
+        "biomass_width_at_1h": float(estimate.width()[round(1.0 / STEP), 0]),
+    }
+
+
+def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
+    """Simulate the chemostat, bound it in both coordinates, write the contract files.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        Output folder for this example.
+    seed : int
+        Seed of the noise realisation and of the rays of the reference.
+    plots : bool
+        Also write ``states.png`` and ``widths.png``.
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, T_FINAL + 1e-9, STEP)
+    start = np.array([2.8, 0.35])
+    x = simulate_exact(start, TRUE_PARAMETERS, t, substeps=20)
+    y = x[:, 1] + NOISE * rng.choice([-1.0, 1.0], size=t.size) * rng.uniform(0.5, 1.0, size=t.size)
+    direct_bounds = Bounds(x0=X0_BOX, v=(-NOISE, NOISE), p=PARAMETER_BOX)
+    invariant_box = (np.array([X0_BOX[0][0] / YIELD + X0_BOX[0][1], 0.3]), np.array([X0_BOX[1][0] / YIELD + 0.8, 0.8]))
+    observer = ContinuousNonlinearObserver(
+        invariant_model(), Bounds(x0=invariant_box, v=(-NOISE, NOISE), p=PARAMETER_BOX), STEP
+    )
+    clock = time.perf_counter()
+    estimate = observer.run(t, y[:, None])
+    run_time = time.perf_counter() - clock
+    lower, upper = _biomass_bounds(estimate)
+    reference = consistent_inner_hull(t, y, np.concatenate([start, TRUE_PARAMETERS]), rng)
+    summary = base_summary(
+        example=NAME,
+        seed_file="-",
+        observer="ContinuousNonlinearObserver/invariant",
+        t=t,
+        x=x,
+        x_lower=lower,
+        x_upper=upper,
+        transient_s=0.0,
+    )
+    half = t >= 0.5 * T_FINAL
+    width, inner = (upper - lower)[half].mean(axis=0), (reference[1] - reference[0])[half].mean(axis=0)
+    summary["design"] = {
+        "coordinates": "Z = X/Y + S, S",
+        "substeps": observer.substeps,
+        "zonotope_order": observer.order,
+        "direct": _direct_run(t, y, direct_bounds),
+    }
+    summary["tightness"] = {
+        "biomass_mean_width_second_half": width[0],
+        "biomass_consistent_inner_width_second_half": inner[0],
+        "biomass_ratio": width[0] / inner[0],
+        "substrate_ratio": width[1] / inner[1],
+        "reference": "inner hull of exact consistent trajectories (rays from the truth, bisection)",
+    }
+    summary["paper"] = {"note": "the chemostat of issue 32: no paper numbers"}
+    summary["runtime_s"] = {"design": 0.0, "run": run_time, "ms_per_sample": 1000.0 * run_time / t.size}
+    trajectories = {"t": t, "x": x, "x_lower": lower, "x_upper": upper, "y": y}
+    trajectories.update(reference_x_lower=reference[0], reference_x_upper=reference[1])
+    write_reproduction(out_dir, summary, trajectories)
+    if plots:
+        shown = Estimate(t, lower, upper, meta={"rows": "filtered"})
+        save_figure(plot_estimate(shown, x, ["X (g/L)", "S (g/L)"], time_unit="h"), out_dir / "states.png")
+        widths = {"invariant coordinates": upper - lower, "consistent set (inner)": reference[1] - reference[0]}
+        save_figure(plot_widths(t, widths), out_dir / "widths.png")
+    return summary
+
+
+EXAMPLE = Example(
+    name=NAME,
+    seed_file="-",
+    description="Monod chemostat (issue 32): biomass bounds from substrate samples, validated flow, ±5 % kinetics",
+    run=run,
+)

@@ -1,0 +1,21 @@
+"""The chemostat reproduction: contract files, enclosure and the tightness numbers it reports."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from intervalobs.reproduce import registry
+from intervalobs.reproduce.contract import check_reproduction
+
+
+@pytest.mark.slow
+def test_chemostat_reproduction(tmp_path) -> None:
+    summary = registry()["chemostat"].run(tmp_path / "chemostat", 0, True)
+    assert check_reproduction(tmp_path / "chemostat") == []
+    assert summary["enclosure"]["state"]["fraction"] == 1.0
+    tight = summary["tightness"]
+    assert tight["biomass_ratio"] >= 1.0  # the reference is a lower bound of the consistent set
+    assert tight["biomass_mean_width_second_half"] < 0.05
+    assert summary["design"]["direct"]["diverging"] is True
+    assert np.isfinite(summary["runtime_s"]["ms_per_sample"])
