@@ -28,9 +28,20 @@ TRUTH_ERROR = 1e-10
 exact value; a bound missing the simulated truth by more is a violation."""
 
 
+def matrices(case: Case) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``A, C, E, F`` of ``case`` with their shapes (a model without outputs has ``C`` of shape (0, n))."""
+    A = np.asarray(case["A"], dtype=float)
+    n = A.shape[0]
+    C = np.asarray(case["C"], dtype=float).reshape(-1, n)
+    E = np.asarray(case["E"], dtype=float).reshape(n, -1)
+    F = np.asarray(case["F"], dtype=float)
+    F = F.reshape(C.shape[0], F.size // C.shape[0] if C.shape[0] else 0)
+    return A, C, E, F
+
+
 def simulate_case(case: Case, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Times, states and outputs of one record of ``case`` (vertex noise, exact sampled matrices)."""
-    A, C, E, F = (np.asarray(case[key], dtype=float) for key in ("A", "C", "E", "F"))
+    A, C, E, F = matrices(case)
     n, h, dA = A.shape[0], case["h"], case.get("dA")
     if dA is not None:  # the truth at a vertex of the ΔA box
         A = A + np.where(rng.random((n, n)) < 0.5, np.asarray(dA[0]), np.asarray(dA[1]))
@@ -63,7 +74,8 @@ def model(case: Case) -> tuple[io.LTISystem, io.Bounds, float | None]:
     """The case's system, bounds and sampling period (None in discrete time)."""
     dt = None if case["continuous"] else case["h"]
     dA = None if case.get("dA") is None else tuple(np.asarray(b) for b in case["dA"])
-    system = io.LTISystem(case["A"], case["C"], E=case["E"], F=case["F"], dt=dt, dA=dA)
+    A, C, E, F = matrices(case)
+    system = io.LTISystem(A, C, E=E, F=F, dt=dt, dA=dA)
     bounds = io.Bounds(x0=case["x0"], w=case["w"], v=case["v"])
     return system, bounds, case["h"] if case["continuous"] else None
 
