@@ -105,8 +105,12 @@ def test_a_placed_gain_that_makes_the_output_observer_diverge_is_refused() -> No
 
 
 def _estimate(width: np.ndarray) -> Estimate:
+    """An estimate of these widths; NaN rows (no bound, as after data that contradict the model) set afterwards."""
     t = np.arange(width.shape[0], dtype=float)
-    return Estimate(t, -0.5 * width, 0.5 * width, meta={"method": "test"})
+    finite = np.where(np.isnan(width), 1.0, width)
+    est = Estimate(t, -0.5 * finite, 0.5 * finite, meta={"method": "x"})
+    est.lower[np.isnan(width)], est.upper[np.isnan(width)] = np.nan, np.nan
+    return est
 
 
 @pytest.mark.parametrize(
@@ -117,9 +121,10 @@ def _estimate(width: np.ndarray) -> Estimate:
         ((1.0 - np.exp(-0.2 * np.arange(100.0)))[:, None], False),  # from an exact x0 to a steady width
         (np.r_[np.ones(50), np.full(50, np.inf)][:, None], True),  # finite, then infinite
         (np.full((100, 2), np.inf), False),  # never bounded (no claim to lose)
+        (np.r_[np.ones(50), np.full(50, np.nan)][:, None], False),  # no bound after a sample that contradicts
         (np.array([[1.0], [1e9], [1e9], [1e9], [1e9]]), False),  # too short to judge
     ],
-    ids=["geometric", "linear", "settling", "lost", "unbounded", "short"],
+    ids=["geometric", "linear", "settling", "lost", "unbounded", "ended", "short"],
 )
 def test_growth_check(width: np.ndarray, diverging: bool) -> None:
     est = _estimate(width)

@@ -106,10 +106,11 @@ def check_growth(estimate: Estimate) -> None:
     """Warn and record in ``meta`` when the widths of a run grow without bound.
 
     For every run and state: the largest width over the last tenth of the record over the largest over its
-    first tenth (``meta["width_growth"]``, the worst). A run is diverging (``meta["diverging"]``) when a
-    finite width becomes infinite or NaN, or when that ratio exceeds :data:`GROWTH_LIMIT` while the widths
-    still grow (the last tenth at least 1.5 times the sixth): bounded growth that has settled, e.g. from an
-    exactly known initial state to the steady width, is not. Records of fewer than 10 rows are not judged.
+    first tenth (``meta["width_growth"]``, the worst; NaN rows, where a run has no bound, are left out). A run
+    is diverging (``meta["diverging"]``) when a finite width becomes infinite, or when that ratio exceeds
+    :data:`GROWTH_LIMIT` while the widths still grow (the last tenth at least 1.5 times the sixth): bounded
+    growth that has settled, e.g. from an exactly known initial state to the steady width, is not. Records of
+    fewer than 10 rows are not judged.
 
     Parameters
     ----------
@@ -121,11 +122,12 @@ def check_growth(estimate: Estimate) -> None:
     if steps < 10:
         return
     tenth = steps // 10
-    with np.errstate(invalid="ignore"):
-        early = np.max(width[..., :tenth, :], axis=-2)
-        middle = np.max(width[..., 5 * tenth : 6 * tenth, :], axis=-2)
-        late = np.max(width[..., -tenth:, :], axis=-2)
-        lost = np.isfinite(early) & ~np.isfinite(late)
+    with warnings.catch_warnings(), np.errstate(invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows: rows a run has no bound for
+        early = np.nanmax(width[..., :tenth, :], axis=-2)
+        middle = np.nanmax(width[..., 5 * tenth : 6 * tenth, :], axis=-2)
+        late = np.nanmax(width[..., -tenth:, :], axis=-2)
+        lost = np.isfinite(early) & np.isposinf(late)
         floor = 1e-9 * (1.0 + np.nanmax(np.abs(estimate.lower[..., :tenth, :]), axis=-2))
         ratio = np.where(np.isfinite(early) & np.isfinite(late), late / np.maximum(early, floor), 0.0)
     growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * middle)
