@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, DataError
+from intervalobs import AssumptionError, DataError, DesignError
 from intervalobs.design.regions import place_in_disks
 from intervalobs.estimate import enclosure_report
 from intervalobs.examples import hgio as example
@@ -110,7 +110,7 @@ def test_bad_inputs_raise(gains: dict[str, np.ndarray]) -> None:
     y[0] = 100.0
     with pytest.raises(AssumptionError, match="inconsistent"):
         observer.run(t, y, example.input_signal(t))
-    with pytest.raises(AssumptionError, match="not Hurwitz"):
+    with pytest.raises(DesignError, match="not Hurwitz"):
         _observer(np.array([[1000.0], [0.0], [0.0]]))  # the output observer cannot take a high gain
 
 
@@ -196,3 +196,28 @@ def test_modal_predictor_and_rewrap_only_tighten(gains: dict[str, np.ndarray]) -
     assert np.all(widths["modal"] <= widths["box"] * (1 + 1e-9) + 1e-12)
     # the modal predictor bounds Cẋ between samples: the measured state x₁ gains most
     assert widths["modal"][:, t >= 0.5, 0].mean() < 0.8 * widths["box"][:, t >= 0.5, 0].mean()
+
+
+def test_the_reproduction_reports_general_estimators_next_to_the_hgio(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The hook of hgio-sampled's summary: an estimator registered in GENERAL_ESTIMATORS is run on the record."""
+    from types import SimpleNamespace
+
+    from intervalobs.estimate import Estimate
+    from intervalobs.reproduce import hgio_sampled
+
+    t = np.arange(0.0, 10.0, 1.0)
+    x = np.zeros((2, t.size, 3))
+    sim = SimpleNamespace(x=x, y=np.zeros((2, t.size, 1)), u=np.zeros((t.size, 1)))
+    window = t >= 5.0
+    hgio = np.array([0.5, 2.0, 4.0])
+    empty = hgio_sampled.general_path(t, sim, window, hgio)
+    assert empty["estimators"] == {} and "no general estimator" in empty["status"]
+
+    def fixed_width(t: np.ndarray, y: np.ndarray, u: np.ndarray) -> Estimate:
+        half = np.broadcast_to([0.25, 0.5, 1.0], (y.shape[0], t.size, 3))
+        return Estimate(t, -half, half)
+
+    monkeypatch.setitem(hgio_sampled.GENERAL_ESTIMATORS, "fixed", fixed_width)
+    report = hgio_sampled.general_path(t, sim, window, hgio)["estimators"]["fixed"]
+    np.testing.assert_allclose(report["width_over_hgio"], [1.0, 0.5, 0.5])
+    assert report["enclosure"]["fraction"] == 1.0 and not report["diverging"]

@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
+from scipy.optimize import linear_sum_assignment
 
 from intervalobs import AssumptionError, DesignError
 from intervalobs.design.regions import Disk, canonical_eigenvectors, modal_decomposition, place_in_disks, radius_matrix
@@ -90,9 +91,8 @@ def test_radius_matrix_is_metzler() -> None:
         ([(-1.0, 0.5), (-1.0, 0.5)], "one disk per state"),
         ([(-1.0, 0.5), (-0.6 + 1.8j, 0.2), (-0.6 - 1.7j, 0.2)], "conjugation"),
         ([(0.2, 0.5), (-0.6 + 1.8j, 0.2), (-0.6 - 1.8j, 0.2)], "left half-plane"),
-        ([(-1.0, 0.5), (-2.0, 0.2), (-3.0, 0.2)], "matched"),
     ],
-    ids=["count", "not-conjugate", "unstable-disk", "pair-to-real"],
+    ids=["count", "not-conjugate", "unstable-disk"],
 )
 def test_bad_disks_raise(disks: list[tuple[complex, float]], match: str) -> None:
     with pytest.raises(AssumptionError, match=match):
@@ -122,3 +122,40 @@ def test_canonical_eigenvectors_do_not_depend_on_the_phase_lapack_returns(seed: 
     assert np.all(entry.real > 0) and np.all(entry.imag == 0)
     modal = modal_decomposition(a - 10 * np.eye(5), np.eye(1, 5), np.zeros((5, 1)))
     np.testing.assert_allclose(modal.v1_inv, canonical_eigenvectors(modal.v1_inv), rtol=0, atol=1e-12)
+
+
+def _assert_each_in_its_disk(a: np.ndarray, c: np.ndarray, placed: object) -> None:
+    """Every eigenvalue of A - LC, recomputed here, lies in a disk of its own (a one-to-one matching)."""
+    eig = np.linalg.eigvals(np.asarray(a, dtype=float) - placed.L @ np.asarray(c, dtype=float))  # type: ignore[attr-defined]
+    disks = placed.disks  # type: ignore[attr-defined]
+    inside = np.array([[d.radius - abs(lam - d.center) for lam in eig] for d in disks])
+    rows, cols = linear_sum_assignment(-np.minimum(inside, 0.0) + (inside <= 0))
+    assert np.all(inside[rows, cols] > 0), (eig, disks)
+
+
+@pytest.mark.parametrize(
+    "a, c, disks",
+    [
+        ([[0, 1], [-2, -3]], [[1, 0]], [(-3, 0.5), (-4, 0.5)]),  # the issue's call: real eigenvalues, real disks
+        ([[0, 1], [-2, -3]], [[1, 0]], [(-3 + 1j, 0.5), (-3 - 1j, 0.5)]),  # two real eigenvalues into a pair
+        ([[0, 1], [-5, -2]], [[1, 0]], [(-3, 0.5), (-4, 0.5)]),  # a conjugate pair into two real disks
+        ([[0, 1], [-5, -2]], [[0, 1]], [(-3, 0.5), (-3, 0.5)]),  # the same disk twice
+        ([[0, 1, 0], [0, 0, 1], [1, -2, -3]], [[1, 0, 0]], [(-3, 0.5), (-4, 0.5), (-5, 0.5)]),  # mixed, unstable A
+        (A, C, [(-1.0, 0.5), (-2.0, 0.2), (-3.0, 0.2)]),  # the paper's pair moved to the real axis
+        ([[-1, 2, 0], [0, -2, 1], [0, 0, -3]], [[1, 0, 0], [0, 0, 1]], [(-6, 1), (-2 + 2j, 0.5), (-2 - 2j, 0.5)]),
+    ],
+    ids=["real", "real-to-pair", "pair-to-real", "same-disk", "mixed-unstable", "paper-pair-to-real", "two-outputs"],
+)
+def test_real_and_mixed_targets_land_in_their_disks(a: list[list[float]], c: list[list[float]], disks: list) -> None:
+    placed = place_in_disks(a, c, disks)
+    _assert_each_in_its_disk(np.asarray(a), np.asarray(c), placed)
+    assert np.all(placed.margins > 0)
+    assert np.isrealobj(placed.L)
+    assert placed.modal.condition < 1e8
+
+
+def test_a_block_that_cannot_be_moved_is_a_design_error() -> None:
+    """A conjugate pair that C does not see (C = 0 on its plane) cannot go to the real axis."""
+    a = [[0.0, 1.0, 0.0], [-5.0, -2.0, 0.0], [0.0, 0.0, -1.0]]
+    with pytest.raises(DesignError):
+        place_in_disks(a, [[0.0, 0.0, 1.0]], [(-1.0, 0.5), (-3.0, 0.5), (-4.0, 0.5)])

@@ -14,6 +14,7 @@ __all__ = [
     "DataError",
     "DesignError",
     "DimensionError",
+    "DivergenceWarning",
     "FileError",
     "IntervalObserverError",
     "SchedulerError",
@@ -58,3 +59,10 @@ class FileError(IntervalObserverError, OSError):
 
 class SchedulerError(IntervalObserverError, ConnectionError):
     """The Dask scheduler at the given address did not answer in time."""
+
+
+class DivergenceWarning(RuntimeWarning):
+    """The widths of a run grow without bound: the bounds still hold, but they say nothing about the state.
+
+    The run records the growth in ``Estimate.meta`` (``width_growth``, ``diverging``) as well.
+    """

@@ -547,6 +547,94 @@ def _mode_gain(lam: complex, b: ComplexArray, disk: Disk, real: bool, objective:
     return np.asarray(ell, dtype=complex).reshape(p), solution.status
 
 
+def _is_real(lam: complex) -> bool:
+    """True for an eigenvalue of a real matrix that LAPACK returned on the real axis (up to rounding)."""
+    return abs(lam.imag) <= 1e-9 * (1 + abs(lam))
+
+
+def _mixed_block(region: tuple[Disk, ...], assigned: ComplexArray) -> NDArray[np.bool_]:
+    """Disks whose matched eigenvalue is of the other kind (a real one in a non-real disk or the reverse).
+
+    The set is closed under conjugation of the disks and of the eigenvalues, so its eigenvalues span a real
+    invariant subspace and its centres are a conjugate-closed set of targets (:func:`_place_block`).
+    """
+    centres = np.array([d.center for d in region])
+    block = np.array([d.is_real != _is_real(complex(lam)) for d, lam in zip(region, assigned)])
+    while True:
+        grown = block.copy()
+        for j in np.flatnonzero(block):
+            grown |= np.abs(centres - np.conj(centres[j])) < _CONJUGATE_TOLERANCE
+            grown |= np.abs(assigned - np.conj(assigned[j])) <= 1e-9 * (1 + np.abs(assigned[j]))
+        if np.array_equal(grown, block):
+            return block
+        block = grown
+
+
+def _subspace_gain(closed: FloatArray, c: FloatArray, basis: FloatArray, targets: Sequence[complex]) -> FloatArray:
+    """Real gain that gives the restriction of ``closed`` to the invariant subspace ``basis`` the ``targets``.
+
+    The gain acts along ``basis`` only, so every eigenvalue outside the subspace is kept (its left
+    eigenvector annihilates the subspace); ``targets`` must be closed under conjugation.
+    """
+    block = np.linalg.lstsq(basis, closed @ basis, rcond=None)[0]
+    # place_poles wants an input matrix of full column rank: (C basis)ᵀ = U S Vᵀ, placed through U S
+    u, sv, vt = np.linalg.svd((c @ basis).T, full_matrices=False)
+    rank = int(np.sum(sv > 1e-10 * max(1.0, float(sv[0]) if sv.size else 1.0)))
+    try:
+        if rank == 0:
+            raise ValueError("C sees none of these modes")
+        placed = place_poles(block.T, u[:, :rank] * sv[:rank], np.asarray(targets, dtype=complex))
+    except ValueError as exc:
+        raise DesignError(
+            f"place_in_disks: the eigenvalues {np.round(np.linalg.eigvals(block), 6)} cannot be moved to "
+            f"{np.round(np.asarray(targets), 6)} by output injection (the modes may be unobservable from C: {exc})"
+        ) from exc
+    return np.asarray(basis @ (vt[:rank].T @ placed.gain_matrix).T, dtype=float)
+
+
+def _place_block(
+    a: FloatArray, c: FloatArray, region: tuple[Disk, ...], vals: ComplexArray, vecs: ComplexArray, match: NDArray[Any]
+) -> tuple[FloatArray, NDArray[np.bool_], list[dict[str, Any]]]:
+    """Move the eigenvalues of :func:`_mixed_block` to their disk centres at once (a real gain cannot move
+    one of a conjugate pair into a real disk alone, nor two real eigenvalues into a conjugate pair of disks
+    one by one); duplicate centres are spread over half the radius so that the targets are distinct.
+
+    Returns the gain, the disks it placed, and one entry of ``RegionPlacement.steps`` per disk.
+    """
+    block = _mixed_block(region, vals[match])
+    gain = np.zeros((a.shape[0], c.shape[0]))
+    if not block.any():
+        return gain, block, []
+    columns: list[FloatArray] = []
+    targets: list[complex] = []
+    for j in np.flatnonzero(block):
+        u, lam, disk = vecs[:, match[j]], complex(vals[match[j]]), region[j]
+        if _is_real(lam):
+            columns.append(u.real)
+        elif lam.imag > 0:
+            columns.extend((u.real, u.imag))
+        earlier = sum(abs(region[i].center - disk.center) == 0 for i in np.flatnonzero(block) if i < j)
+        targets.append(disk.center + 0.5 * disk.radius * earlier / (earlier + 1))
+    basis = np.column_stack(columns)
+    if basis.shape[1] != len(targets):
+        raise DesignError(
+            f"place_in_disks: the eigenvalues {np.round(vals[match[block]], 6)} do not form a conjugate-closed set "
+            "(verification failed before the placement)"
+        )
+    gain = _subspace_gain(a, c, basis, targets)
+    steps = [
+        {
+            "disk": int(j),
+            "before": complex(vals[match[j]]),
+            "after": target,
+            "status": "placed with its block",
+            "gain_norm": float(np.linalg.norm(gain)),
+        }
+        for j, target in zip(np.flatnonzero(block), targets)
+    ]
+    return gain, block, steps
+
+
 def place_in_disks(
     A: ArrayLike, C: ArrayLike, disks: Sequence[Disk | tuple[complex, float]], objective: str = "min_gain"
 ) -> RegionPlacement:
@@ -555,7 +643,10 @@ def place_in_disks(
     Eigenvalues of :math:`A` are matched to disks by least total distance; disk by disk (a conjugate
     pair of disks at once) LMI (15) is solved for the modal subsystem and the gain accumulated
     (step 6, :math:`L_1 = \sum_j L_{1j}`, step 10). Eigenvalues are recomputed after each step (steps
-    3 and 7). The result is verified from the eigenvalues of :math:`A - L_1C`.
+    3 and 7). Where the matching puts a real eigenvalue in a non-real disk or one of a conjugate pair in
+    a real disk (Theorem 4.1's one-mode gain cannot do either with a real :math:`L`), those eigenvalues
+    (closed under conjugation) are moved together, by pole placement on their real invariant subspace,
+    to their disk centres. The result is verified from the eigenvalues of :math:`A - L_1C`.
 
     Parameters
     ----------
@@ -576,10 +667,10 @@ def place_in_disks(
     Raises
     ------
     AssumptionError
-        If the disks are not ``n``, not conjugate-symmetric, not in the left half-plane, or a real
-        eigenvalue has to go into a non-real disk (that would need a two-mode block, not supported).
+        If the disks are not ``n``, not conjugate-symmetric or not in the left half-plane.
     DesignError
-        If an LMI is infeasible or the verification fails.
+        If an LMI is infeasible, modes that must move together cannot be moved by output injection
+        (unobservable), or the verification fails.
     """
     a = as_matrix("A", A)
     n = a.shape[0]
@@ -600,12 +691,12 @@ def place_in_disks(
         raise AssumptionError(
             "disks: expected disks closed under complex conjugation (a real gain places conjugate pairs)"
         )
-    gain = np.zeros((n, c.shape[0]))
-    vals = np.linalg.eigvals(a)
+    vals, vecs = np.linalg.eig(a)
+    vals, vecs = vals.astype(complex), vecs.astype(complex)  # complex even when every eigenvalue is real
     rows, cols = linear_sum_assignment(np.abs(centres[:, None] - vals[None, :]))
-    assigned = vals[cols[np.argsort(rows)]]
-    steps: list[dict[str, Any]] = []
-    done = np.zeros(n, dtype=bool)
+    match = cols[np.argsort(rows)]
+    assigned = vals[match]
+    gain, done, steps = _place_block(a, c, region, vals, vecs, match)
     for j, disk in enumerate(region):
         if done[j]:
             continue
@@ -623,13 +714,6 @@ def place_in_disks(
         cur_vals, cur_vecs = np.linalg.eig(a - gain @ c)
         k = int(np.argmin(np.abs(cur_vals - assigned[j])))
         lam = complex(cur_vals[k])
-        if disk.is_real != (abs(lam.imag) <= 1e-9 * (1 + abs(lam))):
-            kind = "real" if disk.is_real else "non-real"
-            raise AssumptionError(
-                f"disks: the eigenvalue {lam:.4g} was matched to the {kind} disk centred at {disk.center}; "
-                "a real gain places real eigenvalues in real-centred disks and conjugate pairs in conjugate "
-                "disk pairs (other combinations need a two-mode block, not supported)"
-            )
         if objective == "min_gain" and disk.margin(lam) > _MARGIN * disk.radius:
             steps.append({"disk": j, "before": lam, "after": lam, "status": "already inside", "gain_norm": 0.0})
             continue
@@ -643,10 +727,7 @@ def place_in_disks(
         else:
             # A real gain along the real invariant plane [Re u, Im u] moves the pair to (wanted, conj)
             # exactly and keeps every other eigenvalue (their left eigenvectors annihilate the plane).
-            plane = np.column_stack([u.real, u.imag])
-            block = np.linalg.lstsq(plane, (a - gain @ c) @ plane, rcond=None)[0]
-            placed = place_poles(block.T, (c @ plane).T, np.array([wanted, wanted.conjugate()]))
-            step_gain = plane @ placed.gain_matrix.T
+            step_gain = _subspace_gain(a - gain @ c, c, np.column_stack([u.real, u.imag]), [wanted, wanted.conjugate()])
         gain = gain + step_gain
         new = np.linalg.eigvals(a - gain @ c)
         after = complex(new[np.argmin(np.abs(new - wanted))])

@@ -22,6 +22,7 @@ the same numbers.
 from __future__ import annotations
 
 import functools
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -31,11 +32,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import ThreadpoolController
 
-from ..errors import DataError
+from ..errors import DataError, DivergenceWarning
 from ..estimate import Estimate
 from ..validation import as_array, as_box, as_instance, as_signal, as_time, check_both_or_neither, check_finite
 
-__all__ = ["Observer", "ObserverState"]
+__all__ = ["GROWTH_LIMIT", "Observer", "ObserverState", "check_growth"]
 
 FloatArray = NDArray[np.float64]
 
@@ -59,7 +60,8 @@ def _one_blas_thread(run: Callable[_Params, _Result]) -> Callable[_Params, _Resu
 
 
 def _named(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
-    """Label the estimate of ``run`` with the state names of the observer's model (when it has them)."""
+    """Label the estimate of ``run`` with the state names of the observer's model (when it has them) and
+    check its widths for unbounded growth (:func:`check_growth`)."""
 
     @functools.wraps(run)
     def named(self: Observer, *args: Any, **kwargs: Any) -> Estimate:
@@ -67,6 +69,7 @@ def _named(run: Callable[..., Estimate]) -> Callable[..., Estimate]:
         names = self._channel_names("state")
         if names is not None and len(names) == estimate.lower.shape[-1]:
             estimate.state_names = names
+        check_growth(estimate)
         return estimate
 
     return named
@@ -92,6 +95,54 @@ def _checked_step(step: Callable[..., ObserverState]) -> Callable[..., ObserverS
         return step(self, state, *args, **kwargs)
 
     return checked
+
+
+GROWTH_LIMIT = 100.0
+"""Growth of a state's width, from the first tenth of a record to the last, beyond which a run that is still
+growing (last tenth at least 1.5 times the sixth) is reported as diverging (:func:`check_growth`)."""
+
+
+def check_growth(estimate: Estimate) -> None:
+    """Warn and record in ``meta`` when the widths of a run grow without bound.
+
+    For every run and state: the largest width over the last tenth of the record over the largest over its
+    first tenth (``meta["width_growth"]``, the worst; NaN rows, where a run has no bound, are left out). A run
+    is diverging (``meta["diverging"]``) when a finite width becomes infinite, or when that ratio exceeds
+    :data:`GROWTH_LIMIT` while the widths still grow (the last tenth at least 1.5 times the sixth): bounded
+    growth that has settled, e.g. from an exactly known initial state to the steady width, is not. Records of
+    fewer than 10 rows are not judged.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        The result of a run; its ``meta`` is updated in place.
+    """
+    width = np.asarray(estimate.upper, dtype=float) - np.asarray(estimate.lower, dtype=float)
+    steps = width.shape[-2]
+    if steps < 10:
+        return
+    tenth = steps // 10
+    with warnings.catch_warnings(), np.errstate(invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows: rows a run has no bound for
+        early = np.nanmax(width[..., :tenth, :], axis=-2)
+        middle = np.nanmax(width[..., 5 * tenth : 6 * tenth, :], axis=-2)
+        late = np.nanmax(width[..., -tenth:, :], axis=-2)
+        lost = np.isfinite(early) & np.isposinf(late)
+        floor = 1e-9 * (1.0 + np.nanmax(np.abs(estimate.lower[..., :tenth, :]), axis=-2))
+        ratio = np.where(np.isfinite(early) & np.isfinite(late), late / np.maximum(early, floor), 0.0)
+    growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * middle)
+    worst = float(np.max(ratio)) if ratio.size else 0.0
+    diverging = bool(np.any(lost) or np.any(growing))
+    estimate.meta.update(width_growth=np.inf if np.any(lost) else worst, diverging=diverging)
+    if diverging:
+        warnings.warn(
+            f"{estimate.meta.get('method', 'the observer')}: the widths grow without bound (a state's width grew "
+            f"{estimate.meta['width_growth']:.3g} times from the first tenth of the record to the last and is still "
+            "growing); the bounds hold but say nothing about the state: the estimation error of this design is "
+            "unstable for this model (a gain that makes it contract, more outputs, or a smaller disturbance box)",
+            DivergenceWarning,
+            stacklevel=3,
+        )
 
 
 SPACING_TOLERANCE = 1e-9

@@ -48,7 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..complex_interval import real_part_radius
-from ..errors import AssumptionError, BoundsError, DimensionError
+from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
@@ -297,10 +297,13 @@ class HighGainIntervalObserver(Observer):
         self.output_gain = out_gain
         self.output_radius_abscissa = self._output_radius_abscissa()
         if self.output_radius_abscissa >= 0:
-            raise AssumptionError(
-                "output_gain: the radius system of the output-bound observer (Theorem 4.2) is not Hurwitz "
-                f"(spectral abscissa {self.output_radius_abscissa:.3g}); its bounds would diverge. "
-                "Use a smaller output gain"
+            raise DesignError(
+                f"output_gain ({'the placed gain L' if output_gain is None else 'as given'}): the output-bound "
+                "observer (Theorem 4.2) with this gain diverges: the worst case of its error radii, fed back "
+                f"through the gain from its own box, grows like exp({self.output_radius_abscissa:.3g} t) (its radius "
+                "system is not Hurwitz), so its bounds of y between samples, and every state bound built on them, "
+                "would grow without bound on this system. Give a smaller output_gain (zeros: the model's own modes) "
+                "or disks nearer the eigenvalues of A"
             )
         self.d_lower, self.d_upper = full.w
         self._A = _Split(system.A)
@@ -360,6 +363,12 @@ class HighGainIntervalObserver(Observer):
         -------
         HighGainIntervalObserver
             With ``placement`` (and ``theta_design``) set.
+
+        Raises
+        ------
+        DesignError
+            If no gain places the eigenvalues in the disks, or the output-bound observer with
+            ``output_gain`` (default: the placed gain) diverges (its radius system is not Hurwitz).
         """
         from ..design.high_gain import theta_design
         from ..design.regions import place_in_disks
@@ -500,6 +509,7 @@ class HighGainIntervalObserver(Observer):
         return self._initial(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), float(t0))
 
     def _initial(self, lo: FloatArray, hi: FloatArray, t0: float) -> ObserverState:
+        lo, hi = self.system.in_domain(lo, hi)
         internal: dict[str, Any] = {"t": t0}
         xc, xr = 0.5 * (lo + hi), 0.5 * (hi - lo)
         for key, mod in (("s", self.state_modal), ("w", self.output_modal)):
@@ -631,7 +641,11 @@ class HighGainIntervalObserver(Observer):
         """A-priori box ``B ⊇ {x(s) : s ∈ [t, t+h]}`` (Picard self-map) and the bounds of φ and ẋ over it.
 
         The first candidate widens the box by twice the previous step's bound of ``h ẋ`` (``guess``);
-        whatever the candidate, it is accepted only if ``X + [0, h] F(B) ⊆ B``.
+        whatever the candidate, it is accepted only if ``X + [0, h] F(B) ⊆ B``. Every candidate is cut to
+        the state domain ``D`` first: the trajectory stays in ``D`` (the model's claim), so as long as it
+        stays in ``B`` its derivative lies in ``F(B ∩ D)`` and the trajectory in ``(X + [0, h] F(B ∩ D)) ∩ D``;
+        that set inside ``B ∩ D`` keeps it in ``B ∩ D`` over the whole step by the same argument as without a
+        domain.
         """
         h = self.h
         sys = self.system
@@ -642,9 +656,9 @@ class HighGainIntervalObserver(Observer):
             b_lo, b_hi = lo, hi
         grow = 1.0
         for _ in range(_PICARD_TRIES):
+            b_lo, b_hi = sys.in_domain(b_lo, b_hi)
             f_lo, f_hi, p_lo, p_hi = self._field(b_lo, b_hi, t, u_lo, u_hi)
-            cand_lo = lo + np.minimum(0.0, h * f_lo)
-            cand_hi = hi + np.maximum(0.0, h * f_hi)
+            cand_lo, cand_hi = sys.in_domain(lo + np.minimum(0.0, h * f_lo), hi + np.maximum(0.0, h * f_hi))
             if np.all(cand_lo >= b_lo) and np.all(cand_hi <= b_hi):
                 return b_lo, b_hi, p_lo, p_hi, f_lo, f_hi
             pad = grow * (cand_hi - cand_lo - (hi - lo)) + _PICARD_SLACK * (1 + np.abs(lo) + np.abs(hi))
@@ -713,6 +727,7 @@ class HighGainIntervalObserver(Observer):
                 y_lo,
                 y_hi,
             )
+            x_lo, x_hi = self.system.in_domain(x_lo, x_hi)
         u_lo, u_hi = uk - self.input_rate * self.h, uk + self.input_rate * self.h
         if self.scheme == "paper-euler":  # the paper: inputs evaluated on the box at t_k only
             b_lo, b_hi = x_lo, x_hi
@@ -752,6 +767,7 @@ class HighGainIntervalObserver(Observer):
             out_lo, out_hi = self._refined(nx_lo, nx_hi, new["y_lower"], new["y_upper"])
         else:
             out_lo, out_hi = boxes["s"]
+        out_lo, out_hi = self.system.in_domain(out_lo, out_hi)
         if self.rewrap:
             for key, mod, rot in (("s", self.state_modal, rot_s), ("w", self.output_modal, rot_w)):
                 new[key + "c"], new[key + "r"], new[key + "i"] = mod.rewrap(

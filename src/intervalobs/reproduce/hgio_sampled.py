@@ -16,10 +16,12 @@ observer's steps and the paper's samples every 5 ms.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..design.high_gain import ThetaDesign, euler_radius_factor, theta_design
 from ..design.regions import HalfPlane, HorizontalStrip, ModalDecomposition, modal_decomposition, place_in_disks
@@ -55,6 +57,60 @@ HULL_REFERENCE = {
     "HullEstimator, the moving-window LP hull with e^{-|x|} in [0, 1] treated as bounded noise, window 200 "
     "samples; lower bound for any sound estimator under worst-case noise. Quoted, not recomputed here.",
 }
+
+
+GeneralEstimator = Callable[[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], Estimate]
+"""An estimator of the general continuous-time nonlinear path (issue 32), built for seed 004's example: called
+with ``(t, y, u)`` of the reproduction's record (every run, ``y`` NaN between samples) and returning its
+:class:`~intervalobs.estimate.Estimate` on the grid ``t``."""
+
+GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {}
+"""The hook for the general path: each entry is run on the same record as the HGIO and reported in
+``summary["design"]["general_path"]`` (width over the same window, its ratio to the recommended HGIO's,
+enclosure, seconds); empty until such an estimator is registered."""
+
+
+def general_path(
+    t: NDArray[np.float64], sim: Any, window: NDArray[np.bool_], hgio_width: NDArray[np.float64]
+) -> dict[str, Any]:
+    """Run every estimator of :data:`GENERAL_ESTIMATORS` on the record; widths next to the HGIO's.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (T,)
+        Grid of the record.
+    sim : SampledRecord
+        The truth and the measurements (``x``, ``y``, ``u``).
+    window : numpy.ndarray of bool, shape (T,)
+        Rows of the mean widths (the HGIO's window).
+    hgio_width : numpy.ndarray, shape (n,)
+        Mean widths of the recommended HGIO over ``window``.
+
+    Returns
+    -------
+    dict
+        ``hgio_width_mean`` and, per estimator, ``width_mean``, ``width_over_hgio``, ``enclosure``,
+        ``seconds`` and ``diverging``.
+    """
+    results: dict[str, Any] = {}
+    for name, build_and_run in GENERAL_ESTIMATORS.items():
+        start = time.perf_counter()
+        est = build_and_run(t, sim.y, sim.u)
+        seconds = time.perf_counter() - start
+        width = (est.upper - est.lower)[..., window, :].reshape(-1, hgio_width.size).mean(axis=0)
+        results[name] = {
+            "width_mean": width,
+            "width_over_hgio": width / hgio_width,
+            "enclosure": est.enclosure(sim.x).as_dict(),
+            "seconds": seconds,
+            "diverging": bool(est.meta.get("diverging", False)),
+        }
+    return {
+        "hgio_width_mean": hgio_width,
+        "window_s": [WIDTH_WINDOW, example.T_FINAL],
+        "estimators": results,
+        "status": "compared" if results else "no general estimator registered yet (GENERAL_ESTIMATORS)",
+    }
 
 
 def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
@@ -413,6 +469,7 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         "runs": RUNS,
         "truth_substeps": SUBSTEPS,
         "sample_period_s": example.SAMPLE_PERIOD,
+        "general_path": general_path(t, sim, window, width_w),
     }
     summary["paper"] = {
         "p1": example.PAPER["p1"],

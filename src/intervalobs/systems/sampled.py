@@ -16,6 +16,11 @@ the range :math:`e^{-|x|} \in [e^{-\max|x|}, e^{-\operatorname{mig}|x|}] \subset
 paper's example). The constructor spot-checks it on random points and refuses an enclosure that
 misses one.
 
+A *state domain* ``domain=(lower, upper)`` (ends may be infinite, e.g. concentrations ``>= 0``) states
+that every admissible trajectory stays in that box. Then ``phi`` and ``phi_bounds`` are only ever called
+inside it (the spot check draws its boxes there, and the observers intersect every box with it before
+bounding ``phi``), so they need not be defined, or clipped, outside it.
+
 :func:`intervalobs.simulate.simulate_sampled` produces the truth for tests and reproductions.
 """
 
@@ -38,6 +43,21 @@ PhiBounds = Callable[[float, float, FloatArray, FloatArray, FloatArray, FloatArr
 _SPOT_CHECKS = 256
 
 
+def _as_domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[FloatArray, FloatArray]:
+    """``(lower, upper)`` of the state domain as two (n,) vectors; infinite ends allowed, no NaN, lower <= upper."""
+    if domain is None:
+        return np.full(n, -np.inf), np.full(n, np.inf)
+    if not isinstance(domain, tuple | list) or len(domain) != 2:
+        raise BoundsError(f"domain: expected a (lower, upper) pair, got {type(domain).__name__}")
+    try:
+        lo, hi = (np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy() for v in domain)
+    except (TypeError, ValueError) as exc:
+        raise DimensionError(f"domain: expected (lower, upper) of {n} numbers each or scalars ({exc})") from exc
+    if np.any(np.isnan(lo) | np.isnan(hi)) or np.any(lo > hi) or np.any(lo == np.inf) or np.any(hi == -np.inf):
+        raise BoundsError(f"domain: expected lower <= upper with no NaN and a nonempty box, got {lo}, {hi}")
+    return lo, hi
+
+
 class SampledSystem:
     """The continuous-discrete model of seed 004, eq. (8).
 
@@ -57,6 +77,10 @@ class SampledSystem:
         Number of known inputs.
     sample_period : float
         Time between two output samples :math:`t_{k+1} - t_k`.
+    domain : tuple of array_like, optional
+        ``(lower, upper)``, shape (n,) or scalars, ends possibly infinite: a box that every admissible
+        trajectory stays in (forward invariant; the user's claim, e.g. ``(0, inf)`` for concentrations).
+        Default: the whole space.
 
     Attributes
     ----------
@@ -72,6 +96,7 @@ class SampledSystem:
         phi_bounds: PhiBounds | None = None,
         m: int = 0,
         sample_period: float = 1.0,
+        domain: tuple[ArrayLike, ArrayLike] | None = None,
     ) -> None:
         self.A = as_matrix("A", A)
         n = self.A.shape[0]
@@ -89,6 +114,7 @@ class SampledSystem:
                 "phi_bounds: a sound observer needs an enclosure of phi over boxes; give both phi and phi_bounds "
                 "or neither"
             )
+        self.domain = _as_domain(domain, n)
         self.phi = phi
         self.phi_bounds = phi_bounds
         if phi is not None:
@@ -168,8 +194,17 @@ class SampledSystem:
         assert self.phi is not None and self.phi_bounds is not None
         rng = np.random.default_rng(12345)
         n, m = self.n, self.m
-        centre = rng.normal(scale=3.0, size=(_SPOT_CHECKS, n))
+        dom_lo, dom_hi = self.domain
+        draw = rng.normal(scale=3.0, size=(_SPOT_CHECKS, n))
         radius = rng.uniform(0.0, 2.0, size=(_SPOT_CHECKS, n))
+        # centres moved into the domain (reflected at a finite end, squashed into a bounded one), boxes cut to it
+        with np.errstate(invalid="ignore"):  # inf - inf in the branches np.where does not take
+            squashed = dom_lo + (dom_hi - dom_lo) * 0.5 * (1.0 + np.tanh(draw / 3.0))
+            reflected = np.where(np.isfinite(dom_lo), dom_lo + np.abs(draw), dom_hi - np.abs(draw))
+        bounded, unbounded = np.isfinite(dom_lo) & np.isfinite(dom_hi), ~np.isfinite(dom_lo) & ~np.isfinite(dom_hi)
+        centre = np.where(bounded, squashed, np.where(unbounded, draw, reflected))
+        box_lo, box_hi = np.maximum(centre - radius, dom_lo), np.minimum(centre + radius, dom_hi)
+        centre, radius = 0.5 * (box_lo + box_hi), 0.5 * (box_hi - box_lo)
         u_c = rng.normal(scale=3.0, size=(_SPOT_CHECKS, m))
         u_r = rng.uniform(0.0, 1.0, size=(_SPOT_CHECKS, m))
         lo, hi = self.phi_bounds(0.0, 0.1, u_c - u_r, u_c + u_r, centre - radius, centre + radius)
@@ -187,6 +222,31 @@ class SampledSystem:
             slack = 1e-9 * (1.0 + np.abs(value))
             if np.any(value < lo - slack) or np.any(value > hi + slack):
                 raise AssumptionError("phi_bounds: does not enclose phi at a random point of a random box (spot check)")
+
+    def in_domain(self, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The box ``[lower, upper]`` intersected with the state domain (sound: the truth stays in both).
+
+        Parameters
+        ----------
+        lower, upper : numpy.ndarray, shape (..., n)
+            A box that contains the state.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., n)
+
+        Raises
+        ------
+        AssumptionError
+            If the domain empties a nonempty box: the data contradict the model (a trajectory left the domain).
+        """
+        lo, hi = np.maximum(lower, self.domain[0]), np.minimum(upper, self.domain[1])
+        if np.any((lo > hi) & (lower <= upper)):  # only what the domain empties (not a box given empty)
+            raise AssumptionError(
+                "domain: a box that contains the state does not meet the state domain; the data contradict the "
+                "model (noise or disturbance outside their boxes, or a trajectory that leaves the domain)"
+            )
+        return lo, hi
 
     def __repr__(self) -> str:
         return f"SampledSystem(n={self.n}, m={self.m}, p={self.p}, sample_period={self.sample_period:g})"
