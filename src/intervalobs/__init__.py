@@ -20,6 +20,7 @@ from .errors import (
     DesignError,
     DimensionError,
     FileError,
+    InconsistentDataError,
     IntervalObserverError,
     SchedulerError,
 )
@@ -73,6 +74,7 @@ __all__ = [
     "HighGainIntervalObserver",
     "HullEstimator",
     "HullLowerBound",
+    "InconsistentDataError",
     "IntersectionObserver",
     "IntervalObserver",
     "IntervalObserverError",

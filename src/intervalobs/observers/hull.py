@@ -51,7 +51,7 @@ from scipy import sparse
 from scipy.linalg import expm
 
 from ..design.certified_lp import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
-from ..errors import AssumptionError, DataError, DimensionError
+from ..errors import AssumptionError, DataError, DimensionError, InconsistentDataError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
 from ..systems.bounds import Bounds, ResolvedBounds
@@ -1108,7 +1108,7 @@ class HullEstimator(Observer):
         """Inflate the box, and refuse an empty one (the data contradict the bounds)."""
         lower, upper = inflate(lower, upper)
         if np.any(lower > upper):
-            raise DataError(
+            raise InconsistentDataError(
                 f"y: the measurements are inconsistent with the model and its bounds at step {k} "
                 "(empty consistent set): check the noise bounds"
             )
