@@ -25,6 +25,7 @@ from .errors import (
     SchedulerError,
 )
 from .estimate import EnclosureReport, Estimate
+from .front_door import observe, suggest
 from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
 from .interval import Interval, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
@@ -156,3 +157,7 @@ __all__ += [
     "jacobian_bounds",
     "simulate_nonlinear",
 ]
+
+# the front door
+
+__all__ += ["observe", "suggest"]

@@ -73,7 +73,10 @@ def _parser(examples: Sequence[str], campaigns: Sequence[str]) -> argparse.Argum
     estimate.add_argument("model", nargs="?", metavar="MODEL", help="model file (.toml or .py)")
     estimate.add_argument("data", nargs="?", metavar="DATA", help="record (.csv or .parquet)")
     estimate.add_argument(
-        "--observer", type=types.choice(list(OBSERVERS)), default="tube", help="observer (default: tube)"
+        "--observer",
+        type=types.choice(list(OBSERVERS)),
+        default="auto",
+        help="observer (default: auto, the choice of intervalobs.observe)",
     )
     estimate.add_argument("--time", default=None, metavar="COLUMN", help="time column (default: t or time)")
     estimate.add_argument(

@@ -67,7 +67,8 @@ carry the rounding of their last digit, a few ulps of the largest time."""
 FloatArray = NDArray[np.float64]
 
 OBSERVERS = {
-    "tube": "IntervalObserver.design: the gain with the smallest error tube (default)",
+    "auto": "intervalobs.observe: the tightest estimator within 5 ms a sample, filtered rows (default)",
+    "tube": "IntervalObserver.design: the gain with the smallest error tube",
     "framer": "IntervalObserver.design(method='framer'): the classical framer in searched coordinates",
     "intersection": "IntersectionObserver.design: several sound observers intersected, output contraction",
     "hull": "HullEstimator.design: the exact interval hull by linear programming (point models; slow)",
@@ -417,10 +418,10 @@ def design_observer(model: ModelFile, h: float, observer: str = "tube") -> Obser
         return IntersectionObserver.design(model.system, model.bounds, h=period)
     if observer == "hull":
         return HullEstimator.design(model.system, model.bounds, h=period)
-    raise DataError(f"observer: expected one of {list(OBSERVERS)}, got {observer!r}")
+    raise DataError(f"observer: expected one of {[k for k in OBSERVERS if k != 'auto']}, got {observer!r}")
 
 
-def estimate_record(model: ModelFile, record: Record, observer: str = "tube") -> Estimate:
+def estimate_record(model: ModelFile, record: Record, observer: str = "auto") -> Estimate:
     """Bounds of the states over a measured record.
 
     The observer runs on the uniform grid ``k·h`` (the record's times minus the first, so that
@@ -441,9 +442,13 @@ def estimate_record(model: ModelFile, record: Record, observer: str = "tube") ->
     Estimate
         With ``meta["observer"]`` the observer's key.
     """
-    designed = design_observer(model, record.h, observer)
     grid = record.h * np.arange(record.t.size)
-    estimate = designed.run(grid, record.y, record.u)
+    if observer == "auto":
+        from .front_door import observe
+
+        estimate = observe(model.system, model.bounds, grid, record.y, record.u)
+    else:
+        estimate = design_observer(model, record.h, observer).run(grid, record.y, record.u)
     return replace(estimate, t=record.t, meta={**estimate.meta, "observer": observer, "time_unit": "s"})
 
 
