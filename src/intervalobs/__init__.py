@@ -21,10 +21,12 @@ from .errors import (
     DimensionError,
     DivergenceWarning,
     FileError,
+    InconsistentDataError,
     IntervalObserverError,
     SchedulerError,
 )
 from .estimate import EnclosureReport, Estimate
+from .front_door import observe, suggest
 from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
 from .interval import Interval, interval_matvec_bounds, matvec_bounds, neg, pos
 from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
@@ -78,6 +80,7 @@ __all__ = [
     "HighGainIntervalObserver",
     "HullEstimator",
     "HullLowerBound",
+    "InconsistentDataError",
     "IntersectionObserver",
     "IntervalObserver",
     "IntervalObserverError",
@@ -168,3 +171,7 @@ __all__ += [
     "FlowEnclosure",
     "flow_enclosure",
 ]
+
+# the front door
+
+__all__ += ["observe", "suggest"]

@@ -73,7 +73,10 @@ def _parser(examples: Sequence[str], campaigns: Sequence[str]) -> argparse.Argum
     estimate.add_argument("model", nargs="?", metavar="MODEL", help="model file (.toml or .py)")
     estimate.add_argument("data", nargs="?", metavar="DATA", help="record (.csv or .parquet)")
     estimate.add_argument(
-        "--observer", type=types.choice(list(OBSERVERS)), default="tube", help="observer (default: tube)"
+        "--observer",
+        type=types.choice(list(OBSERVERS)),
+        default="auto",
+        help="observer (default: auto, the choice of intervalobs.observe)",
     )
     estimate.add_argument("--time", default=None, metavar="COLUMN", help="time column (default: t or time)")
     estimate.add_argument(
@@ -161,11 +164,15 @@ def _estimate(args: argparse.Namespace) -> int:
     result = records.estimate_record(model, record, args.observer)
     source = {"model": str(model.path), "data": str(record.path)}
     records.write_bounds(result, out, plot=args.plot, parquet=record.path.suffix == ".parquet", source=source)
+    head = f"{record.path.name}: {record.t.size} samples every {record.h:g} s, {args.observer} observer"
+    if not result.consistent:
+        print(
+            f"{head}: the data contradict the model from t = {result.inconsistent_from:g} s (no state fits them; "
+            f"bounds kept up to it, summary.json: consistent false), {time.perf_counter() - start:.1f} s -> {out}"
+        )
+        return 0
     widths = ", ".join(f"{n} {w:.4g}" for n, w in zip(result.state_names, result.width()[-1]))
-    print(
-        f"{record.path.name}: {record.t.size} samples every {record.h:g} s, {args.observer} observer, "
-        f"final widths {widths}, {time.perf_counter() - start:.1f} s -> {out}"
-    )
+    print(f"{head}, final widths {widths}, {time.perf_counter() - start:.1f} s -> {out}")
     return 0
 
 

@@ -16,6 +16,7 @@ __all__ = [
     "DimensionError",
     "DivergenceWarning",
     "FileError",
+    "InconsistentDataError",
     "IntervalObserverError",
     "SchedulerError",
 ]
@@ -43,6 +44,15 @@ class DesignError(IntervalObserverError, RuntimeError):
 
 class DataError(IntervalObserverError, ValueError):
     """Measurements or inputs contain NaN/inf or do not match the time vector."""
+
+
+class InconsistentDataError(DataError):
+    """The data contradict the model and its bounds: no admissible realisation explains them.
+
+    An observer's ``step`` raises it when its box becomes empty (a parameter outside its box, a unit
+    error, a wrong time grid, a fault); ``run`` does not: it returns the estimate up to that time,
+    with ``Estimate.consistent`` False and ``Estimate.inconsistent_from`` the time.
+    """
 
 
 class ArgumentError(IntervalObserverError, ValueError):

@@ -124,7 +124,19 @@ class Estimate:
     Raises
     ------
     BoundsError
-        A bound is NaN (not an interval: ``-inf``/``inf`` say "no bound"), or lower > upper somewhere.
+        A bound is NaN (not an interval: ``-inf``/``inf`` say "no bound") before
+        ``meta["inconsistent_from"]``, or lower > upper somewhere.
+
+    Notes
+    -----
+    **Data that contradict the model.** When an estimator's box becomes empty (the data fit no
+    admissible realisation of the model: a parameter outside its box, a unit error, a wrong time
+    grid), the estimate is kept and says so: :attr:`consistent` is False, :attr:`inconsistent_from`
+    is the first time whose box is empty (``meta["inconsistent_from"]``), the rows before it keep
+    their bounds and the rows from it on are NaN (no bound holds any more; the last bounds would
+    claim a guarantee the model no longer gives). :meth:`from_boxes` builds such an estimate;
+    :meth:`enclosure` checks only the rows before that time, plots stop there and mark it, and the
+    tables (:meth:`to_pandas`, :meth:`to_xarray`, :meth:`save`) keep the NaN rows and the time.
     """
 
     t: FloatArray
@@ -147,7 +159,8 @@ class Estimate:
             )
         if self.lower.shape[-2] != self.t.size:
             raise DimensionError(f"Estimate: expected {self.t.size} time steps in lower, got {self.lower.shape[-2]}")
-        _check_bounds("lower", "upper", self.t, self.lower, self.upper)
+        usable = self.bounded_rows()
+        _check_bounds("lower", "upper", self.t, self.lower, self.upper, usable)
         if (self.input_lower is None) != (self.input_upper is None):
             raise DimensionError("Estimate: give both input_lower and input_upper or neither")
         if self.input_lower is not None and self.input_upper is not None:
@@ -158,7 +171,7 @@ class Estimate:
                     f"Estimate: input bounds must have shape {self.lower.shape[:-1]} + (q,), "
                     f"got {self.input_lower.shape} and {self.input_upper.shape}"
                 )
-            _check_bounds("input_lower", "input_upper", self.t, self.input_lower, self.input_upper)
+            _check_bounds("input_lower", "input_upper", self.t, self.input_lower, self.input_upper, usable)
         self.state_names = as_names("state_names", self.state_names or None, self.lower.shape[-1], "x")
         q = 0 if self.input_lower is None else self.input_lower.shape[-1]
         self.input_names = as_names("input_names", self.input_names or None, q, "d")
@@ -170,10 +183,77 @@ class Estimate:
         span = f"[{self.t[0]:.4g}, {self.t[-1]:.4g}]" if self.t.size else "[]"
         final = float(np.mean(self.width()[..., -1, :])) if self.t.size and self.lower.shape[-1] else float("nan")
         method = f"method={self.meta['method']!r}, " if "method" in self.meta else ""
+        broken = "" if self.consistent else f", inconsistent_from={self.inconsistent_from:.4g}"
         return (
             f"Estimate({method}{runs}samples={self.t.size}, t={span}, n={self.lower.shape[-1]}{inputs}, "
-            f"final_mean_width={final:.4g})"
+            f"final_mean_width={final:.4g}{broken})"
         )
+
+    @classmethod
+    def from_boxes(
+        cls,
+        t: ArrayLike,
+        lower: ArrayLike,
+        upper: ArrayLike,
+        input_lower: ArrayLike | None = None,
+        input_upper: ArrayLike | None = None,
+        meta: dict[str, Any] | None = None,
+    ) -> Estimate:
+        """An estimator's boxes as an estimate; an empty box (lower > upper) ends its run's bounds.
+
+        From the first row where a state or input box of a run is empty (or NaN) on, that run's
+        rows are NaN, and ``meta["inconsistent_from"]`` is the earliest such time over the runs
+        (see the class Notes): the data contradict the model from then on.
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Sample times.
+        lower, upper : array_like, shape (T, n) or (M, T, n)
+            State boxes, as the estimator computed them.
+        input_lower, input_upper : array_like, optional
+            Unknown-input boxes, shape (T, q) or (M, T, q).
+        meta : dict, optional
+            Method facts, copied.
+
+        Returns
+        -------
+        Estimate
+        """
+        times = np.asarray(t, dtype=float)
+        boxes = [np.array(a, dtype=float) for a in (lower, upper)]
+        if input_lower is not None and input_upper is not None:
+            boxes += [np.array(a, dtype=float) for a in (input_lower, input_upper)]
+        facts = dict(meta or {})
+        after = _after_first_empty(times, boxes)
+        if after is not None:
+            for box in boxes:
+                box[after] = np.nan
+            facts["inconsistent_from"] = float(times[np.argmax(np.any(after.reshape(-1, times.size), axis=0))])
+        if len(boxes) == 2:
+            return cls(times, boxes[0], boxes[1], meta=facts)
+        return cls(times, boxes[0], boxes[1], boxes[2], boxes[3], meta=facts)
+
+    @property
+    def inconsistent_from(self) -> float | None:
+        """First time at which the data contradict the model (an empty box), or None (``meta["inconsistent_from"]``)."""
+        value = self.meta.get("inconsistent_from")
+        return None if value is None else float(value)
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the data fit the model over the whole record (no empty box; see the class Notes)."""
+        return self.inconsistent_from is None
+
+    def bounded_rows(self) -> NDArray[np.bool_]:
+        """The rows before :attr:`inconsistent_from` (every row when the data fit the model).
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (T,)
+        """
+        start = self.inconsistent_from
+        return np.asarray(self.t < (np.inf if start is None else start))
 
     @property
     def transient(self) -> float:
@@ -195,10 +275,16 @@ class Estimate:
         Returns
         -------
         EnclosureReport
+            Of the rows before :attr:`inconsistent_from` (the rows after it hold no bound).
         """
         truth = as_truth("x", x, self.t, self.state_names)
+        kept = self.bounded_rows()
         return enclosure_report(
-            self.t, self.lower, truth, self.upper, self.transient if transient is None else transient
+            self.t[kept],
+            self.lower[..., kept, :],
+            truth[..., kept, :],
+            self.upper[..., kept, :],
+            self.transient if transient is None else transient,
         )
 
     def input_enclosure(self, d: ArrayLike, transient: float | None = None) -> EnclosureReport:
@@ -452,11 +538,19 @@ class Estimate:
         )
 
 
-def _check_bounds(lower_name: str, upper_name: str, t: FloatArray, lower: FloatArray, upper: FloatArray) -> None:
-    """Refuse NaN bounds (not an interval) and empty ones (lower > upper), naming the first offending sample."""
+def _check_bounds(
+    lower_name: str,
+    upper_name: str,
+    t: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    usable: NDArray[np.bool_],
+) -> None:
+    """Refuse NaN bounds (not an interval) in the ``usable`` rows and empty ones (lower > upper), naming the first."""
     for name, values in ((lower_name, lower), (upper_name, upper)):
-        if np.isnan(values).any():
-            k = int(np.argwhere(np.isnan(values))[0][-2])
+        missing = np.isnan(values) & usable[:, None]
+        if missing.any():
+            k = int(np.argwhere(missing)[0][-2])
             raise BoundsError(
                 f"Estimate: {name}: expected numbers (-inf/inf for no bound), got NaN at t = {t[k]:g} (row {k})"
             )
@@ -466,6 +560,23 @@ def _check_bounds(lower_name: str, upper_name: str, t: FloatArray, lower: FloatA
             f"Estimate: expected {lower_name} <= {upper_name}, got {lower_name} > {upper_name} "
             f"at t = {t[k]:g} (row {k})"
         )
+
+
+def _after_first_empty(t: FloatArray, boxes: list[FloatArray]) -> NDArray[np.bool_] | None:
+    """Rows (..., T) at or after the first empty (or NaN) box of their run; None if none or the shapes differ.
+
+    ``boxes`` alternates lower and upper arrays of shape (..., T, k); shapes that do not fit are left
+    to the :class:`Estimate` constructor's checks.
+    """
+    lead = boxes[0].shape[:-1]
+    if boxes[0].ndim < 2 or lead[-1:] != t.shape:
+        return None
+    empty = np.zeros(lead, dtype=bool)
+    for lo, hi in zip(boxes[::2], boxes[1::2]):
+        if lo.shape == hi.shape and lo.shape[:-1] == lead:
+            empty |= np.any(~(lo <= hi), axis=-1)
+    after = np.cumsum(empty, axis=-1) > 0
+    return after if after.any() else None
 
 
 def _jsonable(value: Any) -> Any:

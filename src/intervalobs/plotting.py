@@ -36,7 +36,8 @@ def plot_estimate(
 
     A Monte Carlo estimate (bounds of shape (M, T, n)) is drawn for the run ``run``, or, when ``run``
     is None, as the envelope of all runs (lowest lower and highest upper bound at each time) with
-    every run's truth as a thin line.
+    every run's truth as a thin line. When the data contradict the model, the bands stop at
+    ``estimate.inconsistent_from`` (NaN rows), marked by a dashed red line.
 
     Parameters
     ----------
@@ -106,6 +107,9 @@ def plot_estimate(
                     axis.plot(
                         times, curve, color="black", lw=0.5 if thin else 1.0, alpha=0.6 if thin else 1.0, label=label
                     )
+            if estimate.inconsistent_from is not None:  # the bounds stop there (NaN rows): say why
+                label = "data contradict the model" if row == 0 else None
+                axis.axvline(estimate.inconsistent_from, color="tab:red", ls="--", lw=0.8, label=label)
             axis.set_ylabel(names[row])
             row += 1
     unit = time_unit if time_unit is not None else estimate.meta.get("time_unit")

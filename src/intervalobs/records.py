@@ -67,7 +67,8 @@ carry the rounding of their last digit, a few ulps of the largest time."""
 FloatArray = NDArray[np.float64]
 
 OBSERVERS = {
-    "tube": "IntervalObserver.design: the gain with the smallest error tube (default)",
+    "auto": "intervalobs.observe: the tightest estimator within 5 ms a sample, filtered rows (default)",
+    "tube": "IntervalObserver.design: the gain with the smallest error tube",
     "framer": "IntervalObserver.design(method='framer'): the classical framer in searched coordinates",
     "intersection": "IntersectionObserver.design: several sound observers intersected, output contraction",
     "hull": "HullEstimator.design: the exact interval hull by linear programming (point models; slow)",
@@ -417,10 +418,10 @@ def design_observer(model: ModelFile, h: float, observer: str = "tube") -> Obser
         return IntersectionObserver.design(model.system, model.bounds, h=period)
     if observer == "hull":
         return HullEstimator.design(model.system, model.bounds, h=period)
-    raise DataError(f"observer: expected one of {list(OBSERVERS)}, got {observer!r}")
+    raise DataError(f"observer: expected one of {[k for k in OBSERVERS if k != 'auto']}, got {observer!r}")
 
 
-def estimate_record(model: ModelFile, record: Record, observer: str = "tube") -> Estimate:
+def estimate_record(model: ModelFile, record: Record, observer: str = "auto") -> Estimate:
     """Bounds of the states over a measured record.
 
     The observer runs on the uniform grid ``k·h`` (the record's times minus the first, so that
@@ -441,9 +442,13 @@ def estimate_record(model: ModelFile, record: Record, observer: str = "tube") ->
     Estimate
         With ``meta["observer"]`` the observer's key.
     """
-    designed = design_observer(model, record.h, observer)
     grid = record.h * np.arange(record.t.size)
-    estimate = designed.run(grid, record.y, record.u)
+    if observer == "auto":
+        from .front_door import observe
+
+        estimate = observe(model.system, model.bounds, grid, record.y, record.u)
+    else:
+        estimate = design_observer(model, record.h, observer).run(grid, record.y, record.u)
     return replace(estimate, t=record.t, meta={**estimate.meta, "observer": observer, "time_unit": "s"})
 
 
@@ -454,9 +459,11 @@ def write_bounds(
 
     ``bounds.csv`` has the column ``t`` and the columns of :meth:`Estimate.columns`
     (``NAME_lower``, ``NAME_upper``, ``NAME_width``); ``bounds.npz`` is :meth:`Estimate.save`;
-    ``summary.json`` holds the record's size and span, the observer and its design facts (scalars)
-    and per state the width at the last sample and its mean after the transient. It makes no claim
-    about enclosure: there is no truth to compare with.
+    ``summary.json`` holds the record's size and span, the observer and its design facts (scalars),
+    whether the data fit the model (``consistent``, and ``inconsistent_from``: the first time they do
+    not, else null) and per state the width at the last bounded sample and its mean after the
+    transient (over the bounded samples: from ``inconsistent_from`` on the bounds are NaN). It makes no
+    claim about enclosure: there is no truth to compare with.
 
     Parameters
     ----------
@@ -486,8 +493,10 @@ def write_bounds(
         table = np.column_stack([estimate.t, *(values for _, values in columns)])
         writer.writerows([repr(v) for v in row] for row in table.tolist())
     estimate.save(written[1])
-    after = estimate.t >= estimate.transient
-    width = estimate.width()
+    kept = estimate.bounded_rows()
+    after = kept & (estimate.t >= estimate.transient)
+    width = estimate.width()[kept]
+    last = dict(zip(estimate.state_names, width[-1].tolist())) if width.size else None
     summary = {
         **(source or {}),
         "observer": estimate.meta.get("observer"),
@@ -496,10 +505,12 @@ def write_bounds(
         "t_start": float(estimate.t[0]),
         "t_end": float(estimate.t[-1]),
         "transient_s": estimate.transient,
+        "consistent": estimate.consistent,
+        "inconsistent_from": estimate.inconsistent_from,
         "design": {k: v for k, v in _tables.plain(estimate.meta).items() if isinstance(v, (int, float, bool))},
-        "final_width": dict(zip(estimate.state_names, width[-1].tolist())),
-        "mean_width_after_transient": dict(
-            zip(estimate.state_names, (width[after].mean(axis=0) if after.any() else width[-1]).tolist())
+        "final_width": last,
+        "mean_width_after_transient": (
+            dict(zip(estimate.state_names, estimate.width()[after].mean(axis=0).tolist())) if after.any() else last
         ),
     }
     written[2].write_text(json.dumps(summary, indent=2) + "\n")

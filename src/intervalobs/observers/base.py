@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import ThreadpoolController
 
-from ..errors import DataError, DivergenceWarning
+from ..errors import DataError, DivergenceWarning, InconsistentDataError
 from ..estimate import Estimate
 from ..validation import as_array, as_box, as_instance, as_signal, as_time, check_both_or_neither, check_finite
 
@@ -277,7 +277,8 @@ class Observer(ABC):
             return None if values[0] is None else np.stack(values)
 
         lower, upper = np.stack([r.lower for r in runs]), np.stack([r.upper for r in runs])
-        return Estimate(times, lower, upper, stacked("input_lower"), stacked("input_upper"), runs[0].meta)
+        meta = {k: v for k, v in runs[0].meta.items() if k != "inconsistent_from"}
+        return Estimate.from_boxes(times, lower, upper, stacked("input_lower"), stacked("input_upper"), meta)
 
     def _separate_runs(self, times: FloatArray, ys: FloatArray, us: FloatArray) -> list[Estimate]:
         """The Monte Carlo runs of an unbatched observer (leading axis of ``ys``, ``us``), one after another."""
@@ -307,12 +308,15 @@ class Observer(ABC):
 
         ``state`` defaults to :meth:`init`; ``signals`` are further per-sample arguments of ``step``
         (time-first like ``ys``); ``collect`` names vectors of ``state.internal`` returned per row.
+        The loop stops once every run's box is empty or ``step`` raises
+        :class:`~intervalobs.errors.InconsistentDataError` (the data contradict the model): the rows
+        from each run's first inconsistent sample on are NaN (:meth:`Estimate.from_boxes`).
         """
-        lead, steps = ys.shape[:-2], times.size
+        lead, steps, fresh = ys.shape[:-2], times.size, state is None
         state = self.init() if state is None else state
         signals = signals or {}
-        lower = np.empty((*lead, steps, self.n))
-        upper = np.empty_like(lower)
+        lower = np.full((*lead, steps, self.n), np.nan)
+        upper = np.full_like(lower, np.nan)
         inputs: list[FloatArray] = []  # allocated at the first input bound; "no bound yet" is [-inf, inf]
         extras: dict[str, FloatArray] = {}
 
@@ -326,7 +330,7 @@ class Observer(ABC):
             for key in collect:
                 value = np.asarray(current.internal[key])
                 if key not in extras:
-                    extras[key] = np.empty((*lead, steps, value.shape[-1]))
+                    extras[key] = np.full((*lead, steps, value.shape[-1]), np.nan)
                 extras[key][..., k, :] = value
 
         filtered = self.rows == "filtered"
@@ -334,11 +338,47 @@ class Observer(ABC):
             store(0, state)
         for k in range(steps if filtered else steps - 1):
             extra = {name: signal[..., k, :] for name, signal in signals.items()}
-            state = self._step(state, ys[..., k, :], us[..., k, :], **extra)
+            try:
+                state = self._step(state, ys[..., k, :], us[..., k, :], **extra)
+            except InconsistentDataError:
+                if lead and fresh:  # one run contradicts the model: the others keep their bounds
+                    return self._loop_runs(times, ys, us, signals, collect)
+                if lead:
+                    raise
+                for box in (lower, upper, *inputs):
+                    box[..., k:, :] = np.nan  # y_k contradicts the model: no bound from t_k on
+                break
             store(k if filtered else k + 1, state)
+            if np.all(np.any(~(state.lower <= state.upper), axis=-1)):
+                break
         meta = {"transient_s": float(times[0]), **self.meta(), "rows": self.rows}
         input_lower, input_upper = inputs if inputs else (None, None)
-        return Estimate(times, lower, upper, input_lower, input_upper, meta), extras
+        return Estimate.from_boxes(times, lower, upper, input_lower, input_upper, meta), extras
+
+    def _loop_runs(
+        self,
+        times: FloatArray,
+        ys: FloatArray,
+        us: FloatArray,
+        signals: dict[str, FloatArray],
+        collect: tuple[str, ...],
+    ) -> tuple[Estimate, dict[str, FloatArray]]:
+        """:meth:`_loop` run by run, from :meth:`init`, stacked: each run stops at its own inconsistent sample."""
+        lead = ys.shape[:-2]
+        runs = [
+            self._loop(times, ys[i], us[i], None, {key: value[i] for key, value in signals.items()}, collect)
+            for i in np.ndindex(lead)
+        ]
+
+        def stacked(values: list[Any]) -> Any:
+            return None if values[0] is None else np.stack(values).reshape(*lead, *values[0].shape)
+
+        lower, upper, input_lower, input_upper = (
+            stacked([getattr(e, key) for e, _ in runs]) for key in ("lower", "upper", "input_lower", "input_upper")
+        )
+        meta = {k: v for k, v in runs[0][0].meta.items() if k != "inconsistent_from"}
+        extras = {key: stacked([x[key] for _, x in runs]) for key in collect}
+        return Estimate.from_boxes(times, lower, upper, input_lower, input_upper, meta), extras
 
     def __repr__(self) -> str:
         """``Name(n=…, p=…, m=…, h=…, fact=…)`` with the facts named by :attr:`summary_fields` that are set."""

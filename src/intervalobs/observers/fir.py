@@ -510,7 +510,7 @@ class FiniteMemoryObserver(Observer):
             )
             lower[..., k, :] = np.maximum(lower[..., k, :], f_lo)
             upper[..., k, :] = np.minimum(upper[..., k, :], f_hi)
-        return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
+        return Estimate.from_boxes(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
     def meta(self) -> dict[str, Any]:
         """Design facts recorded in every :class:`~intervalobs.estimate.Estimate`.

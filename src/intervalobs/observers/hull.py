@@ -59,7 +59,7 @@ from ..design.certified_lp import (
     run_highs,
     shrink_inward,
 )
-from ..errors import AssumptionError, DataError, DimensionError
+from ..errors import AssumptionError, DataError, DimensionError, InconsistentDataError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
 from ..systems.balancing import balanced, state_scales
@@ -1123,7 +1123,7 @@ class HullEstimator(Observer):
         """Inflate the box, and refuse an empty one (the data contradict the bounds)."""
         lower, upper = inflate(lower, upper)
         if np.any(lower > upper):
-            raise DataError(
+            raise InconsistentDataError(
                 f"y: the measurements are inconsistent with the model and its bounds at step {k} "
                 "(empty consistent set): check the noise bounds"
             )

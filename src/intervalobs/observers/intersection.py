@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import coordinate_candidates
-from ..errors import DataError, DesignError, DimensionError
+from ..errors import DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -47,6 +47,8 @@ def output_contraction(
     y_lower: FloatArray,
     y_upper: FloatArray,
     sweeps: int = 1,
+    *,
+    allow_empty: bool = False,
 ) -> tuple[FloatArray, FloatArray]:
     r"""Contract the box ``[lower, upper]`` with :math:`\{x : y_{lo} \le Cx \le y_{hi}\}` (sound).
 
@@ -64,12 +66,20 @@ def output_contraction(
         Bounds of :math:`Cx` implied by the measurement and the noise box.
     sweeps : int
         Passes over the rows.
+    allow_empty : bool
+        Return an empty box (lower > upper somewhere) where the measurement contradicts the box and
+        the noise bounds, instead of raising.
 
     Returns
     -------
     lower, upper : numpy.ndarray, shape (..., n)
-        The contracted box; where it is empty (data inconsistent with the bounds) the input box is
-        returned unchanged for that run and a :class:`~intervalobs.errors.DataError` is raised.
+        The contracted box.
+
+    Raises
+    ------
+    InconsistentDataError
+        Where the contracted box is empty (the measurement contradicts the box and the noise bounds),
+        unless ``allow_empty``.
     """
     lo, hi = np.array(lower, dtype=float), np.array(upper, dtype=float)
     for _ in range(sweeps):
@@ -89,8 +99,10 @@ def output_contraction(
                 new_lo, new_hi = inflate(new_lo, new_lo)[0], inflate(new_hi, new_hi)[1]
                 lo[..., j] = np.maximum(lo[..., j], new_lo)
                 hi[..., j] = np.minimum(hi[..., j], new_hi)
-    if np.any(lo > hi):
-        raise DataError("y: the measurement is inconsistent with the state box and the noise bounds (empty set)")
+    if not allow_empty and np.any(lo > hi):
+        raise InconsistentDataError(
+            "y: the measurement is inconsistent with the state box and the noise bounds (empty set)"
+        )
     return lo, hi
 
 

@@ -335,7 +335,7 @@ class IntervalObserver(Observer):
             z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
         lower, upper = self._x_box(z_c, z_r)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
-        return Estimate(times, lower, upper, meta={**self.meta(), "rows": self.rows})
+        return Estimate.from_boxes(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
     # -- internals -------------------------------------------------------------------------------
     def _tubes(self) -> None:

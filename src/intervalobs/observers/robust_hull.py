@@ -77,7 +77,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 
 from ..design.certified_lp import DenseLP, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
-from ..errors import AssumptionError, BoundsError, DataError, DesignError, DimensionError
+from ..errors import AssumptionError, BoundsError, DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate, product_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -321,7 +321,9 @@ class RobustHullEstimator(Observer):
             d_lo[rows, cols] = np.maximum(d_lo[rows, cols], values[2 * n : 2 * n + nd])
             d_hi[rows, cols] = np.minimum(d_hi[rows, cols], -values[2 * n + nd :])
             if np.any(d_lo > d_hi):
-                raise DataError(f"y: the measurements are inconsistent with the model and its ΔA box at step {k}")
+                raise InconsistentDataError(
+                    f"y: the measurements are inconsistent with the model and its ΔA box at step {k}"
+                )
             self.delta_box = (d_lo, d_hi)
         return lower, upper
 
@@ -399,7 +401,9 @@ class RobustHullEstimator(Observer):
             inner = self.fallback.step(old["fallback"], y, u)
             lo, hi = np.maximum(lo, inner.lower), np.minimum(hi, inner.upper)
         if np.any(lo > hi):
-            raise DataError(f"y: the measurements are inconsistent with the model and its bounds at step {k + 1}")
+            raise InconsistentDataError(
+                f"y: the measurements are inconsistent with the model and its bounds at step {k + 1}"
+            )
         drop = max(k + 2 - self.horizon, 0) - start  # the next window starts at max(k + 2 - H, 0)
         internal = {
             "k": k + 1,

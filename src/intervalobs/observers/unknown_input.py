@@ -887,7 +887,7 @@ class UnknownInputIntervalObserver(Observer):
             "known_input": "none" if self.m == 0 else ("interval" if np.any(u_lo != u_hi) else "held point"),
             "rows": self.rows,
         }
-        return Estimate(times, x_lo, x_hi, xi_lo, xi_hi, meta)
+        return Estimate.from_boxes(times, x_lo, x_hi, xi_lo, xi_hi, meta)
 
     def _majorant(self, pad: FloatArray) -> FloatArray:
         """``e_k = s_k v`` from the scalar recursion of :meth:`_majorant_step` over a record, row 0 zero."""

@@ -1,0 +1,425 @@
+"""One front door: :func:`observe` picks the tightest estimator that fits the model and a cost budget.
+
+The estimators are listed once, in :data:`ESTIMATORS`, tightest first for each kind of model; the
+table of the README and the guide is this table. :func:`observe` takes the first entry that fits the
+model and runs within the budget (milliseconds per sample, measured on the first samples of the
+record), runs it on the whole record, gives filtered rows (the box of ``x(t_k)`` given
+``y_0 … y_k``) and records the choice and why in ``Estimate.meta``. :func:`suggest` lists the entries
+that fit a model without running anything.
+
+The window of the hull estimators is chosen from the model's memory: the number of samples after
+which the influence of the window's prior box has decayed below 1 % (``ρ(Φ)^H ≤ 0.01`` for the
+spectral radius ``ρ`` of the sampled state matrix ``Φ``), between 10 and 60 samples.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import expm
+
+from .errors import ArgumentError, AssumptionError
+from .estimate import Estimate
+from .interval import matvec_bounds
+from .observers.base import Observer
+from .observers.fir import FiniteMemoryObserver
+from .observers.hull import HullEstimator
+from .observers.intersection import output_contraction
+from .observers.interval_observer import IntervalObserver
+from .observers.lpv import LPVIntervalObserver
+from .observers.null_space_gsisio import NullSpaceGSISIO
+from .observers.robust_fir import RobustFiniteMemoryObserver
+from .observers.robust_hull import RobustHullEstimator
+from .observers.unknown_input import UnknownInputIntervalObserver
+from .systems.bounds import Bounds
+from .systems.lpv import LPVSystem
+from .systems.lti import LTISystem
+from .systems.nonlinear import NonlinearSystem
+from .validation import as_time
+
+__all__ = ["ESTIMATORS", "Problem", "Suitable", "filtered_rows", "memory_horizon", "observe", "suggest"]
+
+FloatArray = NDArray[np.float64]
+
+PILOT_SAMPLES = 20
+"""Samples of the record on which an estimator's cost per sample is measured (after one warm-up run)."""
+
+MEMORY_FRACTION = 0.01
+"""The prior's influence (``ρ(Φ)^H``) below which a window of ``H`` samples is long enough."""
+
+HORIZON_RANGE = (10, 60)
+"""Shortest and longest window :func:`memory_horizon` chooses."""
+
+
+@dataclass(frozen=True)
+class Problem:
+    """What :func:`observe` was given, checked: the model, its bounds and the record.
+
+    Parameters
+    ----------
+    system : LTISystem, LPVSystem or NonlinearSystem
+        The model.
+    bounds : Bounds
+        Boxes of the initial state and the noises.
+    t : numpy.ndarray, shape (T,)
+        Sample times.
+    h : float or None
+        Sampling period of a continuous-time model (the spacing of ``t``), None in discrete time.
+    unknown_input : numpy.ndarray or None
+        Matrix through which unknown (unbounded) inputs enter an LTI model.
+    options : dict
+        Further design arguments of the chosen estimator.
+    """
+
+    system: Any
+    bounds: Bounds
+    t: FloatArray
+    h: float | None
+    unknown_input: FloatArray | None
+    options: dict[str, Any]
+
+    @property
+    def kind(self) -> str:
+        """``"lti"``, ``"lti-dA"`` (interval ΔA), ``"lti-unknown-input"``, ``"lpv"`` or ``"nonlinear"``."""
+        if isinstance(self.system, LPVSystem):
+            return "lpv"
+        if isinstance(self.system, NonlinearSystem):
+            return "nonlinear"
+        if self.unknown_input is not None:
+            return "lti-unknown-input"
+        return "lti" if self.system.dA is None else "lti-dA"
+
+
+@dataclass(frozen=True)
+class Suitable:
+    """One row of :data:`ESTIMATORS`: an estimator, the models it fits, its width and its cost.
+
+    Parameters
+    ----------
+    name : str
+        The estimator (a class of :mod:`intervalobs.observers`, or a planned one).
+    kind : str
+        The :attr:`Problem.kind` it fits.
+    width : str
+        Expected width, in words (against the exact hull of the consistent set where it is known).
+    cost : str
+        Expected cost per sample and at design time, in words.
+    build : callable
+        ``build(problem) -> Observer``: the design.
+    """
+
+    name: str
+    kind: str
+    width: str
+    cost: str
+    build: Callable[[Problem], Observer]
+
+    def fits(self, problem: Problem) -> bool:
+        """Whether this estimator applies to the problem's model.
+
+        Parameters
+        ----------
+        problem : Problem
+
+        Returns
+        -------
+        bool
+        """
+        if self.kind != problem.kind:
+            return False
+        continuous = problem.h is not None
+        return not (self.name == "UnknownInputIntervalObserver" and not continuous)
+
+
+def memory_horizon(system: LTISystem, h: float | None = None) -> int:
+    """A window long enough that the prior box's influence has decayed: ``ρ(Φ)^H ≤ MEMORY_FRACTION``.
+
+    Parameters
+    ----------
+    system : LTISystem
+        The model (its nominal ``A``).
+    h : float, optional
+        Sampling period of a continuous-time model.
+
+    Returns
+    -------
+    int
+        ``H`` in :data:`HORIZON_RANGE`; the longest for a model without decay (``ρ(Φ) ≥ 1``).
+    """
+    phi = system.A if system.dt is not None or h is None else expm(system.A * h)
+    rho = float(np.max(np.abs(np.linalg.eigvals(phi))))
+    shortest, longest = HORIZON_RANGE
+    if rho >= 1.0 or rho == 0.0:
+        return longest if rho >= 1.0 else shortest
+    return int(np.clip(np.ceil(np.log(MEMORY_FRACTION) / np.log(rho)), shortest, longest))
+
+
+def _hull(problem: Problem) -> Observer:
+    horizon = memory_horizon(problem.system, problem.h)
+    return HullEstimator.design(problem.system, problem.bounds, problem.h, horizon=horizon, filtered=True)
+
+
+def _bank(problem: Problem) -> Observer:
+    horizon = min(memory_horizon(problem.system, problem.h), 20)
+    return FiniteMemoryObserver.learn(problem.system, problem.bounds, window=horizon, h=problem.h, filtered=True)
+
+
+def _robust_hull(problem: Problem) -> Observer:
+    horizon = min(memory_horizon(problem.system, problem.h), 40)
+    return RobustHullEstimator.design(problem.system, problem.bounds, problem.h, horizon=horizon)
+
+
+def _robust_bank(problem: Problem) -> Observer:
+    horizon = min(memory_horizon(problem.system, problem.h), 20)
+    return RobustFiniteMemoryObserver.learn(problem.system, problem.bounds, window=horizon, h=problem.h, filtered=True)
+
+
+def _tube(problem: Problem) -> Observer:
+    return IntervalObserver.design(problem.system, problem.bounds, h=problem.h)
+
+
+def _unknown_input(problem: Problem) -> Observer:
+    needed = {"noise_rate", "output_accel"} - set(problem.options)
+    if needed:
+        raise ArgumentError(
+            f"options: an observer of unknown inputs needs bounds of {', '.join(sorted(needed))} "
+            "(|dv/dt| of the measurement noise, |d²y/dt²| of the outputs), got none"
+        )
+    assert problem.unknown_input is not None and problem.h is not None
+    return UnknownInputIntervalObserver.design(
+        problem.system, problem.bounds, problem.unknown_input, problem.h, **problem.options
+    )
+
+
+def _lpv(problem: Problem) -> Observer:
+    if problem.h is None or "theta_rate" not in problem.options:
+        raise ArgumentError("options: an LPV observer needs theta_rate (a bound of |dθ/dt|), got none")
+    return LPVIntervalObserver.design(problem.system, problem.bounds, problem.h, **problem.options)
+
+
+def _null_space(problem: Problem) -> Observer:
+    return NullSpaceGSISIO.design(problem.system, problem.bounds, **problem.options)
+
+
+def _continuous_nonlinear(problem: Problem) -> Observer:
+    raise AssumptionError("system: no estimator for continuous-time nonlinear models yet (see ESTIMATORS)")
+
+
+ESTIMATORS: tuple[Suitable, ...] = (
+    Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull),
+    Suitable("FiniteMemoryObserver", "lti", "near the hull (a learned bank of filters)", "filters; learning", _bank),
+    Suitable("IntervalObserver", "lti", "the error tube of one fixed gain (widest)", "a few products", _tube),
+    Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull),
+    Suitable(
+        "RobustFiniteMemoryObserver", "lti-dA", "near that hull (learned bank)", "filters; learning", _robust_bank
+    ),
+    Suitable("IntervalObserver", "lti-dA", "the error tube of one fixed gain (widest)", "a few products", _tube),
+    Suitable(
+        "UnknownInputIntervalObserver",
+        "lti-unknown-input",
+        "decoupled from the unknown inputs, which it bounds too",
+        "a few products",
+        _unknown_input,
+    ),
+    Suitable("LPVIntervalObserver", "lpv", "a gain designed by LMIs over the scheduling box", "a few products", _lpv),
+    Suitable(
+        "NullSpaceGSISIO",
+        "nonlinear",
+        "decoupled from the unknown inputs, which it bounds too",
+        "interval maps",
+        _null_space,
+    ),
+    # Continuous-time nonlinear models: the estimator of branch `nonlinear` plugs in here (its kind and build).
+    Suitable("continuous-time nonlinear", "nonlinear-continuous", "not available yet", "-", _continuous_nonlinear),
+)
+"""Every estimator :func:`observe` can choose, tightest first within each kind of model."""
+
+
+def suggest(
+    system: Any, bounds: Bounds, *, unknown_input: ArrayLike | None = None, h: float | None = None
+) -> list[dict[str, str]]:
+    """The estimators that fit a model, tightest first, with their expected width and cost.
+
+    Parameters
+    ----------
+    system : LTISystem, LPVSystem or NonlinearSystem
+        The model.
+    bounds : Bounds
+        Boxes of the initial state and the noises.
+    unknown_input : array_like, shape (n, q), optional
+        Matrix through which unknown inputs enter an LTI model.
+    h : float, optional
+        Sampling period of a continuous-time model.
+
+    Returns
+    -------
+    list of dict
+        ``{"estimator", "width", "cost"}`` per fitting row of :data:`ESTIMATORS`.
+    """
+    problem = _problem(system, bounds, np.zeros(1), h, unknown_input, None)
+    return [{"estimator": s.name, "width": s.width, "cost": s.cost} for s in ESTIMATORS if s.fits(problem)]
+
+
+def observe(
+    system: Any,
+    bounds: Bounds,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    *,
+    estimator: str = "auto",
+    filtered: bool = True,
+    budget: float = 5.0,
+    theta: ArrayLike | None = None,
+    unknown_input: ArrayLike | None = None,
+    options: dict[str, Any] | None = None,
+) -> Estimate:
+    """Bounds of the state over a record, from the tightest estimator that fits the model and the budget.
+
+    The rows of :data:`ESTIMATORS` that fit the model are tried tightest first: each is designed,
+    its cost per sample measured on the first :data:`PILOT_SAMPLES` samples, and the first within
+    ``budget`` runs on the whole record (the last that fits runs whatever its cost).
+    ``meta["estimator"]`` names it, ``meta["why"]`` says why, ``meta["considered"]`` lists the
+    tighter ones passed over and ``meta["ms_per_sample"]`` the measured cost.
+
+    Parameters
+    ----------
+    system : LTISystem, LPVSystem or NonlinearSystem
+        The model; continuous time when it has no ``dt`` (then ``t`` must be uniformly spaced).
+    bounds : Bounds
+        Boxes of the initial state and the noises.
+    t : array_like, shape (T,)
+        Sample times.
+    y : array_like, shape (T, p) or (M, T, p)
+        Measurements (a leading axis holds runs).
+    u : array_like, shape (T, m) or (M, T, m), optional
+        Known inputs.
+    estimator : str
+        ``"auto"``, or the name of a row of :data:`ESTIMATORS` to force it.
+    filtered : bool
+        Rows that use ``y_k`` (the box of ``x(t_k)`` given ``y_0 … y_k``); an estimator with predicted
+        rows only gets them from :func:`filtered_rows`. False: the estimator's own rows.
+    budget : float
+        Milliseconds per sample (per run) an estimator may take.
+    theta : array_like, shape (T, s), optional
+        Scheduling signal of an LPV model.
+    unknown_input : array_like, shape (n, q), optional
+        Matrix through which unknown, unbounded inputs enter an LTI model.
+    options : dict, optional
+        Further design arguments of the estimator (``theta_rate`` for LPV; ``noise_rate`` and
+        ``output_accel`` for unknown inputs).
+
+    Returns
+    -------
+    Estimate
+
+    Raises
+    ------
+    ArgumentError
+        ``estimator`` is not a row that fits the model, or ``budget`` is not positive.
+    """
+    times = as_time("t", t)
+    if not budget > 0:
+        raise ArgumentError(f"budget: expected a positive number of milliseconds per sample, got {budget!r}")
+    h = None if getattr(system, "dt", None) is not None or times.size < 2 else float(times[1] - times[0])
+    problem = _problem(system, bounds, times, h, unknown_input, options)
+    fitting = [s for s in ESTIMATORS if s.fits(problem)]
+    if estimator != "auto":
+        fitting = [s for s in fitting if s.name == estimator]
+        if not fitting:
+            names = [s.name for s in ESTIMATORS if s.fits(problem)]
+            raise ArgumentError(f"estimator: expected 'auto' or one of {names} for this model, got {estimator!r}")
+    extra = {} if theta is None else {"theta": theta}
+    considered: list[str] = []
+    for row in fitting:
+        observer = row.build(problem)
+        cost = _cost_per_sample(observer, times, y, u, extra)
+        if cost <= budget or row is fitting[-1]:
+            break
+        considered.append(f"{row.name}: {cost:.3g} ms a sample, over the budget")
+    estimate = observer.run(times, y, u, **extra)
+    why = f"the tightest estimator for this model ({problem.kind}) within {budget:g} ms a sample: {row.width}"
+    if cost > budget:
+        why = f"the only or last estimator for this model ({problem.kind}), over the budget: {row.width}"
+    meta = {"estimator": row.name, "why": why, "considered": considered, "ms_per_sample": cost, "budget_ms": budget}
+    estimate.meta.update(meta)
+    if filtered and estimate.meta.get("rows") == "predicted" and isinstance(system, LTISystem):
+        return filtered_rows(estimate, system, bounds, y)
+    return estimate
+
+
+def _problem(
+    system: Any,
+    bounds: Bounds,
+    t: FloatArray,
+    h: float | None,
+    unknown_input: ArrayLike | None,
+    options: dict[str, Any] | None,
+) -> Problem:
+    """The checked :class:`Problem` (the model's type and the unknown-input matrix)."""
+    if not isinstance(system, (LTISystem, LPVSystem, NonlinearSystem)):
+        raise ArgumentError(f"system: expected an LTISystem, LPVSystem or NonlinearSystem, got {type(system).__name__}")
+    if unknown_input is not None and not isinstance(system, LTISystem):
+        raise ArgumentError("unknown_input: expected None for this model (its unknown inputs are part of it)")
+    matrix = None if unknown_input is None else np.atleast_2d(np.asarray(unknown_input, dtype=float))
+    if isinstance(system, LTISystem) and system.dt is None and h is None and t.size > 1:
+        h = float(t[1] - t[0])
+    return Problem(system, bounds, t, h, matrix, dict(options or {}))
+
+
+def _cost_per_sample(
+    observer: Observer, t: FloatArray, y: ArrayLike, u: ArrayLike | None, extra: dict[str, ArrayLike]
+) -> float:
+    """Milliseconds per sample and run of ``observer.run`` on the first samples (after a warm-up on two)."""
+    ys = np.asarray(y, dtype=float)
+    runs = int(np.prod(ys.shape[:-2])) if ys.ndim > 2 else 1
+
+    def head(signal: ArrayLike | None, count: int) -> Any:
+        return None if signal is None else np.asarray(signal, dtype=float)[..., :count, :]
+
+    count = min(PILOT_SAMPLES, t.size)
+    observer.run(t[:2], head(ys, 2), head(u, 2), **{k: head(v, 2) for k, v in extra.items()})
+    start = time.perf_counter()
+    observer.run(t[:count], head(ys, count), head(u, count), **{k: head(v, count) for k, v in extra.items()})
+    return 1e3 * (time.perf_counter() - start) / (count * runs)
+
+
+def filtered_rows(estimate: Estimate, system: LTISystem, bounds: Bounds, y: ArrayLike) -> Estimate:
+    r"""Filtered rows from predicted ones: each box contracted with the output set of its own sample.
+
+    Row ``k`` of a predicted estimate bounds ``x(t_k)`` given ``y_0 … y_{k-1}``; intersecting it with
+    :math:`\{x : Cx \in y_k - F[v]\}` (:func:`~intervalobs.observers.intersection.output_contraction`,
+    exact for one output row, no LP) bounds ``x(t_k)`` given ``y_0 … y_k``. An empty intersection
+    means ``y_k`` contradicts the model (``inconsistent_from``).
+
+    Parameters
+    ----------
+    estimate : Estimate
+        Predicted rows (``meta["rows"] == "predicted"``).
+    system : LTISystem
+        The model (``C``, ``F``).
+    bounds : Bounds
+        Its bounds (the measurement-noise box).
+    y : array_like, shape (T, p) or (M, T, p)
+        The measurements the estimate was computed from.
+
+    Returns
+    -------
+    Estimate
+        With ``meta["rows"] = "filtered"`` and ``meta["filtered_by"] = "output contraction"``.
+    """
+    resolved = bounds.resolve(system)
+    fv_lo, fv_hi = matvec_bounds(system.F, *resolved.v)
+    ys = np.asarray(y, dtype=float)
+    lower, upper = output_contraction(
+        estimate.lower, estimate.upper, system.C, ys - fv_hi, ys - fv_lo, allow_empty=True
+    )
+    meta = {k: v for k, v in estimate.meta.items() if k != "inconsistent_from"}
+    meta.update(rows="filtered", filtered_by="output contraction")
+    contracted = Estimate.from_boxes(estimate.t, lower, upper, estimate.input_lower, estimate.input_upper, meta)
+    return replace(contracted, state_names=estimate.state_names, input_names=estimate.input_names)

@@ -1,0 +1,171 @@
+"""observe(): the estimator chosen for each kind of model is sound, filtered and near the tightest the library has."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from intervalobs import (
+    ArgumentError,
+    Bounds,
+    HullEstimator,
+    IntervalObserver,
+    LTISystem,
+    NullSpaceGSISIO,
+    RobustHullEstimator,
+    observe,
+    simulate,
+    simulate_nonlinear,
+    suggest,
+)
+from intervalobs.examples import aircraft as ac
+from intervalobs.examples import gsisio as nonlinear_example
+from intervalobs.examples import numerical3
+from intervalobs.front_door import ESTIMATORS, filtered_rows, memory_horizon
+
+BUDGET = 50.0
+"""ms a sample for the default tests: the hull fits on a loaded two-core machine (the 5 ms case is marked slow)."""
+
+
+def _mean_width(estimate, start: int = 10) -> float:
+    return float(estimate.width()[..., start:, :].sum(axis=-1).mean())
+
+
+def _random_lti(seed: int, uncertain: bool) -> LTISystem:
+    rng = np.random.default_rng(seed)
+    n = 3
+    a = rng.uniform(-0.4, 0.4, (n, n))
+    a *= 0.85 / max(np.abs(np.linalg.eigvals(a)).max(), 1e-9)
+    c = rng.uniform(-1.0, 1.0, (1, n))
+    d = 0.01 * np.abs(a) if uncertain else None
+    return LTISystem(a, c, dt=1.0, dA=None if d is None else (-d, d))
+
+
+BOUNDS = Bounds(x0=(-1, 1), w=(-0.02, 0.02), v=(-0.05, 0.05))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_point_lti_is_sound_and_within_1_1_of_the_exact_hull(seed: int) -> None:
+    system = _random_lti(seed, uncertain=False)
+    t = np.arange(60.0)
+    truth = simulate(system, BOUNDS, t, seed=seed)
+    estimate = observe(system, BOUNDS, t, truth.y, budget=BUDGET)
+    assert estimate.meta["estimator"] == "HullEstimator" and estimate.meta["rows"] == "filtered"
+    assert "within" in estimate.meta["why"]
+    assert estimate.enclosure(truth.x).fraction == 1.0
+    exact = HullEstimator.design(system, BOUNDS, horizon=None, filtered=True).run(t, truth.y)
+    assert _mean_width(estimate) <= 1.1 * _mean_width(exact)
+    assert _mean_width(estimate) >= _mean_width(exact) * (1 - 1e-6)  # nothing beats the exact hull
+
+
+@pytest.mark.parametrize("seed", [0, pytest.param(1, marks=pytest.mark.slow)])
+def test_uncertain_lti_is_sound_and_within_1_1_of_the_best(seed: int) -> None:
+    system = _random_lti(seed, uncertain=True)
+    t = np.arange(40.0)
+    truth = simulate(system, BOUNDS, t, seed=seed, runs=3)
+    estimate = observe(system, BOUNDS, t, truth.y, budget=BUDGET)
+    assert estimate.meta["estimator"] == "RobustHullEstimator" and estimate.meta["rows"] == "filtered"
+    assert estimate.enclosure(truth.x).fraction == 1.0
+    others = [
+        IntervalObserver.design(system, BOUNDS).run(t, truth.y),
+        RobustHullEstimator.design(system, BOUNDS, horizon=40).run(t, truth.y),
+    ]
+    best = min(_mean_width(filtered_rows(e, system, BOUNDS, truth.y)) for e in others)
+    assert _mean_width(estimate) <= 1.1 * best
+
+
+def test_unknown_input_picks_the_decoupling_observer_and_is_sound() -> None:
+    t = np.arange(3001) * ac.TE
+    record = ac.simulate_aircraft(t, seed=0, delta_kind="sine", omega_kind="vertex")
+    options = {"noise_rate": np.full(4, ac.DELTA_DOT_BAR), "output_accel": np.full(4, ac.OUTPUT_ACCEL)}
+    estimate = observe(
+        ac.aircraft_system(), ac.aircraft_bounds(), t, record.y, unknown_input=ac.D, options=options, budget=BUDGET
+    )
+    assert estimate.meta["estimator"] == "UnknownInputIntervalObserver"
+    assert estimate.enclosure(record.x, transient=0.0).fraction == 1.0
+    assert estimate.input_enclosure(record.xi, transient=0.0).fraction == 1.0
+    with pytest.raises(ArgumentError, match="noise_rate"):
+        observe(ac.aircraft_system(), ac.aircraft_bounds(), t[:50], record.y[:50], unknown_input=ac.D)
+
+
+def test_lpv_model_picks_the_lpv_observer_and_is_sound() -> None:
+    lpv = pytest.importorskip("test_lpv_design")
+    t = np.arange(0.0, 2.0 + lpv.H / 2, lpv.H)
+    x, theta, u = lpv.simulate(t, runs=2, seed=3)
+    estimate = observe(
+        lpv.make_system(),
+        lpv.BOUNDS,
+        t,
+        x[..., :2],
+        u,
+        theta=theta,
+        options={"theta_rate": lpv.RHO},
+        budget=BUDGET,
+    )
+    assert estimate.meta["estimator"] == "LPVIntervalObserver" and estimate.meta["rows"] == "filtered"
+    assert estimate.enclosure(x).fraction == 1.0
+
+
+def test_nonlinear_model_picks_the_null_space_observer_and_is_sound() -> None:
+    system, bounds = nonlinear_example.fullrank_system(), nonlinear_example.fullrank_bounds()
+    sim = simulate_nonlinear(system, bounds, nonlinear_example.fullrank_input(60), seed=4)
+    t = np.arange(sim.y.shape[-2], dtype=float)
+    estimate = observe(system, bounds, t, sim.y, budget=BUDGET)
+    assert estimate.meta["estimator"] == "NullSpaceGSISIO"
+    assert estimate.enclosure(sim.x).fraction == 1.0
+    direct = NullSpaceGSISIO.design(system, bounds).run(t, sim.y)
+    assert _mean_width(estimate) <= 1.1 * _mean_width(direct)
+
+
+def test_suggest_lists_what_fits_tightest_first() -> None:
+    names = [row["estimator"] for row in suggest(_random_lti(0, uncertain=False), BOUNDS)]
+    assert names == ["HullEstimator", "FiniteMemoryObserver", "IntervalObserver"]
+    first = suggest(_random_lti(0, uncertain=True), BOUNDS)[0]
+    assert first["estimator"] == "RobustHullEstimator"
+    assert any(row.kind == "nonlinear-continuous" for row in ESTIMATORS)  # the plug-in place
+
+
+@pytest.mark.slow
+def test_a_tight_budget_falls_back_and_says_why() -> None:
+    """Learns the bank on the way (30 s on a loaded machine)."""
+    system = _random_lti(2, uncertain=False)
+    t = np.arange(30.0)
+    truth = simulate(system, BOUNDS, t, seed=2)
+    estimate = observe(system, BOUNDS, t, truth.y, budget=1e-6)
+    assert estimate.meta["estimator"] == "IntervalObserver" and "over the budget" in estimate.meta["why"]
+    assert [c.split(":")[0] for c in estimate.meta["considered"]] == ["HullEstimator", "FiniteMemoryObserver"]
+    assert estimate.meta["rows"] == "filtered" and estimate.enclosure(truth.x).fraction == 1.0
+    forced = observe(system, BOUNDS, t, truth.y, estimator="IntervalObserver", filtered=False)
+    assert forced.meta["rows"] == "predicted"
+    assert np.all(forced.width() >= estimate.width() - 1e-12)  # the contraction only narrows
+    with pytest.raises(ArgumentError, match="RobustHullEstimator"):
+        observe(system, BOUNDS, t, truth.y, estimator="RobustHullEstimator")
+
+
+def test_memory_horizon_follows_the_decay() -> None:
+    slow = LTISystem([[0.9]], [[1.0]], dt=1.0)
+    fast = LTISystem([[0.5]], [[1.0]], dt=1.0)
+    still = LTISystem([[1.0]], [[1.0]], dt=1.0)
+    assert memory_horizon(fast) == 10 and memory_horizon(still) == 60
+    assert 0.9 ** memory_horizon(slow) <= 0.01 < 0.9 ** (memory_horizon(slow) - 1)
+
+
+@pytest.mark.slow
+def test_seed002_68_within_1_05_of_the_exact_hull_under_5_ms() -> None:
+    model = numerical3.system("68")
+    system = LTISystem(model.A, model.C, B=model.B, E=model.E, F=model.F, dt=model.dt)  # θ = 0: the hull is exact
+    bounds, t = numerical3.bounds(), numerical3.time_grid()
+    u = numerical3.input_signal(t)
+    truth = simulate(system, bounds, t, u, seed=0)
+    estimate = observe(system, bounds, t, truth.y, u, budget=5.0)
+    assert estimate.enclosure(truth.x).fraction == 1.0
+    exact = HullEstimator.design(system, bounds, horizon=None, filtered=True).run(t, truth.y, u)
+    assert _mean_width(estimate, 20) <= 1.05 * _mean_width(exact, 20)
+
+
+def test_the_readme_table_is_the_estimators_table() -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    for row in ESTIMATORS:
+        assert f"| `{row.name}` | {row.width} | {row.cost} |" in readme, f"README: rewrite the row of {row.name}"
