@@ -419,8 +419,8 @@ def test_thin_growing_windows_of_30_tanks_solve_at_the_first_attempt(monkeypatch
     solved by the dense simplex, a few (where it gives up) by HiGHS from its basis."""
     from highspy import _core
 
-    from intervalobs.design.dense_simplex import DenseSimplex
     from intervalobs.examples.scale_cases import tank_cascade
+    from intervalobs.lp.dense_simplex import DenseSimplex
     from intervalobs.observers import hull as hull_module
 
     case = tank_cascade(30, steps=30)
@@ -453,8 +453,8 @@ def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_w
     """Vertex noise makes windows of the 6-tank cascade thin (inscribed slack about -1e-11): every solve must
     still end optimal (the widened LP of ``ROW_RELAX`` when the exact one does not), so no box keeps the loose
     multipliers of a failed solve."""
-    from intervalobs.design.dense_simplex import DenseSimplex
     from intervalobs.examples.scale_cases import tank_cascade
+    from intervalobs.lp.dense_simplex import DenseSimplex
 
     case = tank_cascade(6, steps=40)
     sim = case.simulate(seed=0, noise="vertex")

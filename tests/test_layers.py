@@ -26,6 +26,7 @@ LAYERS: dict[str, int] = {
     "estimate": 4,
     "plotting": 4,
     "systems": 5,
+    "lp": 5,
     "simulate": 6,
     "design": 6,
     "diagnosis": 7,

@@ -21,7 +21,7 @@ so exactness is kept, and a useful tightening otherwise).
 
 **Soundness of an LP bound.** A simplex optimum is only accurate to the solver's tolerances, which
 is not a guarantee: every bound is taken from weak duality with the solver's duals as multipliers and
-the rounding of its own evaluation subtracted (:mod:`intervalobs.design.certified_lp`), so it is valid
+the rounding of its own evaluation subtracted (:mod:`intervalobs.lp.certified`), so it is valid
 whatever their accuracy. The box is finally intersected with the interval propagation of the previous
 box (sound without any LP) and inflated by ``ROUNDING_MARGIN`` like every observer's output.
 
@@ -50,10 +50,10 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 from scipy.linalg import expm
 
-from ..design.certified_lp import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds, round_outward
+from ..lp.certified import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
@@ -349,7 +349,7 @@ class _CondensedLP:
 
     **Warm start.** The ``2n`` objectives of a window are solved as a chain: the lower bounds of
     components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`), by the dense simplex of
-    :class:`~intervalobs.design.dense_simplex.DenseSimplex`, which keeps the basis inverse from one objective to
+    :class:`~intervalobs.lp.dense_simplex.DenseSimplex`, which keeps the basis inverse from one objective to
     the next (HiGHS spends a fixed time on every ``run()``: about 0.7 ms on the 30-tank cascade, against about
     40 µs a pivot and 15 pivots a solve). The first objective of the chain starts from its own optimal basis of
     the previous step, shifted by one step (each variable and row keeps the status it had *at the same time*:
@@ -406,7 +406,7 @@ class _CondensedLP:
     def __init__(self, model: _LinearModel, horizon: int, workers: int = 1) -> None:
         from highspy import _core
 
-        from ..design.dense_simplex import DenseSimplex  # Numba: loaded (80 MB, 0.4 s) only where it is used
+        from ..lp.dense_simplex import DenseSimplex  # Numba: loaded (80 MB, 0.4 s) only where it is used
 
         self.model, self.horizon = model, horizon
         n, p = model.C.shape[1], model.C.shape[0]
@@ -544,7 +544,7 @@ class _CondensedLP:
         """Rigorous lower bounds of ``(x_k)_i - (q_L)_i`` and of ``(q_L)_i - (x_k)_i`` for every ``i``.
 
         Solves the ``2n`` LPs of the window along the chain (class docstring, "Warm start"), then evaluates
-        every weak-duality bound at once (:func:`~intervalobs.design.certified_lp.dual_bounds`).
+        every weak-duality bound at once (:func:`~intervalobs.lp.certified.dual_bounds`).
 
         Parameters
         ----------
@@ -826,7 +826,7 @@ class HullEstimator(Observer):
     windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on seed
     002's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead
     of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain by a dense simplex of
-    our own (:class:`~intervalobs.design.dense_simplex.DenseSimplex`): the first by the dual simplex from its
+    our own (:class:`~intervalobs.lp.dense_simplex.DenseSimplex`): the first by the dual simplex from its
     basis of the previous step, each next one by the primal simplex from the optimum of the one before; HiGHS
     solves what it gives up on, and the sparse window LP. Every bound is certified by weak duality (module
     docstring), so the box is sound whatever the solver's accuracy. A Monte

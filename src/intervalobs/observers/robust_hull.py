@@ -43,7 +43,7 @@ and the remainder radius :math:`\rho_j = K\,|x_j - \hat x_j|_{\max} + R_x|x_j|_{
 Every state of the true system, with the true :math:`\Delta A`, noise and remainder, is feasible (the
 boxes of :math:`x_j` are the estimator's own, sound by induction), so every bound of the LP is a sound
 bound. Bounds are **certified by weak duality** with the rounding of their evaluation subtracted
-(:func:`~intervalobs.design.certified_lp.dual_bounds`, as the hull); the condensed matrix and the drive are
+(:func:`~intervalobs.lp.certified.dual_bounds`, as the hull); the condensed matrix and the drive are
 padded for their own rounding like the hull's condensed LP.
 
 **McCormick window** (``mccormick=True``). The split bounds :math:`\delta\,(x_j - \hat x_j)` by
@@ -76,9 +76,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 
-from ..design.certified_lp import DenseLP, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..interval import inflate, product_bounds
+from ..lp.certified import DenseLP, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import DeltaLinearisation, delta_linearisation, sampled_model
@@ -480,7 +480,7 @@ class _EnvelopeLP:
     scratch.
 
     **Certificate.** A copy of the matrix with the same entries (as ``Aᵀ`` in CSR, updated in place)
-    gives the weak-duality bounds (:func:`~intervalobs.design.certified_lp.dual_bounds`); an optimum
+    gives the weak-duality bounds (:func:`~intervalobs.lp.certified.dual_bounds`); an optimum
     whose multipliers certify more than ``CERTIFICATE_GAP`` below its value (an ill-conditioned basis
     reached from a restored one) is solved again from scratch and the better certificate kept.
     """
