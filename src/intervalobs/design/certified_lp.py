@@ -1,4 +1,4 @@
-"""Moved to :mod:`intervalobs.lp.certified`; this name warns and goes in the next release.
+"""Moved to :mod:`intervalobs.lp.certified`; a name read from here warns, and this module goes in the next release.
 
 .. deprecated:: 0.2.0
    Import from :mod:`intervalobs.lp.certified`.
@@ -7,27 +7,16 @@
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
-from ..lp.certified import (
-    FEASIBILITY_TOLERANCE,
-    INNER_SHRINK,
-    DenseLP,
-    dual_bounds,
-    highs_model,
-    new_highs,
-    run_highs,
-    shrink_inward,
-)
+from ..lp import certified as _moved
 
-__all__ = [
-    "FEASIBILITY_TOLERANCE",
-    "INNER_SHRINK",
-    "DenseLP",
-    "dual_bounds",
-    "highs_model",
-    "new_highs",
-    "run_highs",
-    "shrink_inward",
-]
+__all__ = list(_moved.__all__)
 
-warnings.warn("intervalobs.design.certified_lp has moved to intervalobs.lp.certified", FutureWarning, stacklevel=2)
+
+def __getattr__(name: str) -> Any:
+    """The object of :mod:`intervalobs.lp.certified`, with a ``FutureWarning``."""
+    if name not in __all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn("intervalobs.design.certified_lp has moved to intervalobs.lp.certified", FutureWarning, stacklevel=2)
+    return getattr(_moved, name)

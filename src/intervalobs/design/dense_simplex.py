@@ -1,4 +1,4 @@
-"""Moved to :mod:`intervalobs.lp.dense_simplex`; this name warns and goes in the next release.
+"""Moved to :mod:`intervalobs.lp.dense_simplex`; a name read from here warns, and this module goes in the next release.
 
 .. deprecated:: 0.2.0
    Import from :mod:`intervalobs.lp.dense_simplex`.
@@ -7,9 +7,18 @@
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
-from ..lp.dense_simplex import DenseSimplex, load_kernels
+from ..lp import dense_simplex as _moved
 
-__all__ = ["DenseSimplex", "load_kernels"]
+__all__ = list(_moved.__all__)
 
-warnings.warn("intervalobs.design.dense_simplex has moved to intervalobs.lp.dense_simplex", FutureWarning, stacklevel=2)
+
+def __getattr__(name: str) -> Any:
+    """The object of :mod:`intervalobs.lp.dense_simplex`, with a ``FutureWarning``."""
+    if name not in __all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        "intervalobs.design.dense_simplex has moved to intervalobs.lp.dense_simplex", FutureWarning, stacklevel=2
+    )
+    return getattr(_moved, name)
