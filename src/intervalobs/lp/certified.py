@@ -27,6 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import sparse
 
+from .chain import RecordsPath, SolverPath
+
 __all__ = [
     "FEASIBILITY_TOLERANCE",
     "INNER_SHRINK",
@@ -200,7 +202,7 @@ def dual_bounds(lp: LinearProgram, costs: FloatArray, duals: FloatArray) -> Floa
     return np.asarray(np.where(unbounded, -np.inf, value))
 
 
-class DenseLP:
+class DenseLP(RecordsPath):
     """An LP ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi`` solved by HiGHS; bounds by weak duality.
 
     ``A`` is dense, or sparse (CSC) for a model with few nonzeros.
@@ -212,6 +214,7 @@ class DenseLP:
     def __init__(self) -> None:
         self.solver = new_highs()
         self.inf = float(self.solver.getInfinity())
+        self.path = SolverPath()
 
     def load(
         self,
@@ -268,13 +271,17 @@ class DenseLP:
         for r, cost in enumerate(costs):
             self.solver.changeColsCost(self.ncol, self._cols, cost)
             run_highs(self.solver)
+            self.path.pivots += int(self.solver.getInfo().simplex_iteration_count)
             solution = self.solver.getSolution()
             dual = np.asarray(solution.row_dual)
+            optimal = self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal
+            self.path.highs_warm += optimal
+            self.path.failed += not optimal
             if dual.shape != (self.nrow,) or not np.all(np.isfinite(dual)):
                 usable[r] = False
                 continue
             duals[r] = dual
-            if self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal:
+            if optimal:
                 points[r] = np.asarray(solution.col_value)
         return np.where(usable, dual_bounds(self, costs, duals), -np.inf), points
 
