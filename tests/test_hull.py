@@ -13,7 +13,8 @@ from scipy.optimize import linprog
 from conftest import random_system
 from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import DataError, IntervalObserverError
-from intervalobs.observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+from intervalobs.observers.hull import HullEstimator
+from intervalobs.tightness import HullLowerBound, hull_lower_bound
 
 STEPS = 40
 

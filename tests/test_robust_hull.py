@@ -11,8 +11,9 @@ from scipy.linalg import expm
 
 from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import ArgumentTypeError, AssumptionError, BoundsError, DataError
-from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from intervalobs.observers.robust_hull import RobustHullEstimator
 from intervalobs.systems.sampling import delta_linearisation
+from intervalobs.tightness import robust_hull_lower_bound
 
 STEPS = 40
 H_CONTINUOUS = 0.05

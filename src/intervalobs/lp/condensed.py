@@ -150,6 +150,17 @@ class CondensedWindowLP(RecordsPath):
     :math:`m_j = |\Phi|^j m_0 + \sum_{i<j} |\Phi|^{j-1-i}(|e|_{max} + |\Gamma u_{s+i}| + |q_{i+1}|)`.
     This covers the error of the powers (``j n u |Φ|^j`` to first order), of the drive as an inner
     product of at most ``H n`` nonzero terms, and of the magnitudes' own evaluation (nonnegative terms).
+
+    Parameters
+    ----------
+    model : WindowModel
+        The model (box measurement noise: ``F`` None).
+    horizon : int
+        Window length ``H`` (steps).
+    workers : int
+        HiGHS instances (and dense simplices) solving parts of the chain in parallel threads.
+    solver : {"auto", "highs"}
+        ``"highs"``: no dense simplex, HiGHS solves every objective.
     """
 
     def __init__(self, model: WindowModel, horizon: int, workers: int = 1, solver: Solver = "auto") -> None:
@@ -246,6 +257,24 @@ class CondensedWindowLP(RecordsPath):
 
         Row ``i`` of ``y`` and ``u`` is time ``s + i``; ``prior_*`` bound the window's first state (the
         box of ``x_0`` while ``k ≤ H``).
+
+        Parameters
+        ----------
+        k : int
+            The step.
+        y, u : numpy.ndarray
+            Measurements and inputs of the window.
+        prior_lo, prior_hi : numpy.ndarray, shape (n,)
+            Box of the window's first state.
+        use_current : bool
+            Whether ``y_k`` is used.
+
+        Returns
+        -------
+        drive : numpy.ndarray, shape (n,)
+            ``q_L``.
+        pad : numpy.ndarray, shape (n,)
+            The objective's rounding pad.
         """
         m, H, n, p = self.model, self.horizon, self.n, self.p
         L = min(k, H)

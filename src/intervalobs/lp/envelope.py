@@ -187,6 +187,25 @@ class EnvelopeLP(RecordsPath):
 
         Row ``i`` of ``ys``, ``us`` and ``box_*`` is time ``s + i`` (``box_*`` bound ``x_τ``, ``τ < k``);
         ``delta_box`` holds the ends of ``δ`` (one per uncertain entry), ``m`` the number of inputs.
+
+        Parameters
+        ----------
+        k : int
+            The step.
+        ys, us : numpy.ndarray
+            Measurements and inputs of the window.
+        box_lo, box_hi : numpy.ndarray
+            Boxes of the window's earlier states.
+        predicted : tuple of numpy.ndarray
+            A sound box of ``x_k``.
+        delta_box : tuple of numpy.ndarray
+            The ends of ``δ``.
+        m : int
+            Number of inputs.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, ncol)
         """
         mod, n, p, nq, S, inf = self.model, self.n, self.p, self.nq, self.slots, self.inf
         pl, pb = self.pairs

@@ -19,7 +19,7 @@ from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from .certified import dual_bounds, highs_model, new_highs, run_highs
 from .chain import RecordsPath, SolverPath
 
-__all__ = ["SparseWindow", "SparseWindowLP", "WindowModel"]
+__all__ = ["SparseWindow", "SparseWindowLP", "WindowModel", "window_state_maps"]
 
 FloatArray = NDArray[np.float64]
 
@@ -31,6 +31,21 @@ class WindowModel:
     ``G is None``: the process noise is the box ``x+ - Φx - Γu ∈ [w_lo, w_hi]``; otherwise
     ``x+ = Φx + Γu + G w`` with ``w ∈ [w_lo, w_hi]``. Likewise ``F is None``: ``y - Cx ∈ [v_lo, v_hi]``;
     otherwise ``y = Cx + F v``, ``v ∈ [v_lo, v_hi]``.
+
+    Parameters
+    ----------
+    Phi, Gamma : numpy.ndarray
+        Transition and input matrices.
+    G : numpy.ndarray or None
+        Map of the noise variables to the states (None: the noise is a box of the states).
+    w_lo, w_hi : numpy.ndarray
+        Box of the process noise.
+    C : numpy.ndarray
+        Output matrix.
+    F : numpy.ndarray or None
+        Map of the measurement-noise variables to the outputs (None: a box of the outputs).
+    v_lo, v_hi : numpy.ndarray
+        Box of the measurement noise.
     """
 
     Phi: FloatArray
@@ -44,7 +59,19 @@ class WindowModel:
     v_hi: FloatArray
 
     def propagate(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Sound interval image of a box through one step (no measurement), inflated for rounding."""
+        """Sound interval image of a box through one step (no measurement), inflated for rounding.
+
+        Parameters
+        ----------
+        lower, upper : numpy.ndarray, shape (n,)
+            The box.
+        u : numpy.ndarray, shape (m,)
+            The known input.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (n,)
+        """
         lo, hi = matvec_bounds(self.Phi, lower, upper)
         if self.G is None:
             lo, hi = lo + self.w_lo, hi + self.w_hi
@@ -63,6 +90,14 @@ class SparseWindowLP(RecordsPath):
     0 with their rows freed, so one model serves every step. The optimal basis of each objective is
     kept and restored at the next step: the extremal trajectory seen from ``x_k`` changes little when
     the window moves, so the dual simplex restarts close to the optimum.
+
+    Parameters
+    ----------
+    model : WindowModel
+    horizon : int
+        Window length ``H`` (steps).
+    points : int
+        Points of the prior's convex hull (0: the prior is a box).
     """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
@@ -132,17 +167,38 @@ class SparseWindowLP(RecordsPath):
         self.solver.clearSolver()
 
     def newest_column(self, i: int) -> int:
-        """Column of component ``i`` of the newest state ``x_k`` (always the last slot)."""
+        """Column of component ``i`` of the newest state ``x_k`` (always the last slot).
+
+        Parameters
+        ----------
+        i : int
+
+        Returns
+        -------
+        int
+        """
         return (self.slots - 1) * self.n + i
 
     def set_points(self, pts: FloatArray) -> None:
-        """Prior ``x_{k-H} = P λ`` (first slot) with ``λ`` in the simplex; ``pts`` has shape (points, n)."""
+        """Prior ``x_{k-H} = P λ`` (first slot) with ``λ`` in the simplex.
+
+        Parameters
+        ----------
+        pts : numpy.ndarray, shape (points, n)
+            The points ``P`` (rows).
+        """
         for j in range(self.points):
             for i in range(self.n):
                 self.solver.changeCoeff(self.p0 + i, self.l0 + j, -float(pts[j, i]))
 
     def set_bounds(self, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray) -> None:
-        """Replace all column and row bounds."""
+        """Replace all column and row bounds.
+
+        Parameters
+        ----------
+        col_lo, col_hi : numpy.ndarray, shape (ncol,)
+        row_lo, row_hi : numpy.ndarray, shape (nrow,)
+        """
         self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
         self.solver.changeColsBounds(self.ncol, self._cols, col_lo, col_hi)
         self.solver.changeRowsBounds(self.nrow, self._rows, row_lo, row_hi)
@@ -166,7 +222,21 @@ class SparseWindowLP(RecordsPath):
         return ok, np.asarray(solution.col_value), np.asarray(solution.row_dual)
 
     def certified_min(self, col: int, sign: float, key: int) -> float:
-        """A rigorous lower bound of ``sign * x[col]`` over the feasible set (weak duality)."""
+        """A rigorous lower bound of ``sign * x[col]`` over the feasible set (weak duality).
+
+        Parameters
+        ----------
+        col : int
+            The variable.
+        sign : float
+            1 for its minimum, -1 for minus its maximum.
+        key : int
+            Which kept basis to start from (one per objective and family).
+
+        Returns
+        -------
+        float
+        """
         _, _, dual = self._minimise(col, sign, key)
         if dual.size != self.nrow or not np.all(np.isfinite(dual)):
             return -np.inf
@@ -179,6 +249,20 @@ class SparseWindowLP(RecordsPath):
 
         An inner hull needs feasible points only, not optimal ones: a point that is not optimal makes
         the bound less tight, never invalid.
+
+        Parameters
+        ----------
+        col : int
+            The variable.
+        sign : float
+            1 for its minimum, -1 for its maximum.
+        key : int
+            Which kept basis to start from.
+
+        Returns
+        -------
+        ok : bool
+        point : numpy.ndarray, shape (ncol,)
         """
         ok, x, _ = self._minimise(col, sign, key)
         if not ok:
@@ -189,7 +273,16 @@ class SparseWindowLP(RecordsPath):
 
 
 class SparseWindow:
-    """Fills the bounds of a :class:`SparseWindowLP` for step ``k`` from the record and the stored boxes."""
+    """Fills the bounds of a :class:`SparseWindowLP` for step ``k`` from the record and the stored boxes.
+
+    Parameters
+    ----------
+    model : WindowModel
+    horizon : int
+        Window length ``H`` (steps).
+    points : int
+        Points of the prior's convex hull (0: the prior is a box).
+    """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
         self.model = model
@@ -219,6 +312,29 @@ class SparseWindow:
         With ``window_boxes`` False only the first state of the window gets its box (the prior); the
         others get a tenfold-widened copy (sound and finite, as the certificate needs, but inactive:
         fewer degenerate pivots).
+
+        Parameters
+        ----------
+        k : int
+            The step.
+        y, u : numpy.ndarray
+            Measurements and inputs.
+        boxes_lo, boxes_hi : numpy.ndarray or None
+            Boxes of the earlier states.
+        last_lo, last_hi : numpy.ndarray, shape (n,)
+            Box of ``x_k``.
+        use_current : bool
+            Whether ``y_k`` is used.
+        first_lo, first_hi : numpy.ndarray or None
+            The ``x_0`` box.
+        window_boxes : bool
+            Whether every state of the window keeps its box.
+        offset : int
+            The time of row 0 of the record.
+
+        Returns
+        -------
+        col_lo, col_hi, row_lo, row_hi : numpy.ndarray
         """
         lp, m = self.lp, self.model
         S, n, p, nq, nv = lp.slots, lp.n, lp.p, lp.nq, lp.nv
@@ -274,3 +390,43 @@ class SparseWindow:
         row_lo[: lp.y0], row_hi[: lp.y0] = d_lo.ravel(), d_hi.ravel()
         row_lo[lp.y0 : lp.p0], row_hi[lp.y0 : lp.p0] = y_lo.ravel(), y_hi.ravel()
         return col_lo, col_hi, row_lo, row_hi
+
+
+def window_state_maps(
+    phi: FloatArray, gamma: FloatArray, noise: FloatArray, sens: FloatArray, us: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    r"""States of a window as affine maps of ``z = (x_s, q_0 … q_{L-1}, δ)``: ``x_j = S_j z + d_j``.
+
+    ``x_{j+1} = Φ x_j + Γ u_j + G q_j + W_j δ`` with ``noise`` = G (n, n_q) and ``sens[j]`` = W_j (n, n_δ);
+    ``us`` has ``L`` rows.
+
+    Parameters
+    ----------
+    phi, gamma : numpy.ndarray
+        ``Φ`` and ``Γ``.
+    noise : numpy.ndarray, shape (n, n_q)
+        ``G``.
+    sens : numpy.ndarray, shape (L, n, n_δ)
+        ``W_j``.
+    us : numpy.ndarray, shape (L, m)
+        The inputs.
+
+    Returns
+    -------
+    state : numpy.ndarray, shape (L + 1, n, ncol)
+        ``S``.
+    drive : numpy.ndarray, shape (L + 1, n)
+        ``d``.
+    """
+    n, nq = noise.shape
+    L, nd = us.shape[0], sens.shape[-1]
+    ncol = n + L * nq + nd
+    state = np.zeros((L + 1, n, ncol))
+    drive = np.zeros((L + 1, n))
+    state[0, :, :n] = np.eye(n)
+    for j in range(L):
+        state[j + 1] = phi @ state[j]
+        state[j + 1, :, n + j * nq : n + (j + 1) * nq] += noise
+        state[j + 1, :, n + L * nq :] += sens[j]
+        drive[j + 1] = phi @ drive[j] + gamma @ us[j]
+    return state, drive

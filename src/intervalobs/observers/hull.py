@@ -27,13 +27,13 @@ box (sound without any LP) and inflated by ``ROUNDING_MARGIN`` like every observ
 
 **Continuous time** uses the sound sampled model of :mod:`intervalobs.systems.sampling`: the hull
 is exact for that model (whose per-step noise set is a box around the true, non-box set), so it is
-sound for the continuous system and slightly wider than its true hull. :func:`hull_lower_bound` gives
-the matching inner value.
+sound for the continuous system and slightly wider than its true hull.
+:func:`~intervalobs.tightness.hull_lower_bound` gives the matching inner value.
 
 **Interval** :math:`\Delta A` makes :math:`S_k` non-convex. :class:`HullEstimator` refuses it;
-:func:`hull_lower_bound` computes, for a few fixed samples of :math:`\Delta A`, inner hulls of the
-consistent sets and reports the hull of their union: a **lower bound on the box of any sound
-estimator**, never an estimate (it is not an :class:`~intervalobs.estimate.Estimate`).
+:func:`~intervalobs.tightness.hull_lower_bound` computes, for a few fixed samples of :math:`\Delta A`,
+inner hulls of the consistent sets and reports the hull of their union: a **lower bound on the box of any
+sound estimator**, never an estimate (it is not an :class:`~intervalobs.estimate.Estimate`).
 """
 
 from __future__ import annotations
@@ -41,7 +41,6 @@ from __future__ import annotations
 import multiprocessing
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -51,17 +50,16 @@ from scipy.linalg import expm
 from ..errors import AssumptionError, DataError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds
-from ..lp.certified import shrink_inward
 from ..lp.chain import RecordsPath, Solver, SolverPath, as_solver
 from ..lp.condensed import CondensedWindowLP
 from ..lp.window import SparseWindow, WindowModel
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from ..validation import as_positive, as_signal, as_time
+from ..validation import as_positive
 from .base import Observer, ObserverState, _one_blas_thread
 
-__all__ = ["HullEstimator", "HullLowerBound", "hull_lower_bound"]
+__all__ = ["HullEstimator"]
 
 FloatArray = NDArray[np.float64]
 
@@ -135,7 +133,7 @@ class HullEstimator(Observer):
     ----------
     system : LTISystem
         Discrete- or continuous-time model without ``dA`` (for interval ``ΔA`` see
-        :func:`hull_lower_bound`).
+        :func:`~intervalobs.tightness.hull_lower_bound`).
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
     horizon : int or None
@@ -576,194 +574,3 @@ def _hull_runs(task: tuple[tuple[Any, ...], FloatArray, FloatArray, FloatArray])
     """Worker of :meth:`HullEstimator.run` with ``processes``: a chunk of runs on a fresh estimator."""
     given, times, ys, us = task
     return HullEstimator(*given)._separate_runs(times, ys, us)
-
-
-@dataclass(frozen=True)
-class HullLowerBound:
-    """A LOWER BOUND on the box of any sound estimator — not an estimate; never use it as bounds.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-    lower, upper : numpy.ndarray, shape (T, n)
-        Hull of the union of inner consistent sets of the fixed ``ΔA`` samples (NaN where no sample is
-        consistent with the data). Every sound box of ``x_k`` contains ``[lower_k, upper_k]``, so
-        ``upper - lower`` is a lower bound on any sound estimator's width.
-    samples : numpy.ndarray, shape (S, n, n)
-        The ``ΔA`` samples used.
-    alive : numpy.ndarray, shape (S,)
-        Whether each sample stayed consistent with the data to the end.
-    label : str
-        The reminder printed in every report.
-    meta : dict
-        Window length and whether ``y_k`` was used.
-    """
-
-    t: FloatArray
-    lower: FloatArray
-    upper: FloatArray
-    samples: FloatArray
-    alive: NDArray[np.bool_]
-    label: str = "lower bound on the width of any sound estimator (not an estimate)"
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    def width(self) -> FloatArray:
-        """Widths ``upper - lower`` (NaN where undefined).
-
-        Returns
-        -------
-        numpy.ndarray, shape (T, n)
-        """
-        return self.upper - self.lower
-
-
-def delta_samples(system: LTISystem, count: int, seed: int) -> FloatArray:
-    """``ΔA = 0`` (nominal), then random vertices of the ``ΔA`` box."""
-    n = system.n
-    if system.dA is None:
-        return np.zeros((min(count, 1), n, n))
-    lo, hi = system.dA
-    rng = np.random.default_rng(seed)
-    picks = [np.zeros((n, n))] if count > 0 else []
-    for _ in range(max(count - 1, 0)):
-        picks.append(np.where(rng.integers(0, 2, size=(n, n)) == 1, hi, lo))
-    return np.array(picks).reshape(-1, n, n)
-
-
-def hull_lower_bound(
-    system: LTISystem,
-    bounds: Bounds,
-    t: ArrayLike,
-    y: ArrayLike,
-    u: ArrayLike | None = None,
-    h: float | None = None,
-    samples: int | ArrayLike = 3,
-    horizon: int | None = 60,
-    filtered: bool = False,
-    seed: int = 0,
-    truth: tuple[ArrayLike, ArrayLike] | None = None,
-    substeps: int = 10,
-) -> HullLowerBound:
-    r"""Lower bound on the box any sound estimator can report: inner hulls for fixed ``ΔA`` samples.
-
-    For a fixed :math:`\Delta A_s` the consistent set :math:`S^s_k` is a polytope contained in the true
-    (non-convex) consistent set :math:`S_k`, so :math:`\square\bigcup_s S^s_k \subseteq \square S_k`,
-    and a sound estimator's box contains :math:`\square S_k`. Each :math:`\square S^s_k` is computed
-    from *inside*: in continuous time with a process noise held over each sampling interval (an
-    admissible signal), and with a moving window whose prior is the convex hull of the optimal states
-    found ``H`` steps back (points of :math:`S^s_{k-H}`), so every solution is a consistent state. The
-    result is shrunk inward by a relative ``1e-6`` to cover the solver's primal tolerance.
-
-    Parameters
-    ----------
-    system : LTISystem
-        The model (``dA`` optional: without it one sample, ``ΔA = 0``, is used).
-    bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
-    h : float, optional
-        Sampling period of a continuous-time system.
-    samples : int or array_like, shape (S, n, n)
-        Number of samples (the nominal ``ΔA = 0`` and random vertices of the box; 0 for none, e.g.
-        when ``truth`` is given), or the samples.
-    horizon : int or None
-        Window length (None: the full history, exact and slow).
-    filtered : bool
-        Use ``y_k`` for the box of ``x_k`` (compare with filtered estimators) or not (default).
-    seed : int
-        Seed of the vertex draw.
-    truth : tuple (ΔA, x), optional
-        In a simulation: the true ``ΔA`` (added as a sample) and the true states (T, n). In discrete
-        time the true state is a consistent point of that sample's set, so it is added to its window
-        prior: the LPs of that sample then never become infeasible. (A sample inconsistent with the data
-        has an empty set and contributes nothing; without the true ``ΔA`` all samples may be.)
-        In continuous time the truth is such a point when it was simulated with process noise held
-        over ``substeps`` equal parts of each sampling interval (the default of
-        :func:`~intervalobs.simulate.simulate`).
-    substeps : int
-        Continuous time: noise vectors per sampling interval of the inner model.
-
-    Returns
-    -------
-    HullLowerBound
-        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
-    """
-    times = as_time("t", t)
-    ys = as_signal("y", y, times.size, system.p)
-    if ys.ndim != 2:
-        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
-    if u is None and system.m > 0:
-        raise DataError(f"u: expected the known input, shape ({times.size}, {system.m}), got None")
-    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
-    full = bounds.resolve(system)
-    if np.ndim(samples) == 0:
-        deltas = delta_samples(system, int(samples), seed)  # type: ignore[arg-type]
-    else:
-        deltas = np.asarray(samples, dtype=float).reshape(-1, system.n, system.n)
-    anchors: list[FloatArray | None] = [None] * deltas.shape[0]
-    if truth is not None:
-        true_delta = np.asarray(truth[0], dtype=float).reshape(1, system.n, system.n)
-        deltas = np.concatenate([true_delta, deltas])
-        x_true = np.asarray(truth[1], dtype=float)
-        if x_true.shape != (times.size, system.n):
-            raise DimensionError(f"truth: expected states of shape {(times.size, system.n)}, got {x_true.shape}")
-        anchors = [x_true, *anchors]
-    steps, n = times.size, system.n
-    size = steps - 1 if horizon is None else int(horizon)
-    size = max(size, 1)
-    lowers = np.full((deltas.shape[0], steps, n), np.nan)
-    uppers = np.full((deltas.shape[0], steps, n), np.nan)
-    alive = np.ones(deltas.shape[0], dtype=bool)
-    x0 = full.x0
-    for s, delta in enumerate(deltas):
-        anchor = anchors[s]
-        inner = inner_model(system, full, h, delta, substeps)
-        window = SparseWindow(inner, size, points=2 * n + (anchor is not None))
-        lp = window.lp
-        points: list[FloatArray] = []
-        for k in range(steps):
-            free_lo, free_hi = np.full(n, -lp.inf), np.full(n, lp.inf)
-            col_lo, col_hi, row_lo, row_hi = window.bounds_at(
-                k, ys, us, None, None, free_lo, free_hi, filtered, x0[0], x0[1]
-            )
-            first = k - size
-            if first > 0:
-                prior = points[first] if anchor is None else np.vstack([points[first], anchor[first]])
-                lp.set_points(prior)
-                row_lo[lp.p0 :] = 0.0
-                row_hi[lp.p0 :] = 0.0
-                row_lo[-1] = row_hi[-1] = 1.0
-                col_lo[lp.l0 :], col_hi[lp.l0 :] = 0.0, 1.0
-            lp.set_bounds(col_lo, col_hi, row_lo, row_hi)
-            base = lp.newest_column(0)
-            found = np.empty((2 * n, n))
-            ok_all = True
-            for i in range(n):
-                for j, sign in enumerate((1.0, -1.0)):
-                    ok, xs = lp.primal_min(base + i, sign, i)
-                    ok_all &= ok
-                    found[2 * i + j] = xs[base : base + n]
-            if not ok_all:
-                if anchor is None:
-                    alive[s] = False
-                    break
-                points.append(np.repeat(anchor[k][None, :], 2 * n, axis=0))  # no hull at k: the truth only
-                continue
-            points.append(found)
-            lowers[s, k] = found.min(axis=0)
-            uppers[s, k] = found.max(axis=0)
-    # A sample that became inconsistent with the data keeps its earlier (valid) hulls.
-    lower = np.full((steps, n), np.nan)
-    upper = np.full((steps, n), np.nan)
-    seen = np.any(np.isfinite(lowers), axis=0)
-    lower[seen] = np.nanmin(lowers[:, seen], axis=0)
-    upper[seen] = np.nanmax(uppers[:, seen], axis=0)
-    lower, upper = shrink_inward(lower, upper)
-    return HullLowerBound(
-        times, lower, upper, deltas, alive, meta={"horizon": "full" if horizon is None else size, "filtered": filtered}
-    )

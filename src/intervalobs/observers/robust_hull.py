@@ -75,34 +75,23 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, BoundsError, DataError, DimensionError
+from ..errors import AssumptionError, DataError, DimensionError
 from ..interval import inflate
-from ..lp.certified import DenseLP, shrink_inward
+from ..lp.certified import DenseLP
 from ..lp.chain import Solver, SolverPath, as_solver
 from ..lp.envelope import EnvelopeLP
+from ..lp.window import window_state_maps
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation, sampled_model
-from ..validation import as_positive, as_signal, as_time
+from ..validation import as_positive
 from .base import Observer, ObserverState
-from .hull import HullLowerBound, inner_model
 
-__all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
+__all__ = ["RobustHullEstimator"]
 
 FloatArray = NDArray[np.float64]
 
-_CANDIDATE_TOLERANCE = 1e-12
-"""Relative tolerance of the check that user ΔA candidates lie in the ΔA box (candidates only seed a
-search for a lower bound; a check on the argument, not a rounding pad)."""
-
 _EPS = float(np.finfo(float).eps)
-_BACKTRACK = (1.0, 0.5, 0.25)
-"""Fractions of a sequential-LP step of the lower bound's ΔA search tried in turn."""
-_TRUST_REGION = 0.2
-"""Largest move of each ΔA entry in one sequential-LP step of the lower bound's search, as a fraction
-of the box width: the linearisation holds near the current ΔA only, and a step across the whole box
-lands where the data exclude ΔA (two-tank, seed 0, ΔA at a vertex: the bound rises from 0.12 / 0.92 /
-0.64 to 0.56 / 1.44 / 1.30 at steps 60 / 180 / 300 with six steps)."""
 
 
 class RobustHullEstimator(Observer):
@@ -253,7 +242,7 @@ class RobustHullEstimator(Observer):
         rho = half @ K.T + big @ mod.R_x.T + np.abs(u_win) @ mod.R_u.T
         e_lo, e_hi = mod.noise_lo - rho, mod.noise_hi + rho
         sens = np.einsum("lab,jb->jal", mod.M, mid) + np.einsum("lab,jb->jal", mod.N, u_win)
-        states, drives = _condensed(mod.Phi, mod.Gamma, np.eye(n), sens, u_win)
+        states, drives = window_state_maps(mod.Phi, mod.Gamma, np.eye(n), sens, u_win)
         # Magnitude bound of every term of x_j (rounding of the maps, the drive and the products W_j).
         growth = (
             np.maximum(np.abs(e_lo), np.abs(e_hi))
@@ -469,221 +458,3 @@ class RobustHullEstimator(Observer):
             "transient_s": 0.0,
             "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
         }
-
-
-def _condensed(
-    phi: FloatArray, gamma: FloatArray, noise: FloatArray, sens: FloatArray, us: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    r"""States of a window as affine maps of ``z = (x_s, q_0 … q_{L-1}, δ)``: ``x_j = S_j z + d_j``.
-
-    ``x_{j+1} = Φ x_j + Γ u_j + G q_j + W_j δ`` with ``noise`` = G (n, n_q) and ``sens[j]`` = W_j (n, n_δ);
-    ``us`` has ``L`` rows. Returns ``S`` (L + 1, n, ncol) and ``d`` (L + 1, n).
-    """
-    n, nq = noise.shape
-    L, nd = us.shape[0], sens.shape[-1]
-    ncol = n + L * nq + nd
-    state = np.zeros((L + 1, n, ncol))
-    drive = np.zeros((L + 1, n))
-    state[0, :, :n] = np.eye(n)
-    for j in range(L):
-        state[j + 1] = phi @ state[j]
-        state[j + 1, :, n + j * nq : n + (j + 1) * nq] += noise
-        state[j + 1, :, n + L * nq :] += sens[j]
-        drive[j + 1] = phi @ drive[j] + gamma @ us[j]
-    return state, drive
-
-
-def _inner_points(
-    model: Any,
-    x0: tuple[FloatArray, FloatArray],
-    k: int,
-    ys: FloatArray,
-    us: FloatArray,
-    lp: DenseLP,
-    sens: FloatArray | None = None,
-    delta_box: tuple[FloatArray, FloatArray] | None = None,
-    objective: int | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Optimal points of ``± x_k`` over the full-history consistent set of a fixed-``ΔA`` model.
-
-    Objective ``r < n`` minimises ``(x_k)_r``, ``r ≥ n`` maximises ``(x_k)_{r-n}``; ``objective`` solves
-    that one only (the other rows of the results stay NaN).
-    With ``sens`` (k, n, n_δ) and ``delta_box`` the model is the linearisation in a step ``δ`` of ``ΔA``
-    (a search direction only). Returns the values (2n, n) of ``x_k`` at the points and the trajectories
-    (2n, k + 1, n); NaN where the solver gave no point or (without ``sens``) the point fails the check
-    against the measurement bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy).
-    """
-    n = model.C.shape[1]
-    G = np.eye(n) if model.G is None else model.G
-    nd = 0 if sens is None else sens.shape[-1]
-    state, drive = _condensed(model.Phi, model.Gamma, G, np.zeros((k, n, nd)) if sens is None else sens, us[:k])
-    ncol = state.shape[-1]
-    matrix = np.einsum("pn,jnc->jpc", model.C, state[:k]).reshape(k * model.C.shape[0], ncol)
-    centre = (drive[:k] @ model.C.T).ravel()
-    y = ys[:k].ravel()
-    v_lo, v_hi = np.tile(model.v_lo, k), np.tile(model.v_hi, k)
-    extra_lo = np.zeros(0) if delta_box is None else delta_box[0]
-    extra_hi = np.zeros(0) if delta_box is None else delta_box[1]
-    col_lo = np.concatenate([x0[0], np.tile(model.w_lo, k), extra_lo])
-    col_hi = np.concatenate([x0[1], np.tile(model.w_hi, k), extra_hi])
-    if k == 0:
-        matrix, centre, y, v_lo, v_hi = np.zeros((1, ncol)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
-    lp.load(matrix, col_lo, col_hi, y - v_hi - centre, y - v_lo - centre)
-    chosen = list(range(2 * n)) if objective is None else [objective]
-    _, points = lp.minima(np.concatenate([state[k], -state[k]])[chosen])
-    values = np.full((2 * n, n), np.nan)
-    paths = np.full((2 * n, k + 1, n), np.nan)
-    steps = np.full((2 * n, nd), np.nan)
-    for r, z in zip(chosen, points, strict=True):
-        if not np.all(np.isfinite(z)):
-            continue
-        z = np.clip(z, col_lo, col_hi)
-        slack = 1e-8 * (1.0 + np.abs(y))
-        residual = y - (matrix @ z + centre)
-        if sens is None and not (np.all(residual >= v_lo - slack) and np.all(residual <= v_hi + slack)):
-            continue
-        values[r] = state[k] @ z + drive[k]
-        paths[r] = state @ z + drive
-        steps[r] = z[ncol - nd :]
-    return values, paths, steps
-
-
-def robust_hull_lower_bound(
-    system: LTISystem,
-    bounds: Bounds,
-    t: ArrayLike,
-    y: ArrayLike,
-    u: ArrayLike | None = None,
-    h: float | None = None,
-    candidates: ArrayLike | None = None,
-    steps: ArrayLike | None = None,
-    search: int = 6,
-    substeps: int = 2,
-) -> HullLowerBound:
-    r"""Lower bound on the box of any sound estimator under interval ``ΔA``: consistent states, full history.
-
-    For any fixed admissible :math:`\Delta A` the states consistent with it and with the data (over the
-    whole record, from the box of :math:`x_0`) are consistent states of the true problem, so the hull of
-    any such states lies inside every sound box. For each step ``k`` and each bound of :math:`x_k`, the
-    LP over the fixed-:math:`\Delta A` consistent set (full history, condensed from :math:`x_0`; in
-    continuous time the process noise is held over ``substeps`` parts of each sampling interval, an
-    admissible signal) is solved for each candidate :math:`\Delta A`, and improved by ``search``
-    steps of sequential linear programming on the bilinear problem: the dynamics linearised in
-    :math:`\Delta A` around the optimal trajectory give a new :math:`\Delta A` (each entry moved by at
-    most a fifth of its interval, clipped to the box),
-    kept when its exact LP value is better. Every point used is re-checked against the measurement
-    bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy) and the result is shrunk inward
-    by a relative 1e-6, as in :func:`~intervalobs.observers.hull.hull_lower_bound`.
-
-    Parameters
-    ----------
-    system : LTISystem
-        Model with an interval ``dA``.
-    bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
-    h : float, optional
-        Sampling period of a continuous-time system.
-    candidates : array_like, shape (S, n, n) or (T, S, n, n), optional
-        Starting ``ΔA`` values (shared by all steps, or per step; NaN entries are skipped), e.g. the
-        simulation's true ``ΔA`` and :meth:`RobustHullEstimator.extremal_deltas`. Default: the centre.
-    steps : array_like of int, optional
-        Steps at which the bound is computed (default all; NaN elsewhere).
-    search : int
-        Sequential-LP improvement steps per candidate and bound.
-    substeps : int
-        Continuous time: noise values per sampling interval of the inner model (more: a larger inner
-        set, slower LPs).
-
-    Returns
-    -------
-    HullLowerBound
-        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
-    """
-    if system.dA is None:
-        raise AssumptionError("system.dA: expected an interval ΔA (without it the hull is exact: HullEstimator)")
-    times = as_time("t", t)
-    ys = as_signal("y", y, times.size, system.p)
-    if ys.ndim != 2:
-        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
-    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
-    full = bounds.resolve(system)
-    n = system.n
-    if np.any(np.count_nonzero(system.F, axis=0) > 1):
-        raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")
-    linear = delta_linearisation(system, full, h)
-    rows_a = np.array([a for a, _ in linear.entries], dtype=int)
-    cols_b = np.array([b for _, b in linear.entries], dtype=int)
-    da_lo, da_hi = system.dA[0][rows_a, cols_b], system.dA[1][rows_a, cols_b]
-    centre = 0.5 * (system.dA[0] + system.dA[1])
-    cands = centre[None, None] if candidates is None else np.asarray(candidates, dtype=float)
-    if cands.ndim == 3:
-        cands = np.broadcast_to(cands, (times.size, *cands.shape))
-    if cands.ndim != 4 or cands.shape[0] != times.size or cands.shape[2:] != (n, n):
-        raise DimensionError(
-            f"candidates: expected shape (S, {n}, {n}) or ({times.size}, S, {n}, {n}), got {cands.shape}"
-        )
-    finite = np.all(np.isfinite(cands), axis=(2, 3))
-    tol = _CANDIDATE_TOLERANCE * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
-    outside = (cands < system.dA[0] - tol) | (cands > system.dA[1] + tol)
-    if np.any(np.any(outside, axis=(2, 3)) & finite):
-        raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")
-    lower = np.full((times.size, n), np.nan)
-    upper = np.full((times.size, n), np.nan)
-    lp = DenseLP()
-    chosen = range(times.size) if steps is None else [int(k) for k in np.atleast_1d(steps)]
-    gain = np.concatenate([-np.ones(n), np.ones(n)])  # row r < n minimises x_r, the others maximise x_{r-n}
-
-    def exact(delta: FloatArray, k: int, objective: int | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
-        return _inner_points(inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective)
-
-    reach = _TRUST_REGION * (da_hi - da_lo)
-    found = np.full((2 * n, n, n), np.nan)  # the best ΔA of each bound at the previous step: a candidate
-    for k in chosen:
-        best = np.full(2 * n, -np.inf)
-        start: list[tuple[FloatArray, FloatArray] | None] = [None] * (2 * n)
-        previous = found[np.all(np.isfinite(found), axis=(1, 2))]
-        for delta in np.concatenate([cands[k][finite[k]], previous]):
-            delta = np.clip(delta, system.dA[0], system.dA[1])
-            values, paths, _ = exact(delta, k)
-            for r in range(2 * n):
-                if np.all(np.isfinite(values[r])) and gain[r] * values[r, r % n] > best[r]:
-                    best[r], start[r] = gain[r] * values[r, r % n], (delta, paths[r])
-        for r in range(2 * n):  # sequential LP from the best candidate of each bound
-            if start[r] is None or k == 0 or rows_a.size == 0:
-                continue
-            current, path = start[r]  # type: ignore[misc]
-            for _ in range(search):
-                sens = np.einsum("lab,jb->jal", linear.M, path[:k])
-                here = current[rows_a, cols_b]
-                model = inner_model(system, full, h, current, substeps)
-                box = (np.maximum(da_lo - here, -reach), np.minimum(da_hi - here, reach))
-                _, _, step = _inner_points(model, full.x0, k, ys, us, lp, sens, box, objective=r)
-                if not np.all(np.isfinite(step[r])):
-                    break
-                for fraction in _BACKTRACK:
-                    trial = current.copy()
-                    trial[rows_a, cols_b] = np.clip(here + fraction * step[r], da_lo, da_hi)
-                    t_values, t_paths, _ = exact(trial, k, objective=r)
-                    if np.all(np.isfinite(t_values[r])) and gain[r] * t_values[r, r % n] > best[r]:
-                        break
-                else:
-                    break
-                current, path, best[r] = trial, t_paths[r], gain[r] * t_values[r, r % n]
-            found[r] = current
-        lo, hi = -best[:n], best[n:]
-        if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
-            lower[k], upper[k] = lo, hi
-    lower, upper = shrink_inward(lower, upper)
-    used = cands.reshape(-1, n, n)
-    alive = np.ones(used.shape[0], dtype=bool)
-    meta = {"horizon": "full", "filtered": False, "search": int(search), "steps": [int(k) for k in chosen]}
-    label = (
-        "lower bound on the width of any sound estimator (consistent states of fixed ΔA, full history; not an estimate)"
-    )
-    return HullLowerBound(times, lower, upper, used, alive, label=label, meta=meta)
