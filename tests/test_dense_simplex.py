@@ -7,7 +7,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from intervalobs.lp.certified import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs
+from intervalobs.lp.certified import (
+    FEASIBILITY_TOLERANCE,
+    basic_variables,
+    dual_bounds,
+    highs_model,
+    new_highs,
+    run_highs,
+)
 from intervalobs.lp.dense_simplex import DenseSimplex, load_kernels
 
 TOL = FEASIBILITY_TOLERANCE
@@ -50,7 +57,7 @@ def _highs(lp: SimpleNamespace, cost: np.ndarray) -> tuple[float, np.ndarray, np
     run_highs(solver)
     solution = solver.getSolution()
     values = np.concatenate([solution.col_value, solution.row_value])
-    basic = np.asarray(solver.getBasicVariables()[1])
+    basic = basic_variables(solver)
     return float(cost @ values[: len(cost)]), basic, values, np.asarray(solution.row_dual)
 
 

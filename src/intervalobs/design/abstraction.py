@@ -45,6 +45,7 @@ from scipy.optimize import linprog
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..inclusion import VectorFunction, evaluate_function
 from ..interval import Interval, inflate, matvec_bounds
+from ..lp.certified import LP_OPTIONS
 
 __all__ = ["AffineAbstraction", "abstraction_sigma", "affine_abstraction", "corollary1_bounds"]
 
@@ -205,7 +206,9 @@ def affine_abstraction(
             rhs.append(2.0 * sig[i])
     cost = np.zeros(nvar)
     cost[-1] = 1.0
-    result = linprog(cost, A_ub=np.array(rows), b_ub=np.array(rhs), bounds=[(None, None)] * nvar, method="highs")
+    result = linprog(
+        cost, A_ub=np.array(rows), b_ub=np.array(rhs), bounds=[(None, None)] * nvar, method="highs", options=LP_OPTIONS
+    )
     if result.status != 0 or result.x is None:
         raise DesignError(f"affine_abstraction: HiGHS returned status {result.status} ({result.message})")
     z = result.x

@@ -31,6 +31,7 @@ from scipy.optimize import linprog
 from scipy.signal import place_poles
 
 from ..errors import DesignError
+from ..lp.certified import LP_OPTIONS
 from ..systems.sampling import SampledModel
 
 __all__ = [
@@ -366,7 +367,7 @@ def _solve_lp(
     a_ub.eliminate_zeros()  # the same matrix HiGHS gets from the dense one
     scale = _GAIN_LIMIT
     bounds = [(-scale, scale)] * nl + [(0, None)] * (ng + nh) + [(None, 1e6 / h if rate is None else None)]
-    res = linprog(cost, A_ub=a_ub, b_ub=np.asarray(rhs), bounds=bounds, method="highs")
+    res = linprog(cost, A_ub=a_ub, b_ub=np.asarray(rhs), bounds=bounds, method="highs", options=LP_OPTIONS)
     if res.status != 0:
         return None
     return res.x[:nl].reshape(n, ny), float(res.x[-1])

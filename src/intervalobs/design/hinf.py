@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from ..errors import AssumptionError, DesignError, DimensionError
+from ..lp.certified import LP_OPTIONS
 from ..validation import as_matrix
 from .lmi import solve_lmi, verify_definite
 
@@ -430,7 +431,9 @@ def _monotone_projection(a: FloatArray, c: FloatArray, gain: FloatArray) -> Floa
     scale = max(1.0, float(np.abs(a).max()))
     for delta in (0.0, 1e-13, 1e-11, 1e-9, 1e-7):
         b_ub = np.concatenate([a.ravel() - delta * scale * seen, gain.ravel(), -gain.ravel()])
-        res = linprog(np.r_[np.zeros(nv), 1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * nv + [(0, None)])
+        res = linprog(
+            np.r_[np.zeros(nv), 1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * nv + [(0, None)], options=LP_OPTIONS
+        )
         if res.status != 0:
             return None
         out = np.asarray(res.x[:nv], dtype=float).reshape(n, p)

@@ -32,7 +32,10 @@ from .chain import RecordsPath, SolverPath
 __all__ = [
     "FEASIBILITY_TOLERANCE",
     "INNER_SHRINK",
+    "LP_OPTIONS",
+    "LP_TIME_LIMIT",
     "DenseLP",
+    "basic_variables",
     "dual_bounds",
     "highs_model",
     "new_highs",
@@ -47,6 +50,14 @@ _EPS = float(np.finfo(float).eps)
 FEASIBILITY_TOLERANCE = 1e-9
 """Primal and dual feasibility tolerance of the LP solves (:func:`new_highs`; HiGHS's default is 1e-7): the
 certified bounds are then within about this much, times the multipliers, of the optimum."""
+
+LP_TIME_LIMIT = 30.0
+"""Seconds one LP solve may take (HiGHS's ``time_limit``): a solve that reaches it ends without an optimum, which
+every caller treats as a failed solve (a skipped candidate, a fallback box or a named error), never a wait.
+The largest LPs of the test suite and the benchmarks take well under a second."""
+
+LP_OPTIONS = {"time_limit": LP_TIME_LIMIT}
+"""``options`` of every ``scipy.optimize.linprog`` call of the package."""
 
 INNER_SHRINK = 1e-6
 """Relative inward margin of inner (lower-bound) hulls: covers the solver's primal tolerance (1e-7)."""
@@ -71,6 +82,7 @@ def new_highs() -> Any:
     # One thread: the default (0) makes every run() count the physical cores from sysfs twice (≈ 35 µs,
     # a third of the run time of a warm-started window LP). See run_highs for the fallback.
     solver.setOptionValue("threads", 1)
+    solver.setOptionValue("time_limit", LP_TIME_LIMIT)
     solver.setOptionValue("primal_feasibility_tolerance", FEASIBILITY_TOLERANCE)
     solver.setOptionValue("dual_feasibility_tolerance", FEASIBILITY_TOLERANCE)
     return solver
@@ -97,6 +109,31 @@ def run_highs(solver: Any) -> None:
         if solver.run() == error:
             solver.setOptionValue("threads", 0)
             solver.run()
+
+
+def basic_variables(solver: Any) -> NDArray[np.int64]:
+    """The basic variables of HiGHS's current basis: ``j ≥ 0`` column ``j``, ``-1 - r`` row ``r``.
+
+    Read from the basis statuses, not from ``getBasicVariables``: that call reads HiGHS's factorisation, which a
+    model with an empty matrix (an all-zero output row, no outputs) never builds, and it then ends the process
+    with a segmentation fault (highspy 1.x).
+
+    Parameters
+    ----------
+    solver : highspy.Highs
+        An instance after a run that ended optimal.
+
+    Returns
+    -------
+    numpy.ndarray of int
+    """
+    from highspy import _core
+
+    basis = solver.getBasis()
+    is_basic = _core.HighsBasisStatus.kBasic
+    cols = [j for j, status in enumerate(basis.col_status) if status == is_basic]
+    rows = [-1 - r for r, status in enumerate(basis.row_status) if status == is_basic]
+    return np.asarray(cols + rows, dtype=np.int64)
 
 
 def highs_model(

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from scipy import sparse
 
 from ..interval import round_outward
-from .certified import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs
+from .certified import FEASIBILITY_TOLERANCE, basic_variables, dual_bounds, highs_model, new_highs, run_highs
 from .chain import RecordsPath, Solver, SolverPath
 from .window import WindowModel
 
@@ -451,7 +451,7 @@ class CondensedWindowLP(RecordsPath):
         """The solver's outcome; restores the rows of :meth:`set_window` after a ``ROW_RELAX``-widened solve."""
         solution = solver.getSolution()
         optimal = solver.getModelStatus() == self._optimal
-        basic = np.asarray(solver.getBasicVariables()[1]) if optimal else None
+        basic = basic_variables(solver) if optimal else None
         value = np.concatenate([solution.col_value, solution.row_value]) if optimal else None
         if widened:
             solver.changeRowsBounds(self.nrow, self._rows, self.solve_lo, self.solve_hi)

@@ -66,6 +66,7 @@ from scipy.optimize import linprog
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
+from ..lp.certified import LP_OPTIONS
 from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
@@ -817,9 +818,9 @@ def _noise_channels(
 
 
 _LP_ATTEMPTS: tuple[tuple[str, dict[str, Any]], ...] = (
-    ("highs", {}),
-    ("highs-ds", {"presolve": False}),
-    ("highs-ipm", {"presolve": False}),
+    ("highs", LP_OPTIONS),
+    ("highs-ds", {"presolve": False, **LP_OPTIONS}),
+    ("highs-ipm", {"presolve": False, **LP_OPTIONS}),
 )
 """Solver settings tried in turn for a filter LP: HiGHS's default, then dual simplex and interior point
 without presolve (HiGHS's presolve returns status "Not Set" on some large window LPs)."""

@@ -65,6 +65,8 @@ def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatAr
     """
     from scipy.optimize import linprog
 
+    from ..lp.certified import LP_OPTIONS
+
     q = M.shape[1]
     lo_out, hi_out = np.array(d_lo, dtype=float), np.array(d_hi, dtype=float)
     flat_hl, flat_hh = h_lo.reshape(-1, M.shape[0]), h_hi.reshape(-1, M.shape[0])
@@ -78,7 +80,7 @@ def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatAr
             for sign, out, pick in ((1.0, flat_lo, np.maximum), (-1.0, flat_hi, np.minimum)):
                 cost = np.zeros(q)
                 cost[i] = sign
-                res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+                res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs", options=LP_OPTIONS)
                 if res.status == 0 and res.x is not None:
                     value = float(res.x[i]) - sign * slack * (1.0 + abs(float(res.x[i])))
                     out[r, i] = pick(out[r, i], value)

@@ -53,6 +53,7 @@ from ..interval import inflate, matvec_bounds
 from ..lp.chain import RecordsPath, Solver, SolverPath, as_solver
 from ..lp.condensed import CondensedWindowLP
 from ..lp.window import SparseWindow, WindowModel
+from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
@@ -220,7 +221,13 @@ class HullEstimator(Observer):
         self.processes = int(processes)
         self.solver = as_solver(solver)
         self._given = (system, bounds, horizon, h, filtered, window_boxes, workers, 1, self.solver)
-        self.model = _outer_model(system, self.bounds, h)
+        # States in very different units: the LPs are solved in balanced coordinates x_b = S x (exact: S is
+        # a diagonal of powers of two, systems/balancing.py); every box crosses between the two in _step.
+        scales = state_scales(system, self.bounds)
+        self.scales = np.ones(self.n) if scales is None else scales
+        """``s`` of the balanced coordinates ``x_b = diag(s) x`` the LPs are solved in (ones: none)."""
+        solved = (system, self.bounds) if scales is None else balanced(system, self.bounds, scales)
+        self.model = _outer_model(*solved, h)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, SparseWindow] = {}
         self._condensed: CondensedWindowLP | None = None
@@ -339,7 +346,7 @@ class HullEstimator(Observer):
         self._paths = []
         internal: dict[str, Any] = {
             "k": 0,
-            "x0": (lo.copy(), hi.copy()),
+            "x0": (lo * self.scales, hi * self.scales),
             "start": 0,
             "y": np.zeros((0, self.p)),
             "u": np.zeros((0, self.m)),
@@ -377,7 +384,7 @@ class HullEstimator(Observer):
             raise DimensionError(f"y: expected one sample of shape ({self.p},) (LPs do not batch), got {y.shape}")
         old = state.internal
         k, start, x0 = int(old["k"]), int(old["start"]), old["x0"]
-        lo, hi = state.lower, state.upper
+        lo, hi = state.lower * self.scales, state.upper * self.scales  # internal boxes: balanced coordinates
         if self.filtered and k > 0:  # state: the filtered box of x_{k-1}; predict x_k from y_0 … y_{k-1}
             nlo, nhi = self.model.propagate(lo, hi, old["u"][-1])
             lo, hi = self._hull(k, start, old["y"], old["u"], old["box_lo"], old["box_hi"], nlo, nhi, False, x0)
@@ -399,7 +406,7 @@ class HullEstimator(Observer):
             "box_lo": box_lo[drop:],
             "box_hi": box_hi[drop:],
         }
-        return ObserverState(lo, hi, internal=internal)
+        return ObserverState(lo / self.scales, hi / self.scales, internal=internal)
 
     def _take_path(self) -> SolverPath:
         """The routes of the LP solves since the last call (a fresh count starts)."""
@@ -541,7 +548,8 @@ class HullEstimator(Observer):
         found: dict[tuple[int, float] | tuple[int, float, int], list[FloatArray]] = {
             (i, sign): [] for i in range(self.n) for sign in (1.0, -1.0)
         }
-        for i, sign, duals, length, anchored in log:
+        for i, sign, balanced_duals, length, anchored in log:
+            duals = balanced_duals / self.scales[i]  # multipliers of (x_b)_i = s_i (x)_i
             if anchored and first_rows:
                 found.setdefault((i, sign, length), []).append(duals.reshape(shape))
             elif not anchored:

@@ -8,6 +8,7 @@ equations are in the class docstring.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -19,7 +20,8 @@ from ..errors import DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
 from ..recursion import LinearRecursion
-from ..systems.bounds import Bounds
+from ..systems.balancing import balanced, state_scales
+from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_array, as_choice, as_matrix, check_no_kwargs
@@ -235,33 +237,19 @@ class IntervalObserver(Observer):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         method = as_choice("method", options.get("method", "tube"), METHODS)
         full = bounds.resolve(system)
-        model = sampled_model(system, full, h)
-        v_radius = full.radius("v")
-        if not is_detectable(model, system.C):
-            raise DesignError("system: the pair (A, C) is not detectable, so no interval observer gain exists")
-        framer: FramerDesign | None = None
-        try:
-            framer = design_framer(model, system.C, system.F, v_radius, options.get("candidates"))
-        except DesignError:
-            if method == "framer":
-                _refuse_unstable_box(system)
-                raise
-        if method == "framer":
-            assert framer is not None
-            observer = cls(system, full, framer.L, framer.T, h, method="framer")
-            observer.design_result = framer
-            return observer
-        extra = {} if framer is None else {f"framer-{framer.coordinates}": framer.L}
-        tube = design_tube_gain(model, system.C, system.F, v_radius, extra)
-        if tube is None:
-            _refuse_unstable_box(system)
-            raise DesignError(
-                "IntervalObserver.design: no candidate gain gives a bounded error tube; "
-                "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
+        scales = state_scales(system, full)
+        if scales is None:
+            result = _design(system, full, h, method, options.get("candidates"))
+        else:  # states in very different units: designed in balanced coordinates (systems/balancing.py)
+            result = _unbalanced(_design(*balanced(system, full, scales), h, method, options.get("candidates")), scales)
+        if isinstance(result, FramerDesign):
+            observer = cls(system, full, result.L, result.T, h, method="framer")
+        else:
+            gains = np.stack((result.L, *result.companions))
+            observer = cls(
+                system, full, gains if len(gains) > 1 else result.L, result.T, h, method="tube", blocks=result.blocks
             )
-        gains = np.stack((tube.L, *tube.companions))
-        observer = cls(system, full, gains if len(gains) > 1 else tube.L, tube.T, h, method="tube", blocks=tube.blocks)
-        observer.design_result = tube
+        observer.design_result = result
         return observer
 
     # -- protocol ------------------------------------------------------------------------------
@@ -535,3 +523,46 @@ def _refuse_unstable_box(system: LTISystem) -> None:
             "the state can grow without bound there, and so does every interval bound that does not know ΔA: "
             "reduce dA"
         )
+
+
+def _design(
+    system: LTISystem, full: ResolvedBounds, h: float | None, method: str, candidates: Any
+) -> FramerDesign | TubeDesign:
+    """The framer (``method="framer"``) or tube design of :meth:`IntervalObserver.design`."""
+    model = sampled_model(system, full, h)
+    v_radius = full.radius("v")
+    if not is_detectable(model, system.C):
+        raise DesignError("system: the pair (A, C) is not detectable, so no interval observer gain exists")
+    framer: FramerDesign | None = None
+    try:
+        framer = design_framer(model, system.C, system.F, v_radius, candidates)
+    except DesignError:
+        if method == "framer":
+            _refuse_unstable_box(system)
+            raise
+    if method == "framer":
+        assert framer is not None
+        return framer
+    extra = {} if framer is None else {f"framer-{framer.coordinates}": framer.L}
+    tube = design_tube_gain(model, system.C, system.F, v_radius, extra)
+    if tube is None:
+        _refuse_unstable_box(system)
+        raise DesignError(
+            "IntervalObserver.design: no candidate gain gives a bounded error tube; "
+            "the pair (A, C) may not be detectable or dA is too wide for this sampling period"
+        )
+    return tube
+
+
+def _unbalanced(result: FramerDesign | TubeDesign, scales: FloatArray) -> FramerDesign | TubeDesign:
+    """A design of the balanced model ``x_b = S x`` in the original coordinates: ``L = S⁻¹L_b``, ``T = T_b S``.
+
+    The observer of the original model with these matrices is the balanced one: ``T(Φ - LC)T⁻¹ =
+    T_b(Φ_b - L_bC_b)T_b⁻¹``, and the products with powers of two are exact (systems/balancing.py).
+    """
+    column = scales[:, None]
+    L, T, steady = result.L / column, result.T * scales, result.steady_radius / scales
+    if isinstance(result, TubeDesign):
+        companions = tuple(gain / column for gain in result.companions)
+        return replace(result, L=L, T=T, steady_radius=steady, companions=companions)
+    return replace(result, L=L, T=T, steady_radius=steady)

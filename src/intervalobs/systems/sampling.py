@@ -681,6 +681,51 @@ class DeltaLinearisation:
     v_hi: FloatArray
 
 
+def _delta_remainder(
+    aug: FloatArray,
+    rad: FloatArray,
+    base: FloatArray,
+    M: FloatArray,
+    N: FloatArray,
+    radius: FloatArray,
+    sampled: SampledModel,
+) -> tuple[FloatArray, FloatArray]:
+    r"""Bounds of the state and input terms of the second-order remainder of :func:`delta_linearisation`.
+
+    Two sound bounds of :math:`|R|`, kept elementwise at their minimum:
+
+    * the series bound :math:`e^{|\mathcal A|h + Dh} - e^{|\mathcal A|h} - L(|\mathcal A|h, Dh)` (tight for
+      small :math:`\|A\|h`; it overflows, or is astronomically loose, for a stiff :math:`A`: about
+      :math:`e^{1000}` for an eigenvalue of :math:`-1000` and :math:`h = 1`);
+    * the triangle inequality :math:`|R| \le |\Phi(\delta) - \Phi_c| + \sum_l |\delta_l| |M_l|`, with the
+      first term bounded by the sound sampled model's ``dPhi`` (which keeps the decay of a stiff :math:`A`)
+      plus the difference of its midpoint matrix and ``base`` (both ``expm`` of the same matrix), and
+      :math:`|\delta_l| \le` the radius of entry :math:`l`; likewise for the input term with ``dGamma`` and
+      :math:`N`.
+
+    Both are padded by ``_MODEL_PAD`` of the largest finite exponential for the rounding of ``expm``.
+    """
+    n = M.shape[1]
+    weights = np.array([radius[a, b] for a, b in zip(*np.nonzero(radius > 0), strict=True)])
+    linear_x = np.einsum("l,lij->ij", weights, np.abs(M)) if len(weights) else np.zeros((n, n))
+    linear_u = np.einsum("l,lij->ij", weights, np.abs(N)) if len(weights) else np.zeros(N.shape[1:])
+    triangle = np.concatenate(
+        [
+            sampled.dPhi + np.abs(sampled.Phi - base[:n, :n]) + linear_x,
+            sampled.dGamma + np.abs(sampled.Gamma - base[:n, n:]) + linear_u,
+        ],
+        axis=1,
+    )
+    triangle = triangle + _MODEL_PAD * (np.abs(base[:n]) + triangle)
+    with np.errstate(over="ignore", invalid="ignore"):
+        abs_aug = np.abs(aug)
+        top = expm(abs_aug + rad)
+        _, first = expm_frechet(abs_aug, rad)
+        series = (np.maximum(top - expm(abs_aug) - first, 0.0) + _MODEL_PAD * top)[:n]
+    remainder = np.where(np.isfinite(series), np.minimum(series, triangle), triangle)
+    return remainder[:, :n], remainder[:, n:]
+
+
 def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = None) -> DeltaLinearisation:
     r"""The sampled model of a system with interval ``ΔA`` as a linear function of :math:`\delta`.
 
@@ -739,11 +784,7 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
             direction[a, b] = step
             _, derivative = expm_frechet(aug * step, direction)
             M[index], N[index] = derivative[:n, :n], derivative[:n, n:]
-        abs_aug = np.abs(aug) * step
-        top = expm(abs_aug + rad * step)
-        _, first = expm_frechet(abs_aug, rad * step)
-        remainder = np.maximum(top - expm(abs_aug) - first, 0.0) + _MODEL_PAD * top
-        R_x, R_u = remainder[:n, :n], remainder[:n, n:]
+        R_x, R_u = _delta_remainder(aug * step, rad * step, base, M, N, radius, sampled)
     else:
         phi, gamma = system.A + center, system.B.copy()
         for index, (a, b) in enumerate(entries):
