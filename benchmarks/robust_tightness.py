@@ -36,7 +36,8 @@ from intervalobs import IntervalObserver, LTISystem, simulate
 from intervalobs.examples import numerical3, spring_mass, two_tank
 from intervalobs.observers.intersection import IntersectionObserver
 from intervalobs.observers.robust_fir import RobustFiniteMemoryObserver
-from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from intervalobs.observers.robust_hull import RobustHullEstimator
+from intervalobs.tightness import robust_hull_lower_bound
 
 SEEDS = (0, 1, 2)
 

@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from intervalobs import IntervalObserver
-from intervalobs.design.dense_simplex import load_kernels
 from intervalobs.examples.scale_cases import TANK_SIZES, tank_cascade
+from intervalobs.lp.dense_simplex import load_kernels
 from intervalobs.observers.fir import FiniteMemoryObserver
 from intervalobs.observers.hull import HullEstimator
 

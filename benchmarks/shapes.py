@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 
 from intervalobs import IntervalObserver
-from intervalobs.design.dense_simplex import load_kernels
 from intervalobs.estimate import Estimate
 from intervalobs.examples.scale_cases import ScaleCase, pedestrian, short_record, vehicle
+from intervalobs.lp.dense_simplex import load_kernels
 from intervalobs.observers.fir import FiniteMemoryObserver
 from intervalobs.observers.hull import HullEstimator
 

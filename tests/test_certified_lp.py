@@ -1,4 +1,4 @@
-"""Certified LP bounds (design/certified_lp.py): weak duality with the rounding subtracted."""
+"""Certified LP bounds (lp/certified.py): weak duality with the rounding subtracted."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import sparse
 
-from intervalobs.design.certified_lp import DenseLP, dual_bounds, shrink_inward
+from intervalobs.lp.certified import DenseLP, dual_bounds, shrink_inward
 
 
 def test_dense_lp_bounds_hold_for_any_multipliers_and_meet_the_optimum() -> None:
@@ -51,3 +51,16 @@ def test_duality_bound_refuses_free_columns_it_cannot_bound() -> None:
     assert -1e-12 < bounded <= 0.0  # min of x0 + 0.1 x1 on the row is exactly 0
     # With x1 free, a rounding error of its reduced cost times an infinite bound is not a number.
     assert dual_bounds(lp(np.inf), costs, duals)[0] == -np.inf
+
+
+@pytest.mark.parametrize("old, new", [("certified_lp", "certified"), ("dense_simplex", "dense_simplex")])
+def test_the_old_design_paths_warn_and_give_the_lp_layers_objects(old: str, new: str) -> None:
+    import importlib
+
+    module = importlib.import_module(f"intervalobs.design.{old}")
+    target = importlib.import_module(f"intervalobs.lp.{new}")
+    for name in target.__all__:
+        with pytest.warns(FutureWarning, match=f"intervalobs.lp.{new}"):
+            assert getattr(module, name) is getattr(target, name)
+    with pytest.raises(AttributeError):
+        module.no_such_name  # noqa: B018

@@ -1,4 +1,4 @@
-"""The dense primal simplex of the window hull's chain (design/dense_simplex.py), against HiGHS from scratch."""
+"""The dense primal simplex of the window hull's chain (lp/dense_simplex.py), against HiGHS from scratch."""
 
 from __future__ import annotations
 
@@ -7,8 +7,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from intervalobs.design.certified_lp import FEASIBILITY_TOLERANCE, dual_bounds, highs_model, new_highs, run_highs
-from intervalobs.design.dense_simplex import DenseSimplex, load_kernels
+from intervalobs.lp.certified import (
+    FEASIBILITY_TOLERANCE,
+    basic_variables,
+    dual_bounds,
+    highs_model,
+    new_highs,
+    run_highs,
+)
+from intervalobs.lp.dense_simplex import DenseSimplex, load_kernels
 
 TOL = FEASIBILITY_TOLERANCE
 
@@ -50,7 +57,7 @@ def _highs(lp: SimpleNamespace, cost: np.ndarray) -> tuple[float, np.ndarray, np
     run_highs(solver)
     solution = solver.getSolution()
     values = np.concatenate([solution.col_value, solution.row_value])
-    basic = np.asarray(solver.getBasicVariables()[1])
+    basic = basic_variables(solver)
     return float(cost @ values[: len(cost)]), basic, values, np.asarray(solution.row_dual)
 
 
@@ -189,3 +196,40 @@ def test_a_kept_basis_is_completed_and_solved_from_by_the_dual_simplex(change: s
 
 def test_load_kernels_runs_the_compiled_code_once() -> None:
     load_kernels()  # a 1 x 1 LP: start and solve, nothing to assert but that it runs
+
+
+def _one_by_one(entry: float, col: tuple[float, float], row: tuple[float, float]) -> DenseSimplex:
+    """The LP ``row_lo ≤ entry · z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi``, started with the row's activity basic."""
+    dense = DenseSimplex(np.array([[entry]]), TOL, TOL, pivot_limit=100)
+    dense.start(
+        np.array([col[0]]), np.array([col[1]]), np.array([row[0]]), np.array([row[1]]), np.array([-1]), np.zeros(2)
+    )
+    return dense
+
+
+def test_every_exit_of_a_solve_is_reached_and_named() -> None:
+    """Each way a solve ends, on an LP built to end there: the estimator reads the name (lp/chain.py)."""
+    optimal = _one_by_one(2.0, (-1.0, 1.0), (-1.0, 1.0))
+    assert optimal.exit == "started"
+    assert optimal.solve(np.array([1.0]))[0] and optimal.exit == "optimal"
+    np.testing.assert_allclose(optimal.values(), [-0.5, -1.0])  # the row 2z ≥ -1 is the binding one
+    # z ≤ 1 and z ≥ 2: the dual simplex finds no variable that can repair the violated row
+    infeasible = _one_by_one(1.0, (-1.0, 1.0), (2.0, 3.0))
+    assert infeasible.solve(np.array([1.0])) == (False, 1) and infeasible.exit == "infeasible"
+    assert not infeasible.ready
+    # a free z and a free row: min z has no bound
+    unbounded = _one_by_one(1.0, (-np.inf, np.inf), (-np.inf, np.inf))
+    assert not unbounded.solve(np.array([1.0]))[0] and unbounded.exit == "unbounded"
+    limited = _one_by_one(2.0, (-1.0, 1.0), (-1.0, 1.0))
+    limited.pivot_limit = 0
+    assert limited.solve(np.array([1.0])) == (False, 0) and limited.exit == "pivot limit"
+    assert limited.solve(np.array([1.0])) == (False, 0) and limited.exit == "no basis"
+
+
+def test_a_basis_whose_inverse_overflows_is_singular_and_refused() -> None:
+    """A basic column of 1e-310 (subnormal): its inverse is infinite, so the start fails and every solve says so."""
+    dense = DenseSimplex(np.array([[1e-310]]), TOL, TOL, pivot_limit=100)
+    one = np.ones(1)
+    assert not dense.start(-one, one, -one, one, np.array([0]), np.zeros(2))
+    assert dense.exit == "singular basis" and not dense.ready
+    assert dense.solve(one) == (False, 0) and dense.exit == "singular basis"

@@ -13,7 +13,8 @@ from scipy.optimize import linprog
 from conftest import random_system
 from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import DataError, IntervalObserverError
-from intervalobs.observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+from intervalobs.observers.hull import HullEstimator
+from intervalobs.tightness import HullLowerBound, hull_lower_bound
 
 STEPS = 40
 
@@ -411,80 +412,42 @@ def test_monte_carlo_runs_equal_separate_estimators(options: dict) -> None:
         np.testing.assert_array_equal(together.upper[i], alone.upper)
 
 
-def test_thin_growing_windows_of_30_tanks_solve_at_the_first_attempt(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_thin_growing_windows_of_30_tanks_solve_at_the_first_attempt() -> None:
     """The growing windows from ``x_0`` of this record (``k`` = 5 … 9) are so thin that with HiGHS's default
     ``small_matrix_value`` (1e-9, dropping entries of the powers of Φ) HiGHS found no feasible point in them, even
     from scratch: about 80 failed runs a step. With ``SMALL_MATRIX_VALUE``, the widened rows and no primal bound
     perturbation every HiGHS run ends optimal, so no objective goes through the fallbacks; most objectives are
-    solved by the dense simplex, a few (where it gives up) by HiGHS from its basis."""
-    from highspy import _core
-
-    from intervalobs.design.dense_simplex import DenseSimplex
+    solved by the dense simplex, a few (where it gives up) by HiGHS from its basis. Read from the route each step
+    recorded (``meta["solver_path"]``)."""
     from intervalobs.examples.scale_cases import tank_cascade
-    from intervalobs.observers import hull as hull_module
 
     case = tank_cascade(30, steps=30)
     sim = case.simulate(seed=0, noise="vertex")
-    statuses: list[bool] = []
-    dense_optima: list[bool] = []
-    run, solve = hull_module.run_highs, DenseSimplex.solve
-
-    def counted(solver: object) -> None:
-        run(solver)
-        statuses.append(solver.getModelStatus() == _core.HighsModelStatus.kOptimal)  # type: ignore[attr-defined]
-
-    def counted_dense(self: DenseSimplex, cost: np.ndarray) -> tuple[bool, int]:
-        out = solve(self, cost)
-        dense_optima.append(out[0])
-        return out
-
-    monkeypatch.setattr(hull_module, "run_highs", counted)
-    monkeypatch.setattr(DenseSimplex, "solve", counted_dense)
     estimate = HullEstimator.design(case.system, case.bounds, horizon=10).run(case.t[:12], sim.y[:12], case.u[:12])
     assert estimate.enclosure(sim.x[:12]).max_violation == 0.0
-    assert all(statuses)  # every HiGHS run optimal
-    assert len(statuses) + sum(dense_optima) >= 11 * 2 * 30  # every objective of every step solved to an optimum
-    assert sum(dense_optima) >= 0.9 * 11 * (2 * 30 - 1)  # almost every chained objective by the dense simplex
+    paths = estimate.meta["solver_path"]
+    assert len(paths) == 11  # one per step
+    assert all(path["widened"] == 0 and path["failed"] == 0 for path in paths)  # every HiGHS run optimal
+    assert all(path["dense"] + path["highs_warm"] >= 2 * 30 for path in paths)  # every objective solved
+    assert sum(path["dense"] for path in paths) >= 0.9 * 11 * (2 * 30 - 1)  # almost all by the dense simplex
 
 
-def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_window(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_window() -> None:
     """Vertex noise makes windows of the 6-tank cascade thin (inscribed slack about -1e-11): every solve must
     still end optimal (the widened LP of ``ROW_RELAX`` when the exact one does not), so no box keeps the loose
     multipliers of a failed solve."""
-    from intervalobs.design.dense_simplex import DenseSimplex
     from intervalobs.examples.scale_cases import tank_cascade
 
     case = tank_cascade(6, steps=40)
     sim = case.simulate(seed=0, noise="vertex")
-    condensed = HullEstimator.design(case.system, case.bounds, horizon=10)
-    lp = condensed._condensed
-    assert lp is not None
-    statuses: list[bool] = []
-    solve = lp._solve_one
-
-    def counted(*args: object) -> object:
-        out = solve(*args)  # type: ignore[arg-type]
-        statuses.append(out[0])
-        return out
-
-    lp._solve_one = counted  # type: ignore[method-assign]
-    dense_optima: list[bool] = []
-    dense_solve = DenseSimplex.solve
-
-    def counted_dense(self: DenseSimplex, cost: np.ndarray) -> tuple[bool, int]:
-        out = dense_solve(self, cost)
-        dense_optima.append(out[0])
-        return out
-
-    monkeypatch.setattr(DenseSimplex, "solve", counted_dense)
-    a = condensed.run(case.t, sim.y, case.u)
-    assert len(statuses) + sum(dense_optima) >= 2 * 6 * 39 and all(statuses)
+    a = HullEstimator.design(case.system, case.bounds, horizon=10).run(case.t, sim.y, case.u)
+    paths = a.meta["solver_path"]
+    assert all(path["failed"] == 0 and path["dense"] + path["highs_warm"] + path["widened"] >= 12 for path in paths)
     assert a.enclosure(sim.x).max_violation == 0.0
     sparse_form = HullEstimator.design(case.system, case.bounds, horizon=10)
     sparse_form._condensed = None
     b = sparse_form.run(case.t, sim.y, case.u)
+    assert all(path["dense"] == 0 for path in b.meta["solver_path"])  # the sparse LP: HiGHS only
     # Both certified; on these ill-conditioned windows (multipliers up to ~1e4) the two formulations' optima
     # agree to the solver tolerance 1e-9 times the multipliers' size, here 1e-6 of (1 + |x|).
     tol = 1e-6 * scale(b.lower, b.upper)
@@ -493,6 +456,30 @@ def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_w
     # of size 10 (1e4 only on the thinnest windows). Seen: 5.3e-6 in 38.4 (1.4e-7 relative) with and
     # without HiGHS's scaling, a fifth of this.
     assert np.sum(a.upper - a.lower) <= np.sum(b.upper - b.lower) + 1e-8 * np.sum(2.0 * scale(b.lower, b.upper))
+
+
+def test_highs_alone_gives_the_boxes_of_the_dense_simplex_to_the_certificates_tolerance() -> None:
+    """``solver="highs"`` bypasses the dense simplex (the recorded route says so); both answers are certified
+    bounds of the same LPs, so they agree to the solver's tolerance times the multipliers (as the sparse and
+    condensed forms above), and both contain the truth."""
+    from intervalobs.examples.scale_cases import tank_cascade
+
+    case = tank_cascade(6, steps=30)
+    sim = case.simulate(seed=1, noise="vertex")
+    dense = HullEstimator.design(case.system, case.bounds, horizon=8).run(case.t, sim.y, case.u)
+    highs = HullEstimator.design(case.system, case.bounds, horizon=8, solver="highs").run(case.t, sim.y, case.u)
+    assert highs.meta["solver"] == "highs" and dense.meta["solver"] == "auto"
+    assert sum(path["dense"] for path in highs.meta["solver_path"]) == 0
+    assert sum(path["dense"] for path in dense.meta["solver_path"]) > 0
+    tol = 1e-6 * scale(dense.lower, dense.upper)
+    assert np.all(np.abs(dense.lower - highs.lower) <= tol) and np.all(np.abs(dense.upper - highs.upper) <= tol)
+    assert dense.enclosure(sim.x).max_violation == 0.0 and highs.enclosure(sim.x).max_violation == 0.0
+
+
+def test_an_unknown_solver_is_refused_by_name() -> None:
+    system, bounds = small_discrete()
+    with pytest.raises(DataError, match="solver: expected one of 'auto', 'highs', got 'glpk'"):
+        HullEstimator.design(system, bounds, solver="glpk")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("processes", [0, 1.5, True])

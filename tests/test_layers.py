@@ -26,6 +26,7 @@ LAYERS: dict[str, int] = {
     "estimate": 4,
     "plotting": 4,
     "systems": 5,
+    "lp": 5,
     "simulate": 6,
     "design": 6,
     "diagnosis": 7,
@@ -77,3 +78,19 @@ def test_imports_only_from_lower_layers(path: Path) -> None:
         upward = LAYERS[target] > LAYERS[own]
         sideways = LAYERS[target] == LAYERS[own] and (own, target) not in SAME_LAYER
         assert not (upward or sideways), f"{own} (layer {LAYERS[own]}) imports {target} (layer {LAYERS[target]})"
+
+
+def _imports_highspy(path: Path) -> bool:
+    """Whether a module imports ``highspy`` (or a part of it) anywhere, inside functions too."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import) and any(alias.name.split(".")[0] == "highspy" for alias in node.names):
+            return True
+        if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "highspy":
+            return True
+    return False
+
+
+def test_only_the_lp_layer_imports_highspy() -> None:
+    outside = [str(p.relative_to(PACKAGE)) for p in MODULES if p.relative_to(PACKAGE).parts[0] != "lp"]
+    assert [name for name in outside if _imports_highspy(PACKAGE / name)] == []
+    assert _imports_highspy(PACKAGE / "lp" / "certified.py")  # the check finds what it looks for

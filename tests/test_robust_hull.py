@@ -11,8 +11,9 @@ from scipy.linalg import expm
 
 from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.errors import ArgumentTypeError, AssumptionError, BoundsError, DataError
-from intervalobs.observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from intervalobs.observers.robust_hull import RobustHullEstimator
 from intervalobs.systems.sampling import delta_linearisation
+from intervalobs.tightness import robust_hull_lower_bound
 
 STEPS = 40
 H_CONTINUOUS = 0.05
@@ -191,6 +192,10 @@ def test_mccormick_sound_and_inside_the_split_window(seed: int, continuous: bool
     both = robust.run(t, y, u)
     assert alone.meta["mccormick"] is True
     assert alone.enclosure(x).max_violation == 0.0
+    for estimate in (split, alone):  # the route of every step: HiGHS only, every objective solved
+        paths = estimate.meta["solver_path"]
+        assert len(paths) == steps - 1 and all(path["dense"] == 0 and path["failed"] == 0 for path in paths)
+        assert all(path["highs_warm"] + path["scratch"] >= 2 * system.n for path in paths)
     assert both.enclosure(x).max_violation == 0.0
     assert np.all(both.lower >= base.lower) and np.all(both.upper <= base.upper)
     # Certified bounds sit within HiGHS's tolerances (1e-9, times column magnitudes ≤ 1e3) of the LP optimum.

@@ -10,8 +10,7 @@ import pytest
 
 from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 from intervalobs.cli import main
-from intervalobs.observers.hull import HullLowerBound
-from intervalobs.tightness import add_tightness, format_tightness, tightness_reference, tightness_report
+from intervalobs.tightness import HullLowerBound, add_tightness, format_tightness, tightness_reference, tightness_report
 
 
 def system_and_data(uncertain: bool) -> tuple[LTISystem, Bounds, np.ndarray, object]:

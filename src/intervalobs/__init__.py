@@ -33,12 +33,12 @@ from .observers import HighGainIntervalObserver, IntervalObserver, Observer, Obs
 from .observers.continuous_nonlinear import ContinuousNonlinearObserver
 from .observers.fir import FiniteMemoryObserver
 from .observers.gsisio import GSISIO
-from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
+from .observers.hull import HullEstimator
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from .observers.null_space_gsisio import NullSpaceGSISIO
 from .observers.robust_fir import RobustFiniteMemoryObserver
-from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from .observers.robust_hull import RobustHullEstimator
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from .simulate import Simulation, simulate, simulate_nonlinear, simulate_sampled
@@ -56,7 +56,14 @@ from .systems.continuous_nonlinear import ContinuousNonlinearSystem
 from .systems.flow_enclosure import FlowEnclosure, flow_enclosure
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem
-from .tightness import format_tightness, tightness_reference, tightness_report
+from .tightness import (
+    HullLowerBound,
+    format_tightness,
+    hull_lower_bound,
+    robust_hull_lower_bound,
+    tightness_reference,
+    tightness_report,
+)
 from .zonotope import Zonotope
 
 __version__ = "0.1.0"

@@ -2,7 +2,7 @@ r"""Tightness report: how far each observer's box is from the tightest box any s
 
 The reference is the exact interval hull of the consistent set (:class:`~intervalobs.observers.hull.
 HullEstimator`) for a model without :math:`\Delta A`, and otherwise the **lower bound** of
-:func:`~intervalobs.observers.robust_hull.robust_hull_lower_bound` (consistent states of fixed
+:func:`robust_hull_lower_bound` (consistent states of fixed
 :math:`\Delta A` candidates over the full history, improved by sequential LP), which no sound
 estimator can beat. For a model with :math:`\Delta A`, :func:`add_tightness` also runs the
 data-dependent :class:`~intervalobs.observers.robust_hull.RobustHullEstimator` (window LP, split or
@@ -19,21 +19,35 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import AssumptionError, BoundsError, DataError, DimensionError
 from .estimate import Estimate
-from .observers.hull import HullEstimator, HullLowerBound, delta_samples
+from .lp.certified import DenseLP, shrink_inward
+from .lp.window import SparseWindow, window_state_maps
+from .observers.hull import HullEstimator, inner_model
 from .observers.interval_observer import IntervalObserver
 from .observers.robust_fir import RobustFiniteMemoryObserver
-from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
-from .systems.bounds import Bounds
+from .observers.robust_hull import RobustHullEstimator
+from .systems.bounds import Bounds, ResolvedBounds
 from .systems.lti import LTISystem
+from .systems.sampling import delta_linearisation
+from .validation import as_signal, as_time
 
-__all__ = ["Tightness", "add_tightness", "format_tightness", "tightness_reference", "tightness_report"]
+__all__ = [
+    "HullLowerBound",
+    "Tightness",
+    "add_tightness",
+    "format_tightness",
+    "hull_lower_bound",
+    "robust_hull_lower_bound",
+    "tightness_reference",
+    "tightness_report",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -298,7 +312,7 @@ def add_tightness(
         ``ΔA`` samples of the lower bound.
     truth : tuple (ΔA, x), optional
         The simulation's true ``ΔA`` and states (anchors the lower bound; see
-        :func:`~intervalobs.observers.hull.hull_lower_bound`).
+        :func:`hull_lower_bound`).
     steps : int, optional
         Use only the first ``steps`` samples (to keep a long record's LPs within the time budget).
     robust_horizon : int, optional
@@ -405,3 +419,467 @@ def add_tightness(
     if oracle is not None:
         widths["hull if ΔA were known"] = oracle.width()
     return Tightness(t, reference, widths)
+
+
+# -- lower bounds on the box of any sound estimator (the references of a model with ΔA) ----------------
+
+_CANDIDATE_TOLERANCE = 1e-12
+"""Relative tolerance of the check that user ΔA candidates lie in the ΔA box (candidates only seed a
+search for a lower bound; a check on the argument, not a rounding pad)."""
+
+_BACKTRACK = (1.0, 0.5, 0.25)
+"""Fractions of a sequential-LP step of the lower bound's ΔA search tried in turn."""
+_TRUST_REGION = 0.2
+"""Largest move of each ΔA entry in one sequential-LP step of the lower bound's search, as a fraction
+of the box width: the linearisation holds near the current ΔA only, and a step across the whole box
+lands where the data exclude ΔA (two-tank, seed 0, ΔA at a vertex: the bound rises from 0.12 / 0.92 /
+0.64 to 0.56 / 1.44 / 1.30 at steps 60 / 180 / 300 with six steps)."""
+
+
+@dataclass(frozen=True)
+class HullLowerBound:
+    """A LOWER BOUND on the box of any sound estimator — not an estimate; never use it as bounds.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+    lower, upper : numpy.ndarray, shape (T, n)
+        Hull of the union of inner consistent sets of the fixed ``ΔA`` samples (NaN where no sample is
+        consistent with the data). Every sound box of ``x_k`` contains ``[lower_k, upper_k]``, so
+        ``upper - lower`` is a lower bound on any sound estimator's width.
+    samples : numpy.ndarray, shape (S, n, n)
+        The ``ΔA`` samples used.
+    alive : numpy.ndarray, shape (S,)
+        Whether each sample stayed consistent with the data to the end.
+    label : str
+        The reminder printed in every report.
+    meta : dict
+        Window length and whether ``y_k`` was used.
+    """
+
+    t: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    samples: FloatArray
+    alive: NDArray[np.bool_]
+    label: str = "lower bound on the width of any sound estimator (not an estimate)"
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def width(self) -> FloatArray:
+        """Widths ``upper - lower`` (NaN where undefined).
+
+        Returns
+        -------
+        numpy.ndarray, shape (T, n)
+        """
+        return self.upper - self.lower
+
+
+def delta_samples(system: LTISystem, count: int, seed: int) -> FloatArray:
+    """``ΔA = 0`` (nominal), then random vertices of the ``ΔA`` box."""
+    n = system.n
+    if system.dA is None:
+        return np.zeros((min(count, 1), n, n))
+    lo, hi = system.dA
+    rng = np.random.default_rng(seed)
+    picks = [np.zeros((n, n))] if count > 0 else []
+    for _ in range(max(count - 1, 0)):
+        picks.append(np.where(rng.integers(0, 2, size=(n, n)) == 1, hi, lo))
+    return np.array(picks).reshape(-1, n, n)
+
+
+def hull_lower_bound(
+    system: LTISystem,
+    bounds: Bounds,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    h: float | None = None,
+    samples: int | ArrayLike = 3,
+    horizon: int | None = 60,
+    filtered: bool = False,
+    seed: int = 0,
+    truth: tuple[ArrayLike, ArrayLike] | None = None,
+    substeps: int = 10,
+) -> HullLowerBound:
+    r"""Lower bound on the box any sound estimator can report: inner hulls for fixed ``ΔA`` samples.
+
+    For a fixed :math:`\Delta A_s` the consistent set :math:`S^s_k` is a polytope contained in the true
+    (non-convex) consistent set :math:`S_k`, so :math:`\square\bigcup_s S^s_k \subseteq \square S_k`,
+    and a sound estimator's box contains :math:`\square S_k`. Each :math:`\square S^s_k` is computed
+    from *inside*: in continuous time with a process noise held over each sampling interval (an
+    admissible signal), and with a moving window whose prior is the convex hull of the optimal states
+    found ``H`` steps back (points of :math:`S^s_{k-H}`), so every solution is a consistent state. The
+    result is shrunk inward by a relative ``1e-6`` to cover the solver's primal tolerance.
+
+    Parameters
+    ----------
+    system : LTISystem
+        The model (``dA`` optional: without it one sample, ``ΔA = 0``, is used).
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``.
+    t : array_like, shape (T,)
+        Sample times.
+    y : array_like, shape (T, p)
+        Measurements of one run.
+    u : array_like, shape (T, m), optional
+        Known inputs.
+    h : float, optional
+        Sampling period of a continuous-time system.
+    samples : int or array_like, shape (S, n, n)
+        Number of samples (the nominal ``ΔA = 0`` and random vertices of the box; 0 for none, e.g.
+        when ``truth`` is given), or the samples.
+    horizon : int or None
+        Window length (None: the full history, exact and slow).
+    filtered : bool
+        Use ``y_k`` for the box of ``x_k`` (compare with filtered estimators) or not (default).
+    seed : int
+        Seed of the vertex draw.
+    truth : tuple (ΔA, x), optional
+        In a simulation: the true ``ΔA`` (added as a sample) and the true states (T, n). In discrete
+        time the true state is a consistent point of that sample's set, so it is added to its window
+        prior: the LPs of that sample then never become infeasible. (A sample inconsistent with the data
+        has an empty set and contributes nothing; without the true ``ΔA`` all samples may be.)
+        In continuous time the truth is such a point when it was simulated with process noise held
+        over ``substeps`` equal parts of each sampling interval (the default of
+        :func:`~intervalobs.simulate.simulate`).
+    substeps : int
+        Continuous time: noise vectors per sampling interval of the inner model.
+
+    Returns
+    -------
+    HullLowerBound
+        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
+    """
+    times = as_time("t", t)
+    ys = as_signal("y", y, times.size, system.p)
+    if ys.ndim != 2:
+        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
+    if u is None and system.m > 0:
+        raise DataError(f"u: expected the known input, shape ({times.size}, {system.m}), got None")
+    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
+    full = bounds.resolve(system)
+    deltas, anchors = _lower_bound_samples(system, times.size, samples, seed, truth)
+    steps, n = times.size, system.n
+    size = max(steps - 1 if horizon is None else int(horizon), 1)
+    lowers = np.full((deltas.shape[0], steps, n), np.nan)
+    uppers = np.full((deltas.shape[0], steps, n), np.nan)
+    alive = np.ones(deltas.shape[0], dtype=bool)
+    for s, delta in enumerate(deltas):
+        window = SparseWindow(
+            inner_model(system, full, h, delta, substeps), size, points=2 * n + (anchors[s] is not None)
+        )
+        alive[s] = _inner_hulls(window, ys, us, full.x0, filtered, anchors[s], lowers[s], uppers[s])
+    # A sample that became inconsistent with the data keeps its earlier (valid) hulls.
+    lower = np.full((steps, n), np.nan)
+    upper = np.full((steps, n), np.nan)
+    seen = np.any(np.isfinite(lowers), axis=0)
+    lower[seen] = np.nanmin(lowers[:, seen], axis=0)
+    upper[seen] = np.nanmax(uppers[:, seen], axis=0)
+    lower, upper = shrink_inward(lower, upper)
+    return HullLowerBound(
+        times, lower, upper, deltas, alive, meta={"horizon": "full" if horizon is None else size, "filtered": filtered}
+    )
+
+
+def _lower_bound_samples(
+    system: LTISystem, steps: int, samples: int | ArrayLike, seed: int, truth: tuple[ArrayLike, ArrayLike] | None
+) -> tuple[FloatArray, list[FloatArray | None]]:
+    """The ``ΔA`` samples of :func:`hull_lower_bound` (the true one first when ``truth`` is given) and, for each,
+    the true trajectory that anchors its window prior (None but for the true ``ΔA``)."""
+    if np.ndim(samples) == 0:
+        deltas = delta_samples(system, int(samples), seed)  # type: ignore[arg-type]
+    else:
+        deltas = np.asarray(samples, dtype=float).reshape(-1, system.n, system.n)
+    anchors: list[FloatArray | None] = [None] * deltas.shape[0]
+    if truth is None:
+        return deltas, anchors
+    true_delta = np.asarray(truth[0], dtype=float).reshape(1, system.n, system.n)
+    x_true = np.asarray(truth[1], dtype=float)
+    if x_true.shape != (steps, system.n):
+        raise DimensionError(f"truth: expected states of shape {(steps, system.n)}, got {x_true.shape}")
+    return np.concatenate([true_delta, deltas]), [x_true, *anchors]
+
+
+def _inner_hulls(
+    window: SparseWindow,
+    ys: FloatArray,
+    us: FloatArray,
+    x0: tuple[FloatArray, FloatArray],
+    filtered: bool,
+    anchor: FloatArray | None,
+    lowers: FloatArray,
+    uppers: FloatArray,
+) -> bool:
+    """Fill ``lowers``, ``uppers`` (steps, n) with the inner hulls of one fixed-``ΔA`` model's consistent sets.
+
+    The prior of a window that starts after ``x_0`` is the convex hull of the optimal states found at its first
+    step (and of ``anchor`` there, a consistent trajectory). Returns whether the model stayed consistent with the
+    data to the end (a step without a feasible point ends the sample, unless ``anchor`` stands in for it).
+    """
+    lp, n = window.lp, lowers.shape[1]
+    size = lp.slots - 1
+    points: list[FloatArray] = []
+    for k in range(lowers.shape[0]):
+        free_lo, free_hi = np.full(n, -lp.inf), np.full(n, lp.inf)
+        col_lo, col_hi, row_lo, row_hi = window.bounds_at(k, ys, us, None, None, free_lo, free_hi, filtered, *x0)
+        first = k - size
+        if first > 0:
+            lp.set_points(points[first] if anchor is None else np.vstack([points[first], anchor[first]]))
+            row_lo[lp.p0 :] = 0.0
+            row_hi[lp.p0 :] = 0.0
+            row_lo[-1] = row_hi[-1] = 1.0
+            col_lo[lp.l0 :], col_hi[lp.l0 :] = 0.0, 1.0
+        lp.set_bounds(col_lo, col_hi, row_lo, row_hi)
+        base = lp.newest_column(0)
+        found = np.empty((2 * n, n))
+        ok_all = True
+        for i in range(n):
+            for j, sign in enumerate((1.0, -1.0)):
+                ok, xs = lp.primal_min(base + i, sign, i)
+                ok_all &= ok
+                found[2 * i + j] = xs[base : base + n]
+        if not ok_all:
+            if anchor is None:
+                return False
+            points.append(np.repeat(anchor[k][None, :], 2 * n, axis=0))  # no hull at k: the truth only
+            continue
+        points.append(found)
+        lowers[k], uppers[k] = found.min(axis=0), found.max(axis=0)
+    return True
+
+
+def _inner_points(
+    model: Any,
+    x0: tuple[FloatArray, FloatArray],
+    k: int,
+    ys: FloatArray,
+    us: FloatArray,
+    lp: DenseLP,
+    sens: FloatArray | None = None,
+    delta_box: tuple[FloatArray, FloatArray] | None = None,
+    objective: int | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Optimal points of ``± x_k`` over the full-history consistent set of a fixed-``ΔA`` model.
+
+    Objective ``r < n`` minimises ``(x_k)_r``, ``r ≥ n`` maximises ``(x_k)_{r-n}``; ``objective`` solves
+    that one only (the other rows of the results stay NaN).
+    With ``sens`` (k, n, n_δ) and ``delta_box`` the model is the linearisation in a step ``δ`` of ``ΔA``
+    (a search direction only). Returns the values (2n, n) of ``x_k`` at the points and the trajectories
+    (2n, k + 1, n); NaN where the solver gave no point or (without ``sens``) the point fails the check
+    against the measurement bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy).
+    """
+    n = model.C.shape[1]
+    G = np.eye(n) if model.G is None else model.G
+    nd = 0 if sens is None else sens.shape[-1]
+    state, drive = window_state_maps(model.Phi, model.Gamma, G, np.zeros((k, n, nd)) if sens is None else sens, us[:k])
+    ncol = state.shape[-1]
+    matrix = np.einsum("pn,jnc->jpc", model.C, state[:k]).reshape(k * model.C.shape[0], ncol)
+    centre = (drive[:k] @ model.C.T).ravel()
+    y = ys[:k].ravel()
+    v_lo, v_hi = np.tile(model.v_lo, k), np.tile(model.v_hi, k)
+    extra_lo = np.zeros(0) if delta_box is None else delta_box[0]
+    extra_hi = np.zeros(0) if delta_box is None else delta_box[1]
+    col_lo = np.concatenate([x0[0], np.tile(model.w_lo, k), extra_lo])
+    col_hi = np.concatenate([x0[1], np.tile(model.w_hi, k), extra_hi])
+    if k == 0:
+        matrix, centre, y, v_lo, v_hi = np.zeros((1, ncol)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
+    lp.load(matrix, col_lo, col_hi, y - v_hi - centre, y - v_lo - centre)
+    chosen = list(range(2 * n)) if objective is None else [objective]
+    _, points = lp.minima(np.concatenate([state[k], -state[k]])[chosen])
+    values = np.full((2 * n, n), np.nan)
+    paths = np.full((2 * n, k + 1, n), np.nan)
+    steps = np.full((2 * n, nd), np.nan)
+    for r, z in zip(chosen, points, strict=True):
+        if not np.all(np.isfinite(z)):
+            continue
+        z = np.clip(z, col_lo, col_hi)
+        slack = 1e-8 * (1.0 + np.abs(y))
+        residual = y - (matrix @ z + centre)
+        if sens is None and not (np.all(residual >= v_lo - slack) and np.all(residual <= v_hi + slack)):
+            continue
+        values[r] = state[k] @ z + drive[k]
+        paths[r] = state @ z + drive
+        steps[r] = z[ncol - nd :]
+    return values, paths, steps
+
+
+def robust_hull_lower_bound(
+    system: LTISystem,
+    bounds: Bounds,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    h: float | None = None,
+    candidates: ArrayLike | None = None,
+    steps: ArrayLike | None = None,
+    search: int = 6,
+    substeps: int = 2,
+) -> HullLowerBound:
+    r"""Lower bound on the box of any sound estimator under interval ``ΔA``: consistent states, full history.
+
+    For any fixed admissible :math:`\Delta A` the states consistent with it and with the data (over the
+    whole record, from the box of :math:`x_0`) are consistent states of the true problem, so the hull of
+    any such states lies inside every sound box. For each step ``k`` and each bound of :math:`x_k`, the
+    LP over the fixed-:math:`\Delta A` consistent set (full history, condensed from :math:`x_0`; in
+    continuous time the process noise is held over ``substeps`` parts of each sampling interval, an
+    admissible signal) is solved for each candidate :math:`\Delta A`, and improved by ``search``
+    steps of sequential linear programming on the bilinear problem: the dynamics linearised in
+    :math:`\Delta A` around the optimal trajectory give a new :math:`\Delta A` (each entry moved by at
+    most a fifth of its interval, clipped to the box),
+    kept when its exact LP value is better. Every point used is re-checked against the measurement
+    bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy) and the result is shrunk inward
+    by a relative 1e-6, as in :func:`hull_lower_bound`.
+
+    Parameters
+    ----------
+    system : LTISystem
+        Model with an interval ``dA``.
+    bounds : Bounds
+        Boxes of ``x0``, ``w``, ``v``.
+    t : array_like, shape (T,)
+        Sample times.
+    y : array_like, shape (T, p)
+        Measurements of one run.
+    u : array_like, shape (T, m), optional
+        Known inputs.
+    h : float, optional
+        Sampling period of a continuous-time system.
+    candidates : array_like, shape (S, n, n) or (T, S, n, n), optional
+        Starting ``ΔA`` values (shared by all steps, or per step; NaN entries are skipped), e.g. the
+        simulation's true ``ΔA`` and :meth:`RobustHullEstimator.extremal_deltas`. Default: the centre.
+    steps : array_like of int, optional
+        Steps at which the bound is computed (default all; NaN elsewhere).
+    search : int
+        Sequential-LP improvement steps per candidate and bound.
+    substeps : int
+        Continuous time: noise values per sampling interval of the inner model (more: a larger inner
+        set, slower LPs).
+
+    Returns
+    -------
+    HullLowerBound
+        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
+    """
+    if system.dA is None:
+        raise AssumptionError("system.dA: expected an interval ΔA (without it the hull is exact: HullEstimator)")
+    times = as_time("t", t)
+    ys = as_signal("y", y, times.size, system.p)
+    if ys.ndim != 2:
+        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
+    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
+    full = bounds.resolve(system)
+    n = system.n
+    if np.any(np.count_nonzero(system.F, axis=0) > 1):
+        raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")
+    cands, finite = _checked_candidates(system, times.size, candidates)
+    lower = np.full((times.size, n), np.nan)
+    upper = np.full((times.size, n), np.nan)
+    lp = DenseLP()
+    fixed = _FixedDelta(system, full, h, substeps, ys, us, lp)
+    chosen = range(times.size) if steps is None else [int(k) for k in np.atleast_1d(steps)]
+    found = np.full((2 * n, n, n), np.nan)  # the best ΔA of each bound at the previous step: a candidate
+    for k in chosen:
+        best = np.full(2 * n, -np.inf)
+        start: list[tuple[FloatArray, FloatArray] | None] = [None] * (2 * n)
+        previous = found[np.all(np.isfinite(found), axis=(1, 2))]
+        for delta in np.concatenate([cands[k][finite[k]], previous]):
+            delta = np.clip(delta, system.dA[0], system.dA[1])
+            values, paths, _ = fixed.points(delta, k)
+            for r in range(2 * n):
+                if np.all(np.isfinite(values[r])) and fixed.gain[r] * values[r, r % n] > best[r]:
+                    best[r], start[r] = fixed.gain[r] * values[r, r % n], (delta, paths[r])
+        for r in range(2 * n):  # sequential LP from the best candidate of each bound
+            if start[r] is not None and k > 0 and fixed.rows_a.size:
+                found[r], best[r] = fixed.improve(k, r, start[r], best[r], search)  # type: ignore[arg-type]
+        lo, hi = -best[:n], best[n:]
+        if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+            lower[k], upper[k] = lo, hi
+    lower, upper = shrink_inward(lower, upper)
+    used = cands.reshape(-1, n, n)
+    alive = np.ones(used.shape[0], dtype=bool)
+    meta = {"horizon": "full", "filtered": False, "search": int(search), "steps": [int(k) for k in chosen]}
+    label = (
+        "lower bound on the width of any sound estimator (consistent states of fixed ΔA, full history; not an estimate)"
+    )
+    return HullLowerBound(times, lower, upper, used, alive, label=label, meta=meta)
+
+
+def _checked_candidates(
+    system: LTISystem, steps: int, candidates: ArrayLike | None
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The ``ΔA`` candidates of :func:`robust_hull_lower_bound` per step, shape (steps, S, n, n), and which are
+    finite; refuses a wrong shape and a finite candidate outside the box ``system.dA``."""
+    assert system.dA is not None
+    n = system.n
+    centre = 0.5 * (system.dA[0] + system.dA[1])
+    cands = centre[None, None] if candidates is None else np.asarray(candidates, dtype=float)
+    if cands.ndim == 3:
+        cands = np.broadcast_to(cands, (steps, *cands.shape))
+    if cands.ndim != 4 or cands.shape[0] != steps or cands.shape[2:] != (n, n):
+        raise DimensionError(f"candidates: expected shape (S, {n}, {n}) or ({steps}, S, {n}, {n}), got {cands.shape}")
+    finite = np.all(np.isfinite(cands), axis=(2, 3))
+    tol = _CANDIDATE_TOLERANCE * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
+    outside = (cands < system.dA[0] - tol) | (cands > system.dA[1] + tol)
+    if np.any(np.any(outside, axis=(2, 3)) & finite):
+        raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")
+    return cands, finite
+
+
+class _FixedDelta:
+    """The consistent states of a fixed ``ΔA`` over a full-history record, and the sequential-LP search for the
+    ``ΔA`` that pushes one bound furthest out (:func:`robust_hull_lower_bound`)."""
+
+    def __init__(
+        self,
+        system: LTISystem,
+        full: ResolvedBounds,
+        h: float | None,
+        substeps: int,
+        ys: FloatArray,
+        us: FloatArray,
+        lp: DenseLP,
+    ) -> None:
+        assert system.dA is not None
+        self.system, self.full, self.h, self.substeps, self.ys, self.us, self.lp = system, full, h, substeps, ys, us, lp
+        self.linear = delta_linearisation(system, full, h)
+        self.rows_a = np.array([a for a, _ in self.linear.entries], dtype=int)
+        self.cols_b = np.array([b for _, b in self.linear.entries], dtype=int)
+        self.da_lo = system.dA[0][self.rows_a, self.cols_b]
+        self.da_hi = system.dA[1][self.rows_a, self.cols_b]
+        self.reach = _TRUST_REGION * (self.da_hi - self.da_lo)
+        self.gain = np.concatenate([-np.ones(system.n), np.ones(system.n)])
+        """Row ``r < n`` minimises ``x_r``, the others maximise ``x_{r-n}``: ``gain[r] x`` is to maximise."""
+
+    def points(
+        self, delta: FloatArray, k: int, objective: int | None = None
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """:func:`_inner_points` of the model with ``ΔA = delta`` at step ``k``."""
+        model = inner_model(self.system, self.full, self.h, delta, self.substeps)
+        return _inner_points(model, self.full.x0, k, self.ys, self.us, self.lp, objective=objective)
+
+    def improve(
+        self, k: int, r: int, start: tuple[FloatArray, FloatArray], best: float, search: int
+    ) -> tuple[FloatArray, float]:
+        """Up to ``search`` sequential-LP steps from the ``ΔA`` and trajectory ``start`` that push bound ``r`` of
+        ``x_k`` out (each step backtracked by :data:`_BACKTRACK` until it improves ``best``); returns the last
+        ``ΔA`` and its value."""
+        current, path = start
+        for _ in range(search):
+            sens = np.einsum("lab,jb->jal", self.linear.M, path[:k])
+            here = current[self.rows_a, self.cols_b]
+            model = inner_model(self.system, self.full, self.h, current, self.substeps)
+            box = (np.maximum(self.da_lo - here, -self.reach), np.minimum(self.da_hi - here, self.reach))
+            _, _, step = _inner_points(model, self.full.x0, k, self.ys, self.us, self.lp, sens, box, objective=r)
+            if not np.all(np.isfinite(step[r])):
+                break
+            for fraction in _BACKTRACK:
+                trial = current.copy()
+                trial[self.rows_a, self.cols_b] = np.clip(here + fraction * step[r], self.da_lo, self.da_hi)
+                t_values, t_paths, _ = self.points(trial, k, objective=r)
+                if np.all(np.isfinite(t_values[r])) and self.gain[r] * t_values[r, r % self.system.n] > best:
+                    break
+            else:
+                break
+            current, path, best = trial, t_paths[r], self.gain[r] * t_values[r, r % self.system.n]
+        return current, best

@@ -45,7 +45,7 @@ from scipy.optimize import linprog
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..inclusion import VectorFunction, evaluate_function
 from ..interval import Interval, inflate, matvec_bounds
-from .certified_lp import LP_OPTIONS
+from ..lp.certified import LP_OPTIONS
 
 __all__ = ["AffineAbstraction", "abstraction_sigma", "affine_abstraction", "corollary1_bounds"]
 

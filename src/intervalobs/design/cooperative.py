@@ -31,8 +31,8 @@ from scipy.optimize import linprog
 from scipy.signal import place_poles
 
 from ..errors import DesignError
+from ..lp.certified import LP_OPTIONS
 from ..systems.sampling import SampledModel
-from .certified_lp import LP_OPTIONS
 
 __all__ = [
     "FramerDesign",

@@ -42,8 +42,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from ..errors import AssumptionError, DesignError, DimensionError
+from ..lp.certified import LP_OPTIONS
 from ..validation import as_matrix
-from .certified_lp import LP_OPTIONS
 from .lmi import solve_lmi, verify_definite
 
 __all__ = [

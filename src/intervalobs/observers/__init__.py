@@ -5,13 +5,13 @@ from .continuous_nonlinear import ContinuousNonlinearObserver
 from .fir import FiniteMemoryObserver
 from .gsisio import GSISIO
 from .hgio import HighGainIntervalObserver
-from .hull import HullEstimator, HullLowerBound, hull_lower_bound
+from .hull import HullEstimator
 from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .lpv import LPVIntervalObserver, LPVIntervalUIO
 from .null_space_gsisio import NullSpaceGSISIO
 from .robust_fir import RobustFiniteMemoryObserver
-from .robust_hull import RobustHullEstimator, robust_hull_lower_bound
+from .robust_hull import RobustHullEstimator
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
@@ -21,7 +21,6 @@ __all__ = [
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
-    "HullLowerBound",
     "IntegratedObserver",
     "IntersectionObserver",
     "IntervalObserver",
@@ -34,7 +33,5 @@ __all__ = [
     "RobustHullEstimator",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",
-    "hull_lower_bound",
     "output_contraction",
-    "robust_hull_lower_bound",
 ]

@@ -63,10 +63,10 @@ from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
-from ..design.certified_lp import LP_OPTIONS
 from ..errors import AssumptionError, DataError, DesignError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
+from ..lp.certified import LP_OPTIONS
 from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem

@@ -65,7 +65,7 @@ def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatAr
     """
     from scipy.optimize import linprog
 
-    from ..design.certified_lp import LP_OPTIONS
+    from ..lp.certified import LP_OPTIONS
 
     q = M.shape[1]
     lo_out, hi_out = np.array(d_lo, dtype=float), np.array(d_hi, dtype=float)

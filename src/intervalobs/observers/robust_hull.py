@@ -43,7 +43,7 @@ and the remainder radius :math:`\rho_j = K\,|x_j - \hat x_j|_{\max} + R_x|x_j|_{
 Every state of the true system, with the true :math:`\Delta A`, noise and remainder, is feasible (the
 boxes of :math:`x_j` are the estimator's own, sound by induction), so every bound of the LP is a sound
 bound. Bounds are **certified by weak duality** with the rounding of their evaluation subtracted
-(:func:`~intervalobs.design.certified_lp.dual_bounds`, as the hull); the condensed matrix and the drive are
+(:func:`~intervalobs.lp.certified.dual_bounds`, as the hull); the condensed matrix and the drive are
 padded for their own rounding like the hull's condensed LP.
 
 **McCormick window** (``mccormick=True``). The split bounds :math:`\delta\,(x_j - \hat x_j)` by
@@ -57,7 +57,7 @@ box. On seed 002's (68) it removes most of the remainder's width (docs/tightness
 certified lower bound on the worst run, H = 20), at about 3 times the CPU time per step of the split
 LP (H = 40). The LP is one HiGHS model built once, with a slot per time of the window used cyclically;
 each step changes its bounds and the few coefficients of the newest slot, and every bound restarts from
-its basis of the previous step (:class:`_EnvelopeLP`).
+its basis of the previous step (:class:`EnvelopeLP`).
 
 **Identification.** The same LP bounds each entry of :math:`\delta`; since :math:`\Delta A` is constant,
 every certified bound holds at every later step, so the estimator keeps the running intersection (the
@@ -74,35 +74,25 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import sparse
 
-from ..design.certified_lp import DenseLP, dual_bounds, highs_model, new_highs, run_highs, shrink_inward
-from ..errors import AssumptionError, BoundsError, DataError, DesignError, DimensionError, InconsistentDataError
-from ..interval import inflate, product_bounds
+from ..errors import AssumptionError, DataError, DesignError, DimensionError, InconsistentDataError
+from ..interval import inflate
+from ..lp.certified import DenseLP
+from ..lp.chain import Solver, SolverPath, as_solver
+from ..lp.envelope import EnvelopeLP
+from ..lp.window import window_state_maps
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
-from ..systems.sampling import DeltaLinearisation, delta_linearisation, sampled_model
-from ..validation import as_positive, as_signal, as_time
+from ..systems.sampling import delta_linearisation, sampled_model
+from ..validation import as_positive
 from .base import Observer, ObserverState
-from .hull import CERTIFICATE_GAP, HullLowerBound, inner_model
 from .interval_observer import IntervalObserver
 
-__all__ = ["RobustHullEstimator", "robust_hull_lower_bound"]
+__all__ = ["RobustHullEstimator"]
 
 FloatArray = NDArray[np.float64]
 
-_CANDIDATE_TOLERANCE = 1e-12
-"""Relative tolerance of the check that user ΔA candidates lie in the ΔA box (candidates only seed a
-search for a lower bound; a check on the argument, not a rounding pad)."""
-
 _EPS = float(np.finfo(float).eps)
-_BACKTRACK = (1.0, 0.5, 0.25)
-"""Fractions of a sequential-LP step of the lower bound's ΔA search tried in turn."""
-_TRUST_REGION = 0.2
-"""Largest move of each ΔA entry in one sequential-LP step of the lower bound's search, as a fraction
-of the box width: the linearisation holds near the current ΔA only, and a step across the whole box
-lands where the data exclude ΔA (two-tank, seed 0, ΔA at a vertex: the bound rises from 0.12 / 0.92 /
-0.64 to 0.56 / 1.44 / 1.30 at steps 60 / 180 / 300 with six steps)."""
 
 
 class RobustHullEstimator(Observer):
@@ -129,12 +119,16 @@ class RobustHullEstimator(Observer):
         Keep the products ``δ_l x_{j,b}`` as LP columns bounded by their McCormick envelopes (module
         docstring): never wider than the split LP, a sparse LP with ``4 n_q`` more rows per step
         (``n_q`` = nonzero columns of the ``M_l``: ``n_δ`` in discrete time).
+    solver : {"auto", "highs"}
+        As for :class:`~intervalobs.observers.hull.HullEstimator`; both mean HiGHS here (these LPs have no
+        chain for the dense simplex), and the option exists so that one setting serves both estimators.
 
     Notes
     -----
     See the module docstring for the LP. Each step solves ``2n`` LPs (``2(n + n_δ)`` with ``identify``)
     with HiGHS; row ``k`` of :meth:`run` is the box of ``x_k`` given ``y_0 … y_{k-1}`` (prediction form).
-    ``meta()["delta_box"]`` holds the identified box of ``ΔA`` at the end of the last run.
+    ``meta()["delta_box"]`` holds the identified box of ``ΔA`` at the end of the last run, and
+    ``meta()["solver_path"]`` the route of every step's solves (:class:`~intervalobs.lp.chain.SolverPath`).
     """
 
     summary_fields = ("horizon", "identify", "mccormick")
@@ -149,6 +143,7 @@ class RobustHullEstimator(Observer):
         identify: bool = True,
         fallback: Observer | None = None,
         mccormick: bool = False,
+        solver: Solver = "auto",
     ) -> None:
         if not isinstance(system, LTISystem):
             raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -172,11 +167,14 @@ class RobustHullEstimator(Observer):
         self._rows = np.array([a for a, _ in self.model.entries], dtype=int)
         self._cols = np.array([b for _, b in self.model.entries], dtype=int)
         self.mccormick = bool(mccormick)
+        self.solver = as_solver(solver)
+        self._paths: list[dict[str, int]] = []
+        """The route of every step's LP solves since :meth:`init` (``meta["solver_path"]``)."""
         pairs = np.argwhere(np.any(self.model.M != 0, axis=1))  # (l, b): column b of M_l is nonzero
         self._pairs = (pairs[:, 0], pairs[:, 1])
         self._extremal: dict[int, FloatArray] = {}
         self._lp = DenseLP()
-        self._envelope = _EnvelopeLP(self.model, self._pairs, self.horizon) if self.mccormick else None
+        self._envelope = EnvelopeLP(self.model, self._pairs, self.horizon) if self.mccormick else None
         self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
 
     @classmethod
@@ -190,6 +188,7 @@ class RobustHullEstimator(Observer):
         identify: bool = True,
         fallback: Observer | Literal[False] | None = None,
         mccormick: bool = False,
+        solver: Solver = "auto",
     ) -> RobustHullEstimator:
         """Build the estimator (there is no gain: the window LP of each step is the estimator).
 
@@ -212,6 +211,8 @@ class RobustHullEstimator(Observer):
             in ``ΔA`` can be the looser one for ``‖A‖h`` of a few units); ``False``: the window LP alone.
         mccormick : bool
             Bound the products ``δ_l x_{j,b}`` by their McCormick envelopes (class docstring).
+        solver : {"auto", "highs"}
+            Which solvers the LPs use (class docstring).
 
         Returns
         -------
@@ -223,7 +224,7 @@ class RobustHullEstimator(Observer):
             If the system has no interval ``dA`` (use :class:`~intervalobs.observers.hull.HullEstimator`).
         """
         given = fallback if isinstance(fallback, Observer) else None
-        estimator = cls(system, bounds, horizon=horizon, h=h, identify=identify, fallback=given, mccormick=mccormick)
+        estimator = cls(system, bounds, horizon, h, identify, given, mccormick, solver)
         if fallback is None:
             try:
                 estimator.fallback = IntervalObserver.design(system, bounds, h=h)
@@ -252,7 +253,7 @@ class RobustHullEstimator(Observer):
         rho = half @ K.T + big @ mod.R_x.T + np.abs(u_win) @ mod.R_u.T
         e_lo, e_hi = mod.noise_lo - rho, mod.noise_hi + rho
         sens = np.einsum("lab,jb->jal", mod.M, mid) + np.einsum("lab,jb->jal", mod.N, u_win)
-        states, drives = _condensed(mod.Phi, mod.Gamma, np.eye(n), sens, u_win)
+        states, drives = window_state_maps(mod.Phi, mod.Gamma, np.eye(n), sens, u_win)
         # Magnitude bound of every term of x_j (rounding of the maps, the drive and the products W_j).
         growth = (
             np.maximum(np.abs(e_lo), np.abs(e_hi))
@@ -295,7 +296,7 @@ class RobustHullEstimator(Observer):
         """
         n, nd = self.n, self.nd
         first = max(k - self.horizon, 0) - start
-        lp: DenseLP | _EnvelopeLP = self._lp
+        lp: DenseLP | EnvelopeLP = self._lp
         if self._envelope is not None:
             d_box = (self.delta_box[0][self._rows, self._cols], self.delta_box[1][self._rows, self._cols])
             window = (ys[first:], us[first:], box_lo[first:], box_hi[first:])
@@ -353,6 +354,8 @@ class RobustHullEstimator(Observer):
         self._extremal = {}
         if self._envelope is not None:
             self._envelope.forget_bases()  # every run starts from scratch (reproducible)
+        self._take_path()
+        self._paths = []
         internal: dict[str, Any] = {
             "k": 0,
             "start": 0,
@@ -396,6 +399,7 @@ class RobustHullEstimator(Observer):
         lo, hi = self._predict(old["box_lo"][-1], old["box_hi"][-1], u)
         low, high = self._box(k + 1, start, ys, us, old["box_lo"], old["box_hi"], (lo, hi))
         lo, hi = inflate(np.maximum(lo, low), np.minimum(hi, high))
+        self._paths.append(self._take_path().as_dict())
         inner = None
         if self.fallback is not None:  # the fallback's box is sound as it is: intersect after the inflation
             inner = self.fallback.step(old["fallback"], y, u)
@@ -416,6 +420,13 @@ class RobustHullEstimator(Observer):
             "delta_box": self.delta_box,
         }
         return ObserverState(lo, hi, internal=internal)
+
+    def _take_path(self) -> SolverPath:
+        """The routes of the LP solves since the last call (a fresh count starts)."""
+        path = self._lp.take_path()
+        if self._envelope is not None:
+            path.add(self._envelope.take_path())
+        return path
 
     def extremal_deltas(self, steps: int) -> FloatArray:
         """The ``ΔA`` of the LP optimum of each bound of the last run: candidates for a lower bound.
@@ -453,6 +464,8 @@ class RobustHullEstimator(Observer):
             "horizon": self.horizon,
             "identify": self.identify,
             "mccormick": self.mccormick,
+            "solver": self.solver,
+            "solver_path": [dict(path) for path in self._paths],
             "h": self.h,
             "uncertain_entries": len(self.model.entries),
             "delta_box": [(self.model.center + b).tolist() for b in self.delta_box],
@@ -460,515 +473,3 @@ class RobustHullEstimator(Observer):
             "transient_s": 0.0,
             "certificate": "weak duality (Neumaier-Shcherbina), rounding subtracted",
         }
-
-
-_PIVOT_MEMORY = 0.7
-"""Weight of the previous average in the moving pivot count of a warm-start alignment."""
-_EXPLORE = 16
-"""Steps after which the McCormick LP's objective tries the warm-start alignment it has not used."""
-
-
-class _EnvelopeLP:
-    r"""The McCormick window LP (:meth:`RobustHullEstimator._box`) as one HiGHS model built once.
-
-    Slot ``τ mod S`` (``S = H + 1``) holds the time ``τ`` of the window ``s … k``: its state
-    :math:`x_\tau`, the noise :math:`e_\tau`, the products :math:`q_\tau = \delta_l x_{\tau,b}` of its
-    transition to ``τ + 1`` (slot ``τ + 1 mod S``; the rows of ``k``, whose transition closes the cycle,
-    are free), its measurement row and its envelope rows; :math:`\delta` comes last. Each step only the
-    bounds change, and the coefficients that depend on the data: the envelopes' factors of
-    :math:`\delta` (the box of :math:`x_\tau`) and, in continuous time, :math:`-N_l u_\tau` — those of
-    the slot the window has just entered; the envelopes' factors of :math:`x` change with the identified
-    :math:`\delta` box only. A slot outside the window (the first ``H`` steps) has its columns fixed at 0
-    and its rows free. Every loaded value is kept, and only the entries that differ are passed on.
-
-    **Warm starts.** The optimal basis of every objective is kept and restored at the next step, in
-    one of two alignments: each variable and row with the status it had *at the same time* (the basis
-    as it is: a variable keeps its slot), or with the status of the one *one step earlier*, i.e. at the
-    same lag behind ``x_k`` (the basis rolled by one slot). Which one needs fewer pivots depends on the
-    example: on seed 002's (68), where the extremal trajectories of ``x_k`` are shaped by the shared
-    :math:`\delta`, the lagged basis (several times fewer pivots); on the two-tank, where the measurements
-    shape them, the timed one (a quarter fewer). So each objective uses the alignment whose recent pivot
-    count (:data:`_PIVOT_MEMORY`) is lower and tries the other one every :data:`_EXPLORE` steps. An
-    objective without a kept basis starts from the last solve's optimum. Dual simplex with Devex pricing
-    (steepest-edge weights would be recomputed after every restored basis). A restored basis is passed
-    as alien (HiGHS repairs a singular one); when it leads to no optimum, the LP is solved again from
-    scratch.
-
-    **Certificate.** A copy of the matrix with the same entries (as ``Aᵀ`` in CSR, updated in place)
-    gives the weak-duality bounds (:func:`~intervalobs.design.certified_lp.dual_bounds`); an optimum
-    whose multipliers certify more than ``CERTIFICATE_GAP`` below its value (an ill-conditioned basis
-    reached from a restored one) is solved again from scratch and the better certificate kept.
-    """
-
-    def __init__(self, model: DeltaLinearisation, pairs: tuple[NDArray[Any], NDArray[Any]], horizon: int) -> None:
-        from highspy import _core
-
-        self.model = model
-        n, p = model.C.shape[1], model.C.shape[0]
-        pl, pb = pairs
-        nq, nd, S = pl.size, model.M.shape[0], horizon + 1
-        self.n, self.p, self.nq, self.nd, self.slots, self.pairs = n, p, nq, nd, S, pairs
-        e0 = S * n
-        q0 = e0 + S * n
-        self.d0 = q0 + S * nq
-        self.ncol = self.d0 + nd
-        self.x_col = np.arange(S * n).reshape(S, n)
-        self.env0 = S * (n + p)
-        self.nrow = self.env0 + 4 * S * nq
-        e_col = e0 + np.arange(S * n).reshape(S, n)
-        q_col = q0 + np.arange(S * nq).reshape(S, nq)
-        dyn = np.arange(S * n).reshape(S, n)
-        meas = S * n + np.arange(S * p).reshape(S, p)
-        env = self.env0 + np.arange(4 * S * nq).reshape(4, S, nq)
-        rows: list[NDArray[Any]] = []
-        cols: list[NDArray[Any]] = []
-        vals: list[NDArray[Any]] = []
-
-        def put(r: ArrayLike, c: ArrayLike, v: ArrayLike) -> NDArray[np.int64]:
-            """Entries ``v`` at rows ``r`` and columns ``c`` (broadcast); returns their positions."""
-            r, c, v = np.broadcast_arrays(r, c, v)
-            first = sum(a.size for a in rows)
-            rows.append(r.ravel())
-            cols.append(c.ravel())
-            vals.append(np.asarray(v, dtype=float).ravel())
-            return first + np.arange(r.size).reshape(r.shape)
-
-        # dynamics of slot i: x_{i+1 mod S} - Φ x_i - e_i - Q q_i - Σ_l (N_l u_τ) δ_l
-        put(dyn, self.x_col[(np.arange(S) + 1) % S], 1.0)
-        put(dyn[:, :, None], self.x_col[:, None, :], -model.Phi[None])
-        put(dyn, e_col, -1.0)
-        Q = model.M[pl, :, pb].T  # (n, n_q): the column of product δ_l x_b
-        put(dyn[:, :, None], q_col[:, None, :], -Q[None])
-        drift = np.argwhere(np.any(model.N != 0, axis=2))  # (l, a): row a of N_l is nonzero
-        self.drift_entries = (drift[:, 0], drift[:, 1])
-        self.drift_at = put(dyn[:, drift[:, 1]], self.d0 + drift[:, 0][None], 1.0)  # (S, entries)
-        put(meas[:, :, None], self.x_col[:, None, :], model.C[None])
-        # envelopes: block b, slot i, product t: q - a x - c δ (a: an end of δ_l, c: an end of x_b)
-        self.env_x_at, self.env_d_at = [], []
-        for b in range(4):
-            put(env[b], q_col, 1.0)
-            self.env_x_at.append(put(env[b], self.x_col[:, pb], 1.0))
-            self.env_d_at.append(put(env[b], self.d0 + pl[None, :], 1.0))
-        r_all, c_all = np.concatenate(rows), np.concatenate(cols)
-        order = np.lexsort((r_all, c_all))  # column-major: the CSC of A is the CSR of Aᵀ
-        self.position = np.empty_like(order)
-        self.position[order] = np.arange(order.size)
-        indptr = np.searchsorted(c_all[order], np.arange(self.ncol + 1))
-        data = np.concatenate(vals)[order]
-        self.matrix_t = sparse.csr_matrix((data, r_all[order], indptr), shape=(self.ncol, self.nrow))
-        self.abs_matrix_t = sparse.csr_matrix((np.abs(data), r_all[order], indptr), shape=(self.ncol, self.nrow))
-        self.col_nnz = int(np.max(np.diff(indptr)))
-        self.solver = new_highs()
-        self.solver.setOptionValue("simplex_dual_edge_weight_strategy", 1)  # Devex (class docstring)
-        self.inf = float(self.solver.getInfinity())
-        free_rows = np.full(self.nrow, self.inf)
-        matrix = sparse.csc_matrix((data, r_all[order], indptr), shape=(self.nrow, self.ncol))
-        zero = np.zeros(self.ncol)
-        self.solver.passModel(highs_model(matrix, zero, zero, -free_rows, free_rows, self.inf))
-        self._r_all, self._c_all = r_all.astype(np.int32), c_all.astype(np.int32)
-        self._cols = np.arange(self.ncol, dtype=np.int32)
-        self._rows = np.arange(self.nrow, dtype=np.int32)
-        self._optimal = _core.HighsModelStatus.kOptimal
-        self._bases: dict[int, Any] = {}
-        self._pivots: dict[tuple[int, bool], float] = {}
-        """Per objective and alignment (lagged?): recent pivot count (a moving average)."""
-        self._tried: dict[tuple[int, bool], int] = {}
-        """Per objective and alignment: the step it was last used at."""
-        self._step = 0
-
-        # The lagged basis: slot i gets the statuses of slot i - 1 (δ keeps its own).
-        def rolled(blocks: list[tuple[int, int]]) -> NDArray[np.int64]:
-            return np.concatenate(
-                [np.roll(first + np.arange(S * w).reshape(S, w), 1, axis=0).ravel() for first, w in blocks]
-            )
-
-        self._lagged_cols = np.concatenate([rolled([(0, n), (e0, n), (q0, nq)]), self.d0 + np.arange(nd)]).tolist()
-        blocks = [(0, n), (S * n, p)] + [(self.env0 + b * S * nq, nq) for b in range(4)]
-        self._lagged_rows = rolled(blocks).tolist()
-
-    def _set(self, at: NDArray[np.int64], values: FloatArray) -> None:
-        """Coefficients ``values`` at the entries ``at`` (only those that differ are passed to HiGHS)."""
-        at, values = at.ravel(), values.ravel()
-        where = self.position[at]
-        changed = np.flatnonzero(self.matrix_t.data[where] != values)
-        if changed.size == 0:
-            return
-        self.matrix_t.data[where[changed]] = values[changed]
-        self.abs_matrix_t.data[where[changed]] = np.abs(values[changed])
-        for e, v in zip(at[changed].tolist(), values[changed].tolist(), strict=True):
-            self.solver.changeCoeff(int(self._r_all[e]), int(self._c_all[e]), v)
-
-    def set_window(
-        self,
-        k: int,
-        ys: FloatArray,
-        us: FloatArray,
-        box_lo: FloatArray,
-        box_hi: FloatArray,
-        predicted: tuple[FloatArray, FloatArray],
-        delta_box: tuple[FloatArray, FloatArray],
-        m: int,
-    ) -> FloatArray:
-        """Bounds and coefficients of the window ``s = k - L … k``; returns the objective rows of ``x_k``.
-
-        Row ``i`` of ``ys``, ``us`` and ``box_*`` is time ``s + i`` (``box_*`` bound ``x_τ``, ``τ < k``);
-        ``delta_box`` holds the ends of ``δ`` (one per uncertain entry), ``m`` the number of inputs.
-        """
-        mod, n, p, nq, S, inf = self.model, self.n, self.p, self.nq, self.slots, self.inf
-        pl, pb = self.pairs
-        L = min(k, S - 1)
-        slot = (k - L + np.arange(L)) % S  # the slots of s … k - 1 (with transitions and measurements)
-        newest = k % S
-        d_lo, d_hi = delta_box
-        d_max = np.maximum(np.abs(d_lo), np.abs(d_hi))
-        u_win, lo, hi = us[:L], box_lo[:L], box_hi[:L]
-        # coefficients: the envelopes' factors of x (δ box), of δ (the boxes of the new slots), the drift
-        for b, a in enumerate((d_lo[pl], d_hi[pl], d_lo[pl], d_hi[pl])):
-            self._set(self.env_x_at[b], np.broadcast_to(-a, (S, nq)))
-        for b, c in enumerate((lo, hi, hi, lo)):
-            self._set(self.env_d_at[b][slot], -c[:, pb])
-        drift = np.einsum("lab,jb->jal", mod.N, u_win)
-        self._set(self.drift_at[slot], -drift[:, self.drift_entries[1], self.drift_entries[0]])
-        # column bounds: states in their boxes (x_k in the prediction), e and q of s … k - 1, δ
-        x_lo, x_hi = np.zeros((S, n)), np.zeros((S, n))
-        x_lo[slot], x_hi[slot] = lo, hi
-        x_lo[newest], x_hi[newest] = predicted
-        rho = np.maximum(np.abs(lo), np.abs(hi)) @ mod.R_x.T + np.abs(u_win) @ mod.R_u.T
-        e_lo, e_hi = np.zeros((S, n)), np.zeros((S, n))
-        e_lo[slot], e_hi[slot] = mod.noise_lo - rho, mod.noise_hi + rho
-        q_lo, q_hi = np.zeros((S, nq)), np.zeros((S, nq))
-        q_lo[slot], q_hi[slot] = inflate(*product_bounds(d_lo[pl], d_hi[pl], lo[:, pb], hi[:, pb]))
-        self.col_lo = np.concatenate([x_lo.ravel(), e_lo.ravel(), q_lo.ravel(), d_lo])
-        self.col_hi = np.concatenate([x_hi.ravel(), e_hi.ravel(), q_hi.ravel(), d_hi])
-        # row bounds: dynamics (padded for the rounding of Γ_c u_j and of N_l u_j times |δ_l|), measurements
-        gamma_u = u_win @ mod.Gamma.T
-        abs_drift = np.einsum("lab,jb->jal", np.abs(mod.N), np.abs(u_win))
-        dyn_pad = 2.0 * (m + 2) * _EPS * (np.abs(u_win) @ np.abs(mod.Gamma).T + abs_drift @ d_max)
-        dyn_lo, dyn_hi = np.full((S, n), -inf), np.full((S, n), inf)
-        dyn_lo[slot], dyn_hi[slot] = gamma_u - dyn_pad, gamma_u + dyn_pad
-        y_pad = 2.0 * _EPS * (np.abs(ys[:L]) + np.maximum(np.abs(mod.v_lo), np.abs(mod.v_hi)))
-        y_lo, y_hi = np.full((S, p), -inf), np.full((S, p), inf)
-        y_lo[slot], y_hi[slot] = ys[:L] - mod.v_hi - y_pad, ys[:L] - mod.v_lo + y_pad
-        # envelopes: q - a x - c δ ≥ -a c (blocks 0, 1) or ≤ -a c (blocks 2, 3), constants padded
-        env_lo, env_hi = np.full((4, S, nq), -inf), np.full((4, S, nq), inf)
-        for b, (a, c) in enumerate(((d_lo[pl], lo), (d_hi[pl], hi), (d_lo[pl], hi), (d_hi[pl], lo))):
-            rhs = -a * c[:, pb]
-            pad = 2.0 * _EPS * np.abs(rhs)
-            if b < 2:
-                env_lo[b, slot] = rhs - pad
-            else:
-                env_hi[b, slot] = rhs + pad
-        self.row_lo = np.concatenate([dyn_lo.ravel(), y_lo.ravel(), env_lo.ravel()])
-        self.row_hi = np.concatenate([dyn_hi.ravel(), y_hi.ravel(), env_hi.ravel()])
-        self.solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
-        self.solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
-        objective = np.zeros((n, self.ncol))
-        objective[np.arange(n), self.x_col[newest]] = 1.0
-        return objective
-
-    def forget_bases(self) -> None:
-        """Drop the kept bases, their pivot counts and the solver's own (the next solves start from scratch)."""
-        self._bases.clear()
-        self._pivots.clear()
-        self._tried.clear()
-        self._step = 0
-        self.solver.clearSolver()
-
-    def _alignment(self, r: int) -> bool:
-        """Whether objective ``r`` restores its kept basis lagged: the alignment of fewer recent pivots,
-        or the other one when it was last tried :data:`_EXPLORE` steps ago (or never)."""
-        for lagged in (True, False):
-            if self._step - self._tried.get((r, lagged), -_EXPLORE) >= _EXPLORE:
-                return lagged
-        return self._pivots[(r, True)] < self._pivots[(r, False)]
-
-    def _lag(self, basis: Any) -> Any:
-        """The basis rolled by one slot (each variable and row gets the status of its predecessor in time)."""
-        from highspy import _core
-
-        col_status, row_status = basis.col_status, basis.row_status
-        rolled = _core.HighsBasis()
-        rolled.col_status = [col_status[i] for i in self._lagged_cols]
-        rolled.row_status = [row_status[i] for i in self._lagged_rows]
-        rolled.valid, rolled.alien = True, True
-        return rolled
-
-    def minima(self, costs: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Certified lower bounds of ``costs[r] · z`` and the solver's optimal points (as ``DenseLP.minima``).
-
-        Parameters
-        ----------
-        costs : numpy.ndarray, shape (R, cols)
-            One objective per row; row ``r`` starts from the basis kept for row ``r``.
-
-        Returns
-        -------
-        bounds : numpy.ndarray, shape (R,)
-        points : numpy.ndarray, shape (R, cols)
-        """
-        solver = self.solver
-        duals = np.zeros((costs.shape[0], self.nrow))
-        points = np.full((costs.shape[0], self.ncol), np.nan)
-        usable = np.zeros(costs.shape[0], dtype=bool)
-        self._step += 1
-        for r, cost in enumerate(costs):
-            solver.changeColsCost(self.ncol, self._cols, cost)
-            kept = self._bases.get(r)
-            lagged = False
-            if kept is not None:
-                lagged = self._alignment(r)
-                solver.setBasis(self._lag(kept) if lagged else kept)
-            run_highs(solver)
-            if kept is not None:
-                pivots = float(solver.getInfo().simplex_iteration_count)
-                old = self._pivots.get((r, lagged), pivots)
-                self._pivots[(r, lagged)] = _PIVOT_MEMORY * old + (1.0 - _PIVOT_MEMORY) * pivots
-                self._tried[(r, lagged)] = self._step
-                if solver.getModelStatus() != self._optimal:
-                    solver.clearSolver()  # the restored basis did not lead to an optimum: from scratch
-                    run_highs(solver)
-            usable[r], duals[r], points[r] = self._read()
-            if solver.getModelStatus() == self._optimal:
-                self._bases[r] = solver.getBasis()
-            else:
-                self._bases.pop(r, None)
-        bounds = np.where(usable, dual_bounds(self, costs, duals), -np.inf)
-        solved = np.all(np.isfinite(points), axis=1)
-        primal = np.where(solved, np.einsum("rc,rc->r", costs, np.nan_to_num(points)), np.nan)
-        for loose in np.flatnonzero(solved & (primal - bounds > CERTIFICATE_GAP * (1.0 + np.abs(primal)))).tolist():
-            solver.changeColsCost(self.ncol, self._cols, costs[loose])
-            solver.clearSolver()
-            run_highs(solver)
-            ok, dual, _ = self._read()
-            if ok:
-                again = dual_bounds(self, costs[loose : loose + 1], dual[None, :])[0]
-                bounds[loose] = max(bounds[loose], again)
-        return bounds, points
-
-    def _read(self) -> tuple[bool, FloatArray, FloatArray]:
-        """Whether the last solve gave finite duals, the duals and the optimal point (NaN if none)."""
-        solution = self.solver.getSolution()
-        dual = np.asarray(solution.row_dual, dtype=float)
-        point = np.full(self.ncol, np.nan)
-        if self.solver.getModelStatus() == self._optimal:
-            point = np.asarray(solution.col_value, dtype=float)
-        ok = dual.shape == (self.nrow,) and bool(np.all(np.isfinite(dual)))
-        return ok, (dual if ok else np.zeros(self.nrow)), point
-
-
-def _condensed(
-    phi: FloatArray, gamma: FloatArray, noise: FloatArray, sens: FloatArray, us: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    r"""States of a window as affine maps of ``z = (x_s, q_0 … q_{L-1}, δ)``: ``x_j = S_j z + d_j``.
-
-    ``x_{j+1} = Φ x_j + Γ u_j + G q_j + W_j δ`` with ``noise`` = G (n, n_q) and ``sens[j]`` = W_j (n, n_δ);
-    ``us`` has ``L`` rows. Returns ``S`` (L + 1, n, ncol) and ``d`` (L + 1, n).
-    """
-    n, nq = noise.shape
-    L, nd = us.shape[0], sens.shape[-1]
-    ncol = n + L * nq + nd
-    state = np.zeros((L + 1, n, ncol))
-    drive = np.zeros((L + 1, n))
-    state[0, :, :n] = np.eye(n)
-    for j in range(L):
-        state[j + 1] = phi @ state[j]
-        state[j + 1, :, n + j * nq : n + (j + 1) * nq] += noise
-        state[j + 1, :, n + L * nq :] += sens[j]
-        drive[j + 1] = phi @ drive[j] + gamma @ us[j]
-    return state, drive
-
-
-def _inner_points(
-    model: Any,
-    x0: tuple[FloatArray, FloatArray],
-    k: int,
-    ys: FloatArray,
-    us: FloatArray,
-    lp: DenseLP,
-    sens: FloatArray | None = None,
-    delta_box: tuple[FloatArray, FloatArray] | None = None,
-    objective: int | None = None,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Optimal points of ``± x_k`` over the full-history consistent set of a fixed-``ΔA`` model.
-
-    Objective ``r < n`` minimises ``(x_k)_r``, ``r ≥ n`` maximises ``(x_k)_{r-n}``; ``objective`` solves
-    that one only (the other rows of the results stay NaN).
-    With ``sens`` (k, n, n_δ) and ``delta_box`` the model is the linearisation in a step ``δ`` of ``ΔA``
-    (a search direction only). Returns the values (2n, n) of ``x_k`` at the points and the trajectories
-    (2n, k + 1, n); NaN where the solver gave no point or (without ``sens``) the point fails the check
-    against the measurement bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy).
-    """
-    n = model.C.shape[1]
-    G = np.eye(n) if model.G is None else model.G
-    nd = 0 if sens is None else sens.shape[-1]
-    state, drive = _condensed(model.Phi, model.Gamma, G, np.zeros((k, n, nd)) if sens is None else sens, us[:k])
-    ncol = state.shape[-1]
-    matrix = np.einsum("pn,jnc->jpc", model.C, state[:k]).reshape(k * model.C.shape[0], ncol)
-    centre = (drive[:k] @ model.C.T).ravel()
-    y = ys[:k].ravel()
-    v_lo, v_hi = np.tile(model.v_lo, k), np.tile(model.v_hi, k)
-    extra_lo = np.zeros(0) if delta_box is None else delta_box[0]
-    extra_hi = np.zeros(0) if delta_box is None else delta_box[1]
-    col_lo = np.concatenate([x0[0], np.tile(model.w_lo, k), extra_lo])
-    col_hi = np.concatenate([x0[1], np.tile(model.w_hi, k), extra_hi])
-    if k == 0:
-        matrix, centre, y, v_lo, v_hi = np.zeros((1, ncol)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
-    lp.load(matrix, col_lo, col_hi, y - v_hi - centre, y - v_lo - centre)
-    chosen = list(range(2 * n)) if objective is None else [objective]
-    _, points = lp.minima(np.concatenate([state[k], -state[k]])[chosen])
-    values = np.full((2 * n, n), np.nan)
-    paths = np.full((2 * n, k + 1, n), np.nan)
-    steps = np.full((2 * n, nd), np.nan)
-    for r, z in zip(chosen, points, strict=True):
-        if not np.all(np.isfinite(z)):
-            continue
-        z = np.clip(z, col_lo, col_hi)
-        slack = 1e-8 * (1.0 + np.abs(y))
-        residual = y - (matrix @ z + centre)
-        if sens is None and not (np.all(residual >= v_lo - slack) and np.all(residual <= v_hi + slack)):
-            continue
-        values[r] = state[k] @ z + drive[k]
-        paths[r] = state @ z + drive
-        steps[r] = z[ncol - nd :]
-    return values, paths, steps
-
-
-def robust_hull_lower_bound(
-    system: LTISystem,
-    bounds: Bounds,
-    t: ArrayLike,
-    y: ArrayLike,
-    u: ArrayLike | None = None,
-    h: float | None = None,
-    candidates: ArrayLike | None = None,
-    steps: ArrayLike | None = None,
-    search: int = 6,
-    substeps: int = 2,
-) -> HullLowerBound:
-    r"""Lower bound on the box of any sound estimator under interval ``ΔA``: consistent states, full history.
-
-    For any fixed admissible :math:`\Delta A` the states consistent with it and with the data (over the
-    whole record, from the box of :math:`x_0`) are consistent states of the true problem, so the hull of
-    any such states lies inside every sound box. For each step ``k`` and each bound of :math:`x_k`, the
-    LP over the fixed-:math:`\Delta A` consistent set (full history, condensed from :math:`x_0`; in
-    continuous time the process noise is held over ``substeps`` parts of each sampling interval, an
-    admissible signal) is solved for each candidate :math:`\Delta A`, and improved by ``search``
-    steps of sequential linear programming on the bilinear problem: the dynamics linearised in
-    :math:`\Delta A` around the optimal trajectory give a new :math:`\Delta A` (each entry moved by at
-    most a fifth of its interval, clipped to the box),
-    kept when its exact LP value is better. Every point used is re-checked against the measurement
-    bounds (tolerance ``1e-8 (1 + |y|)``, the solver's primal accuracy) and the result is shrunk inward
-    by a relative 1e-6, as in :func:`~intervalobs.observers.hull.hull_lower_bound`.
-
-    Parameters
-    ----------
-    system : LTISystem
-        Model with an interval ``dA``.
-    bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
-    h : float, optional
-        Sampling period of a continuous-time system.
-    candidates : array_like, shape (S, n, n) or (T, S, n, n), optional
-        Starting ``ΔA`` values (shared by all steps, or per step; NaN entries are skipped), e.g. the
-        simulation's true ``ΔA`` and :meth:`RobustHullEstimator.extremal_deltas`. Default: the centre.
-    steps : array_like of int, optional
-        Steps at which the bound is computed (default all; NaN elsewhere).
-    search : int
-        Sequential-LP improvement steps per candidate and bound.
-    substeps : int
-        Continuous time: noise values per sampling interval of the inner model (more: a larger inner
-        set, slower LPs).
-
-    Returns
-    -------
-    HullLowerBound
-        Not an :class:`~intervalobs.estimate.Estimate`: a width no sound estimator can beat.
-    """
-    if system.dA is None:
-        raise AssumptionError("system.dA: expected an interval ΔA (without it the hull is exact: HullEstimator)")
-    times = as_time("t", t)
-    ys = as_signal("y", y, times.size, system.p)
-    if ys.ndim != 2:
-        raise DimensionError(f"y: expected one run of shape (T, p), got shape {ys.shape}")
-    us = np.zeros((times.size, system.m)) if u is None else as_signal("u", u, times.size, system.m)
-    full = bounds.resolve(system)
-    n = system.n
-    if np.any(np.count_nonzero(system.F, axis=0) > 1):
-        raise AssumptionError("system.F: the lower bound needs measurement noise channels that each drive one output")
-    linear = delta_linearisation(system, full, h)
-    rows_a = np.array([a for a, _ in linear.entries], dtype=int)
-    cols_b = np.array([b for _, b in linear.entries], dtype=int)
-    da_lo, da_hi = system.dA[0][rows_a, cols_b], system.dA[1][rows_a, cols_b]
-    centre = 0.5 * (system.dA[0] + system.dA[1])
-    cands = centre[None, None] if candidates is None else np.asarray(candidates, dtype=float)
-    if cands.ndim == 3:
-        cands = np.broadcast_to(cands, (times.size, *cands.shape))
-    if cands.ndim != 4 or cands.shape[0] != times.size or cands.shape[2:] != (n, n):
-        raise DimensionError(
-            f"candidates: expected shape (S, {n}, {n}) or ({times.size}, S, {n}, {n}), got {cands.shape}"
-        )
-    finite = np.all(np.isfinite(cands), axis=(2, 3))
-    tol = _CANDIDATE_TOLERANCE * (1.0 + np.abs(system.dA[0]) + np.abs(system.dA[1]))
-    outside = (cands < system.dA[0] - tol) | (cands > system.dA[1] + tol)
-    if np.any(np.any(outside, axis=(2, 3)) & finite):
-        raise BoundsError("candidates: expected ΔA values inside the box system.dA, got one outside")
-    lower = np.full((times.size, n), np.nan)
-    upper = np.full((times.size, n), np.nan)
-    lp = DenseLP()
-    chosen = range(times.size) if steps is None else [int(k) for k in np.atleast_1d(steps)]
-    gain = np.concatenate([-np.ones(n), np.ones(n)])  # row r < n minimises x_r, the others maximise x_{r-n}
-
-    def exact(delta: FloatArray, k: int, objective: int | None = None) -> tuple[FloatArray, FloatArray, FloatArray]:
-        return _inner_points(inner_model(system, full, h, delta, substeps), full.x0, k, ys, us, lp, objective=objective)
-
-    reach = _TRUST_REGION * (da_hi - da_lo)
-    found = np.full((2 * n, n, n), np.nan)  # the best ΔA of each bound at the previous step: a candidate
-    for k in chosen:
-        best = np.full(2 * n, -np.inf)
-        start: list[tuple[FloatArray, FloatArray] | None] = [None] * (2 * n)
-        previous = found[np.all(np.isfinite(found), axis=(1, 2))]
-        for delta in np.concatenate([cands[k][finite[k]], previous]):
-            delta = np.clip(delta, system.dA[0], system.dA[1])
-            values, paths, _ = exact(delta, k)
-            for r in range(2 * n):
-                if np.all(np.isfinite(values[r])) and gain[r] * values[r, r % n] > best[r]:
-                    best[r], start[r] = gain[r] * values[r, r % n], (delta, paths[r])
-        for r in range(2 * n):  # sequential LP from the best candidate of each bound
-            if start[r] is None or k == 0 or rows_a.size == 0:
-                continue
-            current, path = start[r]  # type: ignore[misc]
-            for _ in range(search):
-                sens = np.einsum("lab,jb->jal", linear.M, path[:k])
-                here = current[rows_a, cols_b]
-                model = inner_model(system, full, h, current, substeps)
-                box = (np.maximum(da_lo - here, -reach), np.minimum(da_hi - here, reach))
-                _, _, step = _inner_points(model, full.x0, k, ys, us, lp, sens, box, objective=r)
-                if not np.all(np.isfinite(step[r])):
-                    break
-                for fraction in _BACKTRACK:
-                    trial = current.copy()
-                    trial[rows_a, cols_b] = np.clip(here + fraction * step[r], da_lo, da_hi)
-                    t_values, t_paths, _ = exact(trial, k, objective=r)
-                    if np.all(np.isfinite(t_values[r])) and gain[r] * t_values[r, r % n] > best[r]:
-                        break
-                else:
-                    break
-                current, path, best[r] = trial, t_paths[r], gain[r] * t_values[r, r % n]
-            found[r] = current
-        lo, hi = -best[:n], best[n:]
-        if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
-            lower[k], upper[k] = lo, hi
-    lower, upper = shrink_inward(lower, upper)
-    used = cands.reshape(-1, n, n)
-    alive = np.ones(used.shape[0], dtype=bool)
-    meta = {"horizon": "full", "filtered": False, "search": int(search), "steps": [int(k) for k in chosen]}
-    label = (
-        "lower bound on the width of any sound estimator (consistent states of fixed ΔA, full history; not an estimate)"
-    )
-    return HullLowerBound(times, lower, upper, used, alive, label=label, meta=meta)

@@ -1,0 +1,432 @@
+r"""The window LP of the exact hull: the states of ``H + 1`` steps, their noises and measurements as variables.
+
+:class:`SparseWindowLP` holds the LP of a window (built once, only bounds and costs change from one step to the
+next), :class:`SparseWindow` fills its bounds from a record and the boxes found before, :class:`WindowModel` is the
+linear model both read. The estimators (:class:`~intervalobs.observers.hull.HullEstimator`,
+:func:`~intervalobs.tightness.hull_lower_bound`) say what is estimated; how the LP is solved and certified is here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import sparse
+
+from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
+from .certified import dual_bounds, highs_model, new_highs, run_highs
+from .chain import RecordsPath, SolverPath
+
+__all__ = ["SparseWindow", "SparseWindowLP", "WindowModel", "window_state_maps"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class WindowModel:
+    """``x+ = Φx + Γu + noise``, ``y = Cx + noise`` with box or variable noise (see :class:`SparseWindowLP`).
+
+    ``G is None``: the process noise is the box ``x+ - Φx - Γu ∈ [w_lo, w_hi]``; otherwise
+    ``x+ = Φx + Γu + G w`` with ``w ∈ [w_lo, w_hi]``. Likewise ``F is None``: ``y - Cx ∈ [v_lo, v_hi]``;
+    otherwise ``y = Cx + F v``, ``v ∈ [v_lo, v_hi]``.
+
+    Parameters
+    ----------
+    Phi, Gamma : numpy.ndarray
+        Transition and input matrices.
+    G : numpy.ndarray or None
+        Map of the noise variables to the states (None: the noise is a box of the states).
+    w_lo, w_hi : numpy.ndarray
+        Box of the process noise.
+    C : numpy.ndarray
+        Output matrix.
+    F : numpy.ndarray or None
+        Map of the measurement-noise variables to the outputs (None: a box of the outputs).
+    v_lo, v_hi : numpy.ndarray
+        Box of the measurement noise.
+    """
+
+    Phi: FloatArray
+    Gamma: FloatArray
+    G: FloatArray | None
+    w_lo: FloatArray
+    w_hi: FloatArray
+    C: FloatArray
+    F: FloatArray | None
+    v_lo: FloatArray
+    v_hi: FloatArray
+
+    def propagate(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Sound interval image of a box through one step (no measurement), inflated for rounding.
+
+        Parameters
+        ----------
+        lower, upper : numpy.ndarray, shape (n,)
+            The box.
+        u : numpy.ndarray, shape (m,)
+            The known input.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (n,)
+        """
+        lo, hi = matvec_bounds(self.Phi, lower, upper)
+        if self.G is None:
+            lo, hi = lo + self.w_lo, hi + self.w_hi
+        else:
+            wl, wh = matvec_bounds(self.G, self.w_lo, self.w_hi)
+            lo, hi = lo + wl, hi + wh
+        drive = self.Gamma @ u
+        return inflate(lo + drive, hi + drive, 8 * ROUNDING_MARGIN)
+
+
+class SparseWindowLP(RecordsPath):
+    """The hull LP over a window of ``H`` steps, built once; each step changes only bounds and costs.
+
+    Slot ``i = 0 … H`` holds time ``k - H + i``; the dynamics rows link slot ``i`` to ``i + 1`` (and,
+    freed, the last to the first, so the matrix is a fixed cycle). Slots of times before 0 are fixed at
+    0 with their rows freed, so one model serves every step. The optimal basis of each objective is
+    kept and restored at the next step: the extremal trajectory seen from ``x_k`` changes little when
+    the window moves, so the dual simplex restarts close to the optimum.
+
+    Parameters
+    ----------
+    model : WindowModel
+    horizon : int
+        Window length ``H`` (steps).
+    points : int
+        Points of the prior's convex hull (0: the prior is a box).
+    """
+
+    def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
+        self.model, self.horizon, self.points = model, horizon, points
+        n, p = model.C.shape[1], model.C.shape[0]
+        S = horizon + 1
+        nq = 0 if model.G is None else model.G.shape[1]
+        nv = 0 if model.F is None else model.F.shape[1]
+        self.n, self.p, self.nq, self.nv, self.slots = n, p, nq, nv, S
+        self.w0 = S * n
+        self.v0 = self.w0 + S * nq
+        self.l0 = self.v0 + S * nv
+        self.ncol = self.l0 + points
+        self.y0 = S * n
+        self.p0 = self.y0 + S * p
+        self.nrow = self.p0 + (n + 1 if points else 0)
+        cycle = sparse.eye(S, S, k=1, format="lil")
+        cycle[S - 1, 0] = 1.0
+        dyn_x = sparse.kron(cycle.tocsr(), sparse.eye(n)) - sparse.kron(sparse.eye(S), sparse.csr_matrix(model.Phi))
+        blocks: list[list[Any]] = [[dyn_x, None, None, None], [None, None, None, None], [None, None, None, None]]
+        if nq:
+            assert model.G is not None
+            blocks[0][1] = -sparse.kron(sparse.eye(S), sparse.csr_matrix(model.G))
+        blocks[1][0] = sparse.kron(sparse.eye(S), sparse.csr_matrix(model.C))
+        if nv:
+            assert model.F is not None
+            blocks[1][2] = -sparse.kron(sparse.eye(S), sparse.csr_matrix(model.F))
+        if points:
+            prior = sparse.hstack([sparse.eye(n), sparse.csr_matrix((n, (S - 1) * n))])
+            blocks[2][0] = sparse.vstack([prior, sparse.csr_matrix((1, S * n))])
+            blocks[2][3] = sparse.csr_matrix(np.ones((n + 1, points)))
+        widths = [S * n, S * nq, S * nv, points]
+        heights = [S * n, S * p, n + 1 if points else 0]
+        rows = []
+        for r, hgt in enumerate(heights):
+            if hgt == 0:
+                continue
+            rows.append(
+                [
+                    blocks[r][c] if blocks[r][c] is not None else sparse.csr_matrix((hgt, wdt))
+                    for c, wdt in enumerate(widths)
+                    if wdt
+                ]
+            )
+        matrix = sparse.csc_matrix(sparse.bmat(rows, format="csc"))
+        matrix.eliminate_zeros()
+        self.matrix = matrix
+        self.matrix_t = matrix.T.tocsr()
+        self.abs_matrix_t = abs(self.matrix_t)
+        self.col_nnz = int(np.max(np.diff(matrix.indptr))) if matrix.nnz else 0
+        self.solver = new_highs()
+        self.inf = float(self.solver.getInfinity())
+        free_cols, free_rows = np.full(self.ncol, self.inf), np.full(self.nrow, self.inf)
+        self.solver.passModel(highs_model(matrix, -free_cols, free_cols, -free_rows, free_rows, self.inf))
+        from highspy import _core
+
+        self._status_optimal = _core.HighsModelStatus.kOptimal
+        self._cols = np.arange(self.ncol, dtype=np.int32)
+        self._rows = np.arange(self.nrow, dtype=np.int32)
+        self._cost_col = -1
+        self._bases: dict[tuple[int, float], Any] = {}
+        self.path = SolverPath()
+
+    def forget_bases(self) -> None:
+        """Drop the bases kept for warm starts and the solver's own (the next solves start from scratch)."""
+        self._bases.clear()
+        self.solver.clearSolver()
+
+    def newest_column(self, i: int) -> int:
+        """Column of component ``i`` of the newest state ``x_k`` (always the last slot).
+
+        Parameters
+        ----------
+        i : int
+
+        Returns
+        -------
+        int
+        """
+        return (self.slots - 1) * self.n + i
+
+    def set_points(self, pts: FloatArray) -> None:
+        """Prior ``x_{k-H} = P λ`` (first slot) with ``λ`` in the simplex.
+
+        Parameters
+        ----------
+        pts : numpy.ndarray, shape (points, n)
+            The points ``P`` (rows).
+        """
+        for j in range(self.points):
+            for i in range(self.n):
+                self.solver.changeCoeff(self.p0 + i, self.l0 + j, -float(pts[j, i]))
+
+    def set_bounds(self, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray) -> None:
+        """Replace all column and row bounds.
+
+        Parameters
+        ----------
+        col_lo, col_hi : numpy.ndarray, shape (ncol,)
+        row_lo, row_hi : numpy.ndarray, shape (nrow,)
+        """
+        self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
+        self.solver.changeColsBounds(self.ncol, self._cols, col_lo, col_hi)
+        self.solver.changeRowsBounds(self.nrow, self._rows, row_lo, row_hi)
+
+    def _minimise(self, col: int, sign: float, key: int) -> tuple[bool, FloatArray, FloatArray]:
+        if self._cost_col >= 0 and self._cost_col != col:
+            self.solver.changeColCost(self._cost_col, 0.0)
+        self.solver.changeColCost(col, sign)
+        self._cost_col = col
+        basis = self._bases.get((key, sign))
+        if basis is not None:
+            self.solver.setBasis(basis)
+        run_highs(self.solver)
+        ok = self.solver.getModelStatus() == self._status_optimal
+        self.path.pivots += int(self.solver.getInfo().simplex_iteration_count)
+        self.path.highs_warm += ok  # from the kept basis, or from the last optimum
+        self.path.failed += not ok
+        if ok:
+            self._bases[(key, sign)] = self.solver.getBasis()
+        solution = self.solver.getSolution()
+        return ok, np.asarray(solution.col_value), np.asarray(solution.row_dual)
+
+    def certified_min(self, col: int, sign: float, key: int) -> float:
+        """A rigorous lower bound of ``sign * x[col]`` over the feasible set (weak duality).
+
+        Parameters
+        ----------
+        col : int
+            The variable.
+        sign : float
+            1 for its minimum, -1 for minus its maximum.
+        key : int
+            Which kept basis to start from (one per objective and family).
+
+        Returns
+        -------
+        float
+        """
+        _, _, dual = self._minimise(col, sign, key)
+        if dual.size != self.nrow or not np.all(np.isfinite(dual)):
+            return -np.inf
+        cost = np.zeros((1, self.ncol))
+        cost[0, col] = sign
+        return float(dual_bounds(self, cost, dual[None, :])[0])
+
+    def primal_min(self, col: int, sign: float, key: int) -> tuple[bool, FloatArray]:
+        """The solver's best point (for inner hulls) and whether it is feasible (to 1e-7).
+
+        An inner hull needs feasible points only, not optimal ones: a point that is not optimal makes
+        the bound less tight, never invalid.
+
+        Parameters
+        ----------
+        col : int
+            The variable.
+        sign : float
+            1 for its minimum, -1 for its maximum.
+        key : int
+            Which kept basis to start from.
+
+        Returns
+        -------
+        ok : bool
+        point : numpy.ndarray, shape (ncol,)
+        """
+        ok, x, _ = self._minimise(col, sign, key)
+        if not ok:
+            info = self.solver.getInfo()
+            ok = info.primal_solution_status == 2 and info.max_primal_infeasibility <= 1e-7
+            ok = ok and x.size == self.ncol and bool(np.all(np.isfinite(x)))
+        return ok, x
+
+
+class SparseWindow:
+    """Fills the bounds of a :class:`SparseWindowLP` for step ``k`` from the record and the stored boxes.
+
+    Parameters
+    ----------
+    model : WindowModel
+    horizon : int
+        Window length ``H`` (steps).
+    points : int
+        Points of the prior's convex hull (0: the prior is a box).
+    """
+
+    def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
+        self.model = model
+        self.lp = SparseWindowLP(model, horizon, points)
+
+    def bounds_at(
+        self,
+        k: int,
+        y: FloatArray,
+        u: FloatArray,
+        boxes_lo: FloatArray | None,
+        boxes_hi: FloatArray | None,
+        last_lo: FloatArray,
+        last_hi: FloatArray,
+        use_current: bool,
+        first_lo: FloatArray | None,
+        first_hi: FloatArray | None,
+        window_boxes: bool = False,
+        offset: int = 0,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Column and row bounds at step ``k``.
+
+        Row ``τ - offset`` of ``y``, ``u`` and ``boxes_*`` is time ``τ``.
+        ``boxes_*`` bound ``x_τ`` for ``τ < k`` (None: free, for inner hulls); ``last_*`` bounds
+        ``x_k``; ``first_*`` is the prior of the window's first state when it is time 0 (the ``x_0``
+        box) — for a later first state the caller sets the points prior or relies on ``boxes``.
+        With ``window_boxes`` False only the first state of the window gets its box (the prior); the
+        others get a tenfold-widened copy (sound and finite, as the certificate needs, but inactive:
+        fewer degenerate pivots).
+
+        Parameters
+        ----------
+        k : int
+            The step.
+        y, u : numpy.ndarray
+            Measurements and inputs.
+        boxes_lo, boxes_hi : numpy.ndarray or None
+            Boxes of the earlier states.
+        last_lo, last_hi : numpy.ndarray, shape (n,)
+            Box of ``x_k``.
+        use_current : bool
+            Whether ``y_k`` is used.
+        first_lo, first_hi : numpy.ndarray or None
+            The ``x_0`` box.
+        window_boxes : bool
+            Whether every state of the window keeps its box.
+        offset : int
+            The time of row 0 of the record.
+
+        Returns
+        -------
+        col_lo, col_hi, row_lo, row_hi : numpy.ndarray
+        """
+        lp, m = self.lp, self.model
+        S, n, p, nq, nv = lp.slots, lp.n, lp.p, lp.nq, lp.nv
+        inf = lp.inf
+        times = k - (S - 1) + np.arange(S)  # the time held by each slot
+        valid = times >= 0
+        col_lo = np.zeros(lp.ncol)
+        col_hi = np.zeros(lp.ncol)
+        xl = np.zeros((S, n))
+        xh = np.zeros((S, n))
+        past = valid & (times < k)
+        if boxes_lo is not None and boxes_hi is not None:
+            xl[past], xh[past] = boxes_lo[times[past] - offset], boxes_hi[times[past] - offset]
+            if not window_boxes:
+                loose = past.copy()
+                loose[int(np.argmax(past))] = False  # the oldest state keeps its box: the prior
+                mid, rad = 0.5 * (xl[loose] + xh[loose]), 0.5 * (xh[loose] - xl[loose])
+                xl[loose], xh[loose] = mid - 10.0 * rad - 1.0, mid + 10.0 * rad + 1.0
+        else:
+            xl[past], xh[past] = -inf, inf
+        xl[S - 1], xh[S - 1] = last_lo, last_hi
+        if first_lo is not None and first_hi is not None and k < S:
+            xl[S - 1 - k] = np.maximum(xl[S - 1 - k], first_lo)
+            xh[S - 1 - k] = np.minimum(xh[S - 1 - k], first_hi)
+        col_lo[: S * n], col_hi[: S * n] = xl.ravel(), xh.ravel()
+        step_valid = past  # the transition out of each slot's time is in the window iff that time < k
+        ut = np.zeros((S, u.shape[-1]))
+        ut[step_valid] = u[times[step_valid] - offset]
+        drive = ut @ m.Gamma.T
+        if nq:
+            wl = np.where(step_valid[:, None], m.w_lo, 0.0)
+            wh = np.where(step_valid[:, None], m.w_hi, 0.0)
+            col_lo[lp.w0 : lp.v0], col_hi[lp.w0 : lp.v0] = wl.ravel(), wh.ravel()
+            d_lo, d_hi = drive, drive.copy()
+        else:
+            d_lo, d_hi = drive + m.w_lo, drive + m.w_hi
+        d_lo = np.where(step_valid[:, None], d_lo, -inf)
+        d_hi = np.where(step_valid[:, None], d_hi, inf)
+        measured = valid & ((times < k) | use_current)
+        yt = np.zeros((S, p))
+        yt[measured] = y[times[measured] - offset]
+        if nv:
+            vl = np.where(measured[:, None], m.v_lo, 0.0)
+            vh = np.where(measured[:, None], m.v_hi, 0.0)
+            col_lo[lp.v0 : lp.l0], col_hi[lp.v0 : lp.l0] = vl.ravel(), vh.ravel()
+            y_lo, y_hi = yt, yt.copy()
+        else:
+            y_lo, y_hi = yt - m.v_hi, yt - m.v_lo
+        y_lo = np.where(measured[:, None], y_lo, -inf)
+        y_hi = np.where(measured[:, None], y_hi, inf)
+        row_lo = np.full(lp.nrow, -inf)
+        row_hi = np.full(lp.nrow, inf)
+        row_lo[: lp.y0], row_hi[: lp.y0] = d_lo.ravel(), d_hi.ravel()
+        row_lo[lp.y0 : lp.p0], row_hi[lp.y0 : lp.p0] = y_lo.ravel(), y_hi.ravel()
+        return col_lo, col_hi, row_lo, row_hi
+
+
+def window_state_maps(
+    phi: FloatArray, gamma: FloatArray, noise: FloatArray, sens: FloatArray, us: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    r"""States of a window as affine maps of ``z = (x_s, q_0 … q_{L-1}, δ)``: ``x_j = S_j z + d_j``.
+
+    ``x_{j+1} = Φ x_j + Γ u_j + G q_j + W_j δ`` with ``noise`` = G (n, n_q) and ``sens[j]`` = W_j (n, n_δ);
+    ``us`` has ``L`` rows.
+
+    Parameters
+    ----------
+    phi, gamma : numpy.ndarray
+        ``Φ`` and ``Γ``.
+    noise : numpy.ndarray, shape (n, n_q)
+        ``G``.
+    sens : numpy.ndarray, shape (L, n, n_δ)
+        ``W_j``.
+    us : numpy.ndarray, shape (L, m)
+        The inputs.
+
+    Returns
+    -------
+    state : numpy.ndarray, shape (L + 1, n, ncol)
+        ``S``.
+    drive : numpy.ndarray, shape (L + 1, n)
+        ``d``.
+    """
+    n, nq = noise.shape
+    L, nd = us.shape[0], sens.shape[-1]
+    ncol = n + L * nq + nd
+    state = np.zeros((L + 1, n, ncol))
+    drive = np.zeros((L + 1, n))
+    state[0, :, :n] = np.eye(n)
+    for j in range(L):
+        state[j + 1] = phi @ state[j]
+        state[j + 1, :, n + j * nq : n + (j + 1) * nq] += noise
+        state[j + 1, :, n + L * nq :] += sens[j]
+        drive[j + 1] = phi @ drive[j] + gamma @ us[j]
+    return state, drive
