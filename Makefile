@@ -52,6 +52,7 @@ lock:
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+	$(BIN)/python benchmarks/campaign_scaling.py
 	$(BIN)/python benchmarks/tightness.py
 	$(BIN)/python benchmarks/robust_tightness.py
 	$(BIN)/python benchmarks/scale.py

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from intervalobs.cli import main
+from intervalobs.reproduce import registry
 from paper_notes import QUOTES, misquoted
 
 
@@ -42,6 +43,25 @@ def test_reproduce_own_example_meets_the_contract(tmp_path):
     summary = json.loads((tmp_path / "spring-mass-lti" / "summary.json").read_text())
     assert summary["enclosure"]["state"] == {"fraction": 1.0, "max_violation": 0.0}
     assert main(["check", str(tmp_path / "spring-mass-lti")]) == 0
+
+
+def test_the_default_reproduction_compiles_nothing(tmp_path):
+    """`reproduce` without --full never imports numba: a fresh install pays no first compile for the demo."""
+    code = (
+        "import sys; from intervalobs.cli import main; "
+        f"assert main(['reproduce', 'spring-mass-lti', '--no-plots', '--out', {str(tmp_path)!r}]) == 0; "
+        "print('numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and out.stdout.strip().splitlines()[-1] == "False", out.stderr
+
+
+@pytest.mark.slow
+def test_reproduce_all_runs_the_examples_in_parallel(tmp_path):
+    assert main(["reproduce", "all", "--jobs", "2", "--no-plots", "--out", str(tmp_path)]) == 0
+    for name in registry():
+        assert main(["check", str(tmp_path / name)]) == 0
+        assert "tightness" not in json.loads((tmp_path / name / "summary.json").read_text())
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +140,7 @@ def test_check_finds_what_falls_short(spring_mass_results, tmp_path, capsys, cha
 
 @pytest.mark.slow
 def test_reproduce_all(tmp_path):
-    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 0
+    assert main(["reproduce", "all", "--full", "--out", str(tmp_path)]) == 0
     for name in QUOTES:  # docs/paper-notes.md quotes these summaries
         assert misquoted(name, json.loads((tmp_path / name / "summary.json").read_text()))[0] == []
 

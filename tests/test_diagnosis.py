@@ -18,9 +18,11 @@ import numpy as np
 import pytest
 
 from intervalobs.diagnosis import (
+    MAX_BATCH,
     SCHEDULER_TIMEOUT,
     Campaign,
     CampaignInterrupted,
+    campaign_tasks,
     first_negative_time,
     isolation_outcome,
     psi_hat,
@@ -191,3 +193,61 @@ def test_interrupted_campaign_saves_finished_batches_and_resumes(tmp_path, sigin
     res = run_campaign(TOY, tmp_path, batch=3, progress=False, plots=False, processes=False, workers=1)
     assert res.reused == 6 and res.computed == 18 and sum(CALLS) == 18
     assert res.psi == {"1": [[1.0, 1.0], [1.0, 1.0]], "2": [[0.0, 1.0], [0.0, 1.0]]}
+
+
+def _failing_task(level, magnitude, run_ids, seed):
+    """The toy task, except that the cell (0.3, 5.0) raises once its first task has been saved."""
+    if level == 0.3 and magnitude == 5.0 and min(run_ids) > 0:
+        raise FloatingPointError("the model overflowed\nsecond line")
+    return _toy_task(level, magnitude, run_ids, seed)
+
+
+def test_a_failing_task_is_recorded_and_the_others_go_on(tmp_path):
+    CALLS.clear()
+    failing = dataclasses.replace(TOY, task=_failing_task)
+    with pytest.warns(RuntimeWarning, match=r"1 task\(s\) of toy raised \(first: FloatingPointError: the model"):
+        res = run_campaign(failing, tmp_path, batch=3, progress=False, plots=False, processes=False, workers=1)
+    assert res.failed == [
+        {"level": 0.3, "magnitude": 5.0, "runs": [3, 4, 5], "error": "FloatingPointError: the model overflowed"}
+    ]
+    assert res.computed == 21 and sum(CALLS) == 21  # every other task ran, the failing cell's first one too
+    assert np.isnan(res.psi["2"][1][1]) and res.psi["2"][0] == [0.0, 1.0] and res.psi["2"][1][0] == 0.0
+    with closing(sqlite3.connect(tmp_path / "campaign.sqlite")) as con:
+        assert con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 21 * 2
+    assert json.loads((tmp_path / "psi.json").read_text())["failed"] == res.failed
+    CALLS.clear()  # the retry computes only the failed task's runs
+    res = run_campaign(TOY, tmp_path, batch=3, progress=False, plots=False, processes=False, workers=1)
+    assert res.failed == [] and res.computed == 3 and res.reused == 21 and sum(CALLS) == 3
+    assert res.psi == {"1": [[1.0, 1.0], [1.0, 1.0]], "2": [[0.0, 1.0], [0.0, 1.0]]}
+    assert "failed" not in json.loads((tmp_path / "psi.json").read_text())
+
+
+def _efficiency(sizes: list[int], workers: int, overhead: float, serial_sizes: list[int]) -> float:
+    """Runs per worker-time against one worker, the tasks handed out largest first."""
+    finish = np.zeros(workers)
+    for size in sorted(sizes, reverse=True):
+        finish[np.argmin(finish)] += overhead + size
+    return (len(serial_sizes) * overhead + sum(serial_sizes)) / (workers * finish.max())
+
+
+@pytest.mark.parametrize("workers", [2, 3, 7, 16, 64])
+@pytest.mark.parametrize("left", [[100] * 25, [100, 37, 3, 60]], ids=["paper-grid", "resumed"])
+def test_tasks_are_cut_for_the_workers_present(left, workers):
+    cells = [(0.1, float(i), list(range(100 - n, 100))) for i, n in enumerate(left)]
+    tasks = campaign_tasks(cells, workers)
+    sizes = [len(ids) for _, _, ids in tasks]
+    for level, magnitude, ids in cells:  # every run left in exactly one task of its own cell
+        assert sorted(r for lv, mg, part in tasks if (lv, mg) == (level, magnitude) for r in part) == ids
+    assert max(sizes) <= MAX_BATCH and sizes == sorted(sizes, reverse=True)
+    serial = [len(ids) for _, _, ids in campaign_tasks(cells, 1)]
+    assert _efficiency(sizes, workers, 0.0, serial) >= (0.97 if sum(left) >= 25 * workers else 0.5)
+    # a task's fixed cost (the manipulator's: 65 runs) makes fewer, larger tasks the better cut
+    heavy = [len(ids) for _, _, ids in campaign_tasks(cells, workers, overhead=65.0)]
+    assert len(heavy) <= len(tasks) and max(heavy) >= max(sizes)
+    assert max(len(ids) for _, _, ids in campaign_tasks(cells, workers, batch=7)) == 7
+
+
+def test_progress_shows_runs_per_second_and_the_cut(tmp_path, capsys):
+    run_campaign(TOY, tmp_path, progress=True, plots=False, processes=False, workers=1)
+    err = capsys.readouterr().err
+    assert "run/s" in err and "4 tasks, 1 workers" in err and "24/24" in err

@@ -52,3 +52,12 @@ def test_two_tank(tmp_path: Path) -> None:
     assert paper["set_based_(19)"]["abs_spectral_radius"] == pytest.approx(1.000014, abs=2e-6)
     assert paper["interval_(54)-(55)"]["min_entry"] == pytest.approx(-0.001)
     assert design["naive"]["naive_interval_printed_(54a)"]["max_violation"] > 0.1  # Fig. 9
+
+
+def test_without_the_comparisons_the_example_and_its_enclosure_check_stay(tmp_path: Path) -> None:
+    """``full=False`` (what `intervalobs reproduce` runs by default): no tightness report, same contract."""
+    summary = registry()["numerical-3state"].run(tmp_path / "quick", 0, False, full=False)
+    assert check_reproduction(tmp_path / "quick") == []
+    assert "tightness" not in summary and summary["enclosure"]["state"] == {"fraction": 1.0, "max_violation": 0.0}
+    for report in summary["design"]["system_68"]["enclosure_monte_carlo"].values():
+        assert report == {"fraction": 1.0, "max_violation": 0.0}

@@ -4,11 +4,13 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from . import __version__
 from . import cli_types as types
@@ -49,6 +51,18 @@ def _parser(examples: Sequence[str], campaigns: Sequence[str]) -> argparse.Argum
         "--out", type=types.output_folder, default="results", help="output folder (default: results)"
     )
     reproduce.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    reproduce.add_argument(
+        "--full",
+        action="store_true",
+        help="also run the comparison analyses (tightness references, lower bounds, the angles-only bank): "
+        "minutes instead of seconds",
+    )
+    reproduce.add_argument(
+        "--jobs",
+        type=types.count,
+        default=None,
+        help="examples run at once, one process each (default: the cores, at most the examples)",
+    )
     reproduce.add_argument("--seed", type=types.seed, default=0, help="random seed, an integer >= 0 (default: 0)")
     tightness = commands.add_parser("tightness", help="print an example's width ratios to the exact hull")
     tightness.add_argument("name", metavar="NAME", type=types.choice(examples), help="example from `intervalobs list`")
@@ -129,22 +143,29 @@ def _campaign(args: argparse.Namespace, campaign: Campaign) -> int:
     from .diagnosis import run_campaign
 
     out = args.out / args.name / "campaign"
-    result = run_campaign(
-        campaign,
-        out,
-        runs=args.runs,
-        levels=args.levels,
-        magnitudes=args.magnitudes,
-        scheduler=args.scheduler,
-        workers=args.workers,
-        seed=args.seed,
-        plots=not args.no_plots,
-    )
+    with warnings.catch_warnings():  # failed cells: one line each below
+        warnings.filterwarnings("ignore", message=r"\d+ task\(s\) of .* raised", category=RuntimeWarning)
+        result = run_campaign(
+            campaign,
+            out,
+            runs=args.runs,
+            levels=args.levels,
+            magnitudes=args.magnitudes,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            seed=args.seed,
+            plots=not args.no_plots,
+        )
     print(
         f"{args.name}: campaign of {result.runs} runs per cell, {result.computed} computed, {result.reused} reused, "
-        f"{result.seconds:.1f} s -> {out / 'psi.json'}"
+        f"{result.seconds:.1f} s ({result.tasks} tasks on {result.workers} workers) -> {out / 'psi.json'}"
     )
-    return 0
+    for failed in result.failed:
+        sys.stderr.write(
+            f"intervalobs: failed cell (level {failed['level']:g}, magnitude {failed['magnitude']:g}), "
+            f"{len(failed['runs'])} runs: {failed['error']}\n"
+        )
+    return 1 if result.failed else 0
 
 
 def _estimate(args: argparse.Namespace) -> int:
@@ -176,38 +197,64 @@ def _estimate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_example(task: tuple[str, Path, int, bool, bool]) -> tuple[str, dict[str, Any], float]:
+    """Run one example (in this process or a worker): its name, state enclosure and seconds."""
+    from .reproduce import registry
+
+    name, out, seed, plots, full = task
+    start = time.perf_counter()
+    (out / name).mkdir(parents=True, exist_ok=True)
+    summary = registry()[name].run(out / name, seed, plots, full=full)
+    return name, summary["enclosure"]["state"], time.perf_counter() - start
+
+
+def _ignore_sigint() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them (no traceback from each)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
+    import multiprocessing
+    import os
+
     from tqdm import tqdm
 
-    chosen = list(examples.values()) if args.name == "all" else [examples[args.name]]
+    chosen = list(examples) if args.name == "all" else [args.name]
     out = args.out
-    written = 0
-    progress = tqdm(chosen, desc="reproduce", unit="example", disable=len(chosen) == 1, file=sys.stderr)
+    tasks = [(name, out, args.seed, not args.no_plots, args.full) for name in chosen]
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    jobs = min(args.jobs or cores, len(tasks))
+    written: list[str] = []
+    progress = tqdm(total=len(tasks), desc="reproduce", unit="example", disable=len(tasks) == 1, file=sys.stderr)
+    pool = multiprocessing.get_context("spawn").Pool(jobs, initializer=_ignore_sigint) if jobs > 1 else None
     try:
-        for example in progress:
-            progress.set_postfix_str(example.name)
-            start = time.perf_counter()
-            (out / example.name).mkdir(parents=True, exist_ok=True)
-            summary = example.run(out / example.name, args.seed, not args.no_plots)
-            written += 1
-            state = summary["enclosure"]["state"]
+        results = pool.imap_unordered(_run_example, tasks) if pool is not None else map(_run_example, tasks)
+        for name, state, seconds in results:
+            written.append(name)
+            progress.update()
             tqdm.write(
-                f"{example.name}: enclosure {state['fraction']:.6g} (max violation {state['max_violation']:.3g}), "
-                f"{time.perf_counter() - start:.1f} s -> {out / example.name}",
+                f"{name}: enclosure {state['fraction']:.6g} (max violation {state['max_violation']:.3g}), "
+                f"{seconds:.1f} s -> {out / name}",
                 file=sys.stdout,
             )
     except KeyboardInterrupt:
         progress.close()
-        rest = " ".join(e.name for e in chosen[written:])
+        rest = " ".join(name for name in chosen if name not in written)
         raise KeyboardInterrupt(
-            f"{written} of {len(chosen)} examples written to {out}; rerun `intervalobs reproduce NAME` for the "
+            f"{len(written)} of {len(chosen)} examples written to {out}; rerun `intervalobs reproduce NAME` for the "
             f"others: {rest}"
         ) from None
+    finally:
+        progress.close()
+        if pool is not None:
+            pool.terminate()
+            pool.join()
     return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit code (0 on success, 2 on bad input, 130 when interrupted).
+    """Run the CLI; returns the exit code (0 on success, 2 on bad input, 130 when interrupted, 1 when a
+    campaign finished with failed cells).
 
     Bad input (an option out of range, an unwritable output folder, a library error) is reported on
     one line, ``intervalobs: error: ...``, with exit code 2. Ctrl-C prints one line saying what was

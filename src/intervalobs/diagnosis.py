@@ -6,14 +6,18 @@ r"""Fault isolation from interval-observer signals and Monte Carlo performance c
 * :func:`psi_hat`, :func:`runs_for_sigma`: the Monte Carlo estimate :math:`\hat\Psi` (119) of the
   performance metric (118) and the number of runs for a standard deviation (120).
 * :func:`run_campaign`: Ψ̂ over a grid (uncertainty level × fault magnitude) for several scenarios on
-  Dask (a local cluster, or an existing one by address). Every finished batch of runs is appended to a
-  SQLite file in the output folder, so an interrupted campaign resumes where it stopped; a tqdm bar
-  shows runs done and left; the result is ``psi.json`` and one heat map per scenario.
+  Dask (a local cluster, or an existing one by address). The grid is cut into tasks for the workers
+  present (:func:`campaign_tasks`); every finished task is appended to a SQLite file in the output
+  folder, so an interrupted campaign resumes where it stopped, and a task that raises is recorded as a
+  failed cell while the others go on; a tqdm bar shows runs done and left and runs per second; the
+  result is ``psi.json`` and one heat map per scenario.
 """
 
 from __future__ import annotations
 
 import contextlib
+import heapq
+import itertools
 import json
 import math
 import signal
@@ -21,6 +25,7 @@ import sqlite3
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +41,7 @@ __all__ = [
     "Campaign",
     "CampaignInterrupted",
     "CampaignResult",
+    "campaign_tasks",
     "first_negative_time",
     "isolation_outcome",
     "psi_hat",
@@ -200,6 +206,10 @@ class Campaign:
         Facts copied into ``psi.json`` (what a level, a magnitude and the indicator mean).
     level_label, magnitude_label : str
         Axis labels of the heat maps, with the model's units.
+    task_overhead : float
+        Fixed cost of one task, in runs: a task of ``b`` runs takes about ``task_overhead + b`` times one
+        run (the time loop of a batched task costs the same for 1 run or 50). :func:`campaign_tasks`
+        weighs it against the workers' idle time at the end; measured by benchmarks/campaign_scaling.py.
     """
 
     name: str
@@ -212,6 +222,7 @@ class Campaign:
     describe: dict[str, Any] = field(default_factory=dict)
     level_label: str = "uncertainty level"
     magnitude_label: str = "fault magnitude"
+    task_overhead: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -230,6 +241,11 @@ class CampaignResult:
         Runs computed in this call and runs found in the SQLite file.
     seconds : float
         Wall time of this call.
+    failed : list of dict
+        One entry per task that raised: ``level``, ``magnitude``, ``runs`` (the run numbers it held) and
+        ``error`` (the exception, one line). Their cells have Ψ̂ = NaN; running the campaign again retries them.
+    tasks, workers : int
+        Tasks this call submitted, and the worker threads they were cut for.
     """
 
     psi: dict[str, list[list[float]]]
@@ -239,6 +255,9 @@ class CampaignResult:
     computed: int
     reused: int
     seconds: float
+    failed: list[dict[str, Any]] = field(default_factory=list)
+    tasks: int = 0
+    workers: int = 0
 
 
 class CampaignInterrupted(KeyboardInterrupt):
@@ -259,6 +278,71 @@ class CampaignInterrupted(KeyboardInterrupt):
 
 SCHEDULER_TIMEOUT = 5.0
 """Seconds :func:`run_campaign` waits for a Dask scheduler given by address before it gives up."""
+
+MAX_BATCH = 100
+"""Most runs in a task of the automatic cut (a cell of the paper's campaign): an interrupt loses at most
+one task per worker."""
+
+CUT_TOLERANCE = 0.03
+"""The automatic cut takes the largest task size whose predicted time is within this fraction of the
+best size's: a few per cent of balance is not worth many times the tasks."""
+
+
+def _makespan(sizes: Sequence[int], workers: int, overhead: float) -> float:
+    """Time, in runs, until ``workers`` workers finish tasks of ``sizes`` runs handed out largest first."""
+    finish = [0.0] * max(workers, 1)
+    for size in sorted(sizes, reverse=True):
+        heapq.heapreplace(finish, finish[0] + overhead + size)
+    return max(finish)
+
+
+def campaign_tasks(
+    cells: Sequence[tuple[float, float, Sequence[int]]],
+    workers: int,
+    batch: int | None = None,
+    overhead: float = 0.0,
+) -> list[tuple[float, float, list[int]]]:
+    """Cut the runs left in each cell into tasks for ``workers`` workers.
+
+    Each cell's runs are split into tasks of nearly equal size (differing by at most one run), of at
+    most ``batch`` runs. With ``batch=None`` the size is chosen in 1 ... :data:`MAX_BATCH` to minimise
+    the predicted time to finish them all on ``workers`` workers, a task of ``b`` runs costing
+    ``overhead + b`` runs' time, largest tasks first (the order Dask receives them); among times within
+    :data:`CUT_TOLERANCE` of the best, the largest size wins (fewest tasks: least bookkeeping).
+
+    Parameters
+    ----------
+    cells : sequence of (level, magnitude, run numbers)
+        The runs left in each cell of the grid.
+    workers : int
+        Worker threads that will run the tasks.
+    batch : int, optional
+        Most runs per task (default: chosen as above).
+    overhead : float
+        Fixed cost of a task, in runs (:attr:`Campaign.task_overhead`).
+
+    Returns
+    -------
+    list of (level, magnitude, list of int)
+        The tasks, largest first.
+    """
+
+    def cut(size: int) -> list[tuple[float, float, list[int]]]:
+        tasks: list[tuple[float, float, list[int]]] = []
+        for level, magnitude, ids in cells:
+            parts = math.ceil(len(ids) / size)
+            edges = [round(i * len(ids) / parts) for i in range(parts + 1)] if parts else []
+            tasks += [(level, magnitude, list(ids[a:b])) for a, b in itertools.pairwise(edges)]
+        return sorted(tasks, key=lambda task: -len(task[2]))
+
+    if batch is not None:
+        return cut(batch)
+    largest = min(MAX_BATCH, max((len(ids) for _, _, ids in cells), default=1))
+    times = {
+        size: _makespan([len(ids) for _, _, ids in cut(size)], workers, overhead) for size in range(1, largest + 1)
+    }
+    best = min(times.values())
+    return cut(max(size for size, time_ in times.items() if time_ <= best * (1 + CUT_TOLERANCE)))
 
 
 def _open_store(path: Path) -> sqlite3.Connection:
@@ -288,7 +372,7 @@ def run_campaign(
     magnitudes: Sequence[float] | None = None,
     scheduler: str | None = None,
     workers: int = 2,
-    batch: int = 50,
+    batch: int | None = None,
     seed: int = 0,
     progress: bool = True,
     plots: bool = True,
@@ -296,9 +380,12 @@ def run_campaign(
 ) -> CampaignResult:
     r"""Run (or resume) a Monte Carlo campaign on Dask and write ``psi.json`` and heat maps.
 
-    Each task is one batch of at most ``batch`` runs of one cell (level, magnitude), all scenarios,
-    computed with a leading Monte Carlo axis. Results are appended to ``out_dir/campaign.sqlite`` as
-    soon as a task finishes; runs already in the file (same seed) are not recomputed.
+    Each task is one batch of runs of one cell (level, magnitude), all scenarios, computed with a
+    leading Monte Carlo axis; the batches are cut for the worker threads present when the campaign
+    starts (:func:`campaign_tasks`). Results are appended to ``out_dir/campaign.sqlite`` as soon as a
+    task finishes; runs already in the file (same seed) are not recomputed. A task that raises is
+    recorded in :attr:`CampaignResult.failed` (and ``psi.json``), with a ``RuntimeWarning``, and the
+    others go on: its cell's Ψ̂ is NaN until a later call computes the runs it lacks.
 
     Parameters
     ----------
@@ -311,11 +398,13 @@ def run_campaign(
     levels, magnitudes : sequence of float, optional
         Grid (default the campaign's).
     scheduler : str, optional
-        Address of an existing Dask scheduler; default: a local cluster with ``workers`` processes.
+        Address of an existing Dask scheduler; default: a local cluster with ``workers`` processes. Its
+        workers should be connected before the call: the tasks are cut for the threads present then.
     workers : int
-        Local worker processes (one thread each).
-    batch : int
-        Runs per task.
+        Local worker processes (one thread each); with ``scheduler``, the number of threads to cut the
+        tasks for if none is connected yet.
+    batch : int, optional
+        Most runs per task (default: :func:`campaign_tasks` chooses for the workers present).
     seed : int
         Base seed (run i of a cell always draws the same realisation).
     progress : bool
@@ -344,7 +433,8 @@ def run_campaign(
     start = time.perf_counter()
     m = as_count("runs", campaign.runs if runs is None else runs)
     as_count("workers", workers)
-    as_count("batch", batch)
+    if batch is not None:
+        as_count("batch", batch)
     as_count("seed", seed, minimum=0)
     lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
     mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
@@ -357,19 +447,22 @@ def run_campaign(
     out.mkdir(parents=True, exist_ok=True)
     con = _open_store(out / "campaign.sqlite")
     n_s = len(campaign.scenarios)
-    tasks: list[tuple[float, float, list[int]]] = []
+    cells: list[tuple[float, float, list[int]]] = []
     reused = 0
     for level in lv:
         for magnitude in mg:
             done = _done_runs(con, level, magnitude, seed, n_s)
             todo = [i for i in range(m) if i not in done]
             reused += m - len(todo)
-            tasks += [(level, magnitude, todo[i : i + batch]) for i in range(0, len(todo), batch)]
+            if todo:
+                cells.append((level, magnitude, todo))
     total = len(lv) * len(mg) * m
-    computed = 0
-    if tasks:
+    report: dict[str, Any] = {"computed": 0, "failed": [], "tasks": 0, "workers": 0}
+    if cells:
         try:
-            computed = _compute(campaign, tasks, con, seed, scheduler, workers, processes, progress, (reused, total))
+            report = _compute(
+                campaign, cells, con, seed, (scheduler, workers, processes, batch), progress, (reused, total)
+            )
         except KeyboardInterrupt:
             saved = sum(len({i for i in _done_runs(con, lvl, mag, seed, n_s) if i < m}) for lvl in lv for mag in mg)
             con.close()
@@ -377,94 +470,139 @@ def run_campaign(
         except SchedulerError:
             con.close()
             raise
-    psi: dict[str, list[list[float]]] = {}
-    for s_idx, s_name in enumerate(campaign.scenarios):
-        mat = []
-        for level in lv:
-            row = []
-            for magnitude in mg:
-                vals = con.execute(
-                    "SELECT success FROM runs "
-                    "WHERE level = ? AND magnitude = ? AND seed = ? AND scenario = ? AND run < ?",
-                    (level, magnitude, seed, s_idx, m),
-                ).fetchall()
-                row.append(psi_hat([v[0] for v in vals]) if vals else float("nan"))
-            mat.append(row)
-        psi[s_name] = mat
+    psi = _psi(con, campaign, lv, mg, seed, m)
     con.close()
-    result = CampaignResult(psi, m, lv, mg, computed, reused, time.perf_counter() - start)
-    (out / "psi.json").write_text(
-        json.dumps({"runs": m, "levels": lv, "magnitudes": mg, "psi": psi, **campaign.describe}, indent=2) + "\n"
+    failed = report["failed"]
+    result = CampaignResult(
+        psi,
+        m,
+        lv,
+        mg,
+        report["computed"],
+        reused,
+        time.perf_counter() - start,
+        failed,
+        report["tasks"],
+        report["workers"],
     )
+    facts = {"runs": m, "levels": lv, "magnitudes": mg, "psi": psi, **campaign.describe}
+    (out / "psi.json").write_text(json.dumps({**facts, "failed": failed} if failed else facts, indent=2) + "\n")
+    if failed:
+        cells_failed = ", ".join(f"({f['level']:g}, {f['magnitude']:g})" for f in failed)
+        warnings.warn(
+            f"{len(failed)} task(s) of {campaign.name} raised (first: {failed[0]['error']}); cells (level, magnitude) "
+            f"{cells_failed} have Ψ̂ = NaN; run the same campaign again to retry them",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     if plots:
         _heatmaps(result, out, campaign)
     return result
 
 
+def _psi(
+    con: sqlite3.Connection, campaign: Campaign, levels: list[float], magnitudes: list[float], seed: int, runs: int
+) -> dict[str, list[list[float]]]:
+    """Ψ̂ of every scenario and cell from the store; NaN for a cell that lacks some of its ``runs`` runs."""
+    psi: dict[str, list[list[float]]] = {}
+    for s_idx, s_name in enumerate(campaign.scenarios):
+        mat = []
+        for level in levels:
+            row = []
+            for magnitude in magnitudes:
+                vals = con.execute(
+                    "SELECT success FROM runs "
+                    "WHERE level = ? AND magnitude = ? AND seed = ? AND scenario = ? AND run < ?",
+                    (level, magnitude, seed, s_idx, runs),
+                ).fetchall()
+                row.append(psi_hat([v[0] for v in vals]) if len(vals) == runs else float("nan"))
+            mat.append(row)
+        psi[s_name] = mat
+    return psi
+
+
+def _connect(scheduler: str | None, workers: int, processes: bool) -> tuple[Any, Any]:
+    """A Dask client, on a new local cluster (returned too) or on the scheduler at ``scheduler``."""
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler is None:
+        with _sigint_ignored():
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=processes, dashboard_address=None, silence_logs=40
+            )
+        try:
+            return Client(cluster), cluster
+        except BaseException:
+            cluster.close()
+            raise
+    try:
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT), None
+    except (OSError, TimeoutError, ValueError):
+        raise SchedulerError(
+            f"scheduler: expected the address of a running Dask scheduler (tcp://host:port), got {scheduler!r} "
+            f"(no answer within {SCHEDULER_TIMEOUT:g} s)"
+        ) from None
+
+
 def _compute(
     campaign: Campaign,
-    tasks: list[tuple[float, float, list[int]]],
+    cells: list[tuple[float, float, list[int]]],
     con: sqlite3.Connection,
     seed: int,
-    scheduler: str | None,
-    workers: int,
-    processes: bool,
+    where: tuple[str | None, int, bool, int | None],
     progress: bool,
     done_of_total: tuple[int, int],
-) -> int:
-    """Run ``tasks`` on Dask, appending each finished batch to the store; returns the runs computed."""
-    from dask.distributed import Client, LocalCluster, as_completed
+) -> dict[str, Any]:
+    """Run the runs left in ``cells`` on Dask, appending each finished task to the store.
+
+    ``where`` is (scheduler, workers, processes, batch) of :func:`run_campaign`. Returns ``computed``
+    (runs), ``failed`` (one entry per task that raised), ``tasks`` and ``workers``.
+    """
+    from dask.distributed import as_completed
     from tqdm import tqdm
 
-    cluster = client = bar = None
-    computed = 0
+    scheduler, workers, processes, batch = where
+    client, cluster = _connect(scheduler, workers, processes)
+    bar = None
+    report: dict[str, Any] = {"computed": 0, "failed": []}
     try:
-        if scheduler is None:
-            with _sigint_ignored():
-                cluster = LocalCluster(
-                    n_workers=workers,
-                    threads_per_worker=1,
-                    processes=processes,
-                    dashboard_address=None,
-                    silence_logs=40,
-                )
-            client = Client(cluster)
-        else:
-            try:
-                client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
-            except (OSError, TimeoutError, ValueError):
-                raise SchedulerError(
-                    f"scheduler: expected the address of a running Dask scheduler (tcp://host:port), got "
-                    f"{scheduler!r} (no answer within {SCHEDULER_TIMEOUT:g} s)"
-                ) from None
+        threads = sum(client.nthreads().values()) or workers
+        tasks = campaign_tasks(cells, threads, batch, campaign.task_overhead)
+        report.update(tasks=len(tasks), workers=threads)
         bar = tqdm(
             total=done_of_total[1],
             initial=done_of_total[0],
             desc=campaign.name,
             unit="run",
+            smoothing=0.0,
+            postfix=f"{len(tasks)} tasks, {threads} workers",
             disable=not progress,
             file=sys.stderr,
         )
         futures = [client.submit(campaign.task, lvl, mag, ids, seed, pure=False) for lvl, mag, ids in tasks]
-        meta = {f.key: (lvl, mag, ids) for f, (lvl, mag, ids) in zip(futures, tasks)}
+        meta = {f.key: task for f, task in zip(futures, tasks)}
         for fut in as_completed(futures):
             lvl, mag, ids = meta[fut.key]
-            rows = fut.result()
+            try:
+                rows = fut.result()
+            except Exception as exc:  # a task's failure is the user's model's: record it, keep the others
+                error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+                report["failed"].append({"level": lvl, "magnitude": mag, "runs": ids, "error": error})
+                continue
             con.executemany(
                 "INSERT OR REPLACE INTO runs VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                 [(lvl, mag, r, s, int(ok), int(fa), json.dumps(fn), seed) for r, s, ok, fa, fn in rows],
             )
             con.commit()
-            computed += len(ids)
+            report["computed"] += len(ids)
             bar.update(len(ids))
     finally:
         if bar is not None:
             bar.close()
-        if client is not None:
-            client.close()
+        client.close()
         if cluster is not None:
             cluster.close()
-    return computed
+    return report
 
 
 @contextlib.contextmanager

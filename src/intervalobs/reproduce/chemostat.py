@@ -209,7 +209,7 @@ def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     }
 
 
-def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
+def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Simulate the chemostat, bound it in both coordinates, write the contract files.
 
     Parameters
@@ -220,6 +220,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         Seed of the noise realisation and of the rays of the reference.
     plots : bool
         Also write ``states.png`` and ``widths.png``.
+    full : bool
+        Accepted for the reproduction protocol; this example has no separate heavy analysis yet.
 
     Returns
     -------

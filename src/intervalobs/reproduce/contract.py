@@ -7,17 +7,39 @@ Every reproduction builds its summary with :func:`base_summary` and writes it wi
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..estimate import enclosure_report
 
-__all__ = ["SUMMARY_KEYS", "Example", "base_summary", "check_reproduction", "to_json", "write_reproduction"]
+__all__ = [
+    "SUMMARY_KEYS",
+    "Example",
+    "Reproduction",
+    "base_summary",
+    "check_reproduction",
+    "to_json",
+    "write_reproduction",
+]
+
+
+class Reproduction(Protocol):
+    """What an example runs: ``run(out_dir, seed, plots, full=True) -> summary``.
+
+    ``full=False`` leaves out the analyses that only compare (tightness references, lower bounds, banks of
+    estimators run for comparison): the paper's example, its observers and the enclosure check stay, and
+    the folder still meets the file contract. ``intervalobs reproduce`` runs that way unless given
+    ``--full``.
+    """
+
+    def __call__(self, out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
+        """Run the example, write the contract files into ``out_dir`` and return the summary."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -32,15 +54,15 @@ class Example:
         Identifier of the source paper (``"-"`` for our own examples).
     description : str
         One line for ``intervalobs list``.
-    run : callable
-        ``run(out_dir: Path, seed: int, plots: bool) -> dict``: runs the example, writes the
-        contract files into ``out_dir`` and returns the summary.
+    run : Reproduction
+        ``run(out_dir, seed, plots, full=True) -> dict``: runs the example, writes the contract files
+        into ``out_dir`` and returns the summary; ``full=False`` skips the comparison analyses.
     """
 
     name: str
     seed_file: str
     description: str
-    run: Callable[[Path, int, bool], dict[str, Any]]
+    run: Reproduction
 
 
 def to_json(value: Any) -> Any:

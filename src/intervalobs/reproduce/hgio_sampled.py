@@ -29,7 +29,9 @@ from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
 from ..observers.hgio import HighGainIntervalObserver
 from ..plotting import plot_widths, save_figure
-from ..simulate import simulate_sampled
+from ..simulate import SampledSimulation, simulate_sampled
+from ..systems.bounds import Bounds
+from ..systems.sampled import SampledSystem
 from .contract import Example, base_summary, write_reproduction
 
 NAME = "hgio-sampled"
@@ -215,7 +217,7 @@ def paper_design_facts(
     }
 
 
-def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
+def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design both observers, simulate with bang-bang disturbances, write the contract files.
 
     Parameters
@@ -226,6 +228,8 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
         Random seed of the simulation.
     plots : bool
         Write the PNG figures.
+    full : bool
+        Also run the short-horizon studies (:func:`_short_horizon_studies`).
 
     Returns
     -------
@@ -276,6 +280,190 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
     est_w = widthwise.run(t, sim.y, sim.u)
     width_run_time = time.perf_counter() - start
 
+    studies = _short_horizon_studies(system, bounds, t, sim, (constructive, arbitrary, printed), est_c) if full else {}
+    design_studies = {k: studies[k] for k in ("paper_euler_scheme", "tuned_disks_design", "binomial_design") if full}
+
+    c45 = (est_c.meta["theorem45_lower"], est_c.meta["theorem45_upper"])
+    a45 = (est_a.meta["theorem45_lower"], est_a.meta["theorem45_upper"])
+    window = t >= WIDTH_WINDOW
+    width_c = (c45[1] - c45[0])[:, window].mean(axis=(0, 1))
+    width_a = (a45[1] - a45[0])[:, window].mean(axis=(0, 1))
+    width_r = (est_c.upper - est_c.lower)[:, window].mean(axis=(0, 1))
+    cx = sim.x[..., :1]
+    output_report = enclosure_report(t, est_c.meta["output_lower"], cx, est_c.meta["output_upper"])
+    width_design = widthwise.width_design
+    w45 = (est_w.meta["theorem45_lower"], est_w.meta["theorem45_upper"])
+    width_w = (est_w.upper - est_w.lower)[:, window].mean(axis=(0, 1))
+    width_w_runs = (est_w.upper - est_w.lower)[:, window].mean(axis=1)
+    width_theta = theta_design(
+        width_design.placement.modal,
+        width_design.L,
+        system.C,
+        d_radius,
+        delta,
+        example.ALPHA_D,
+        example.ALPHA_N,
+    )
+    hull = np.array(HULL_REFERENCE["width_mean"])
+    width_summary = {
+        "label": "designed for width (recommended): gain minimising the modal steady-state width bound, "
+        "disks derived from the optimum, Algorithm 1 in them; modal predictor and re-wrap on",
+        "L1": width_design.L.ravel(),
+        "optimum_L1": width_design.optimum_L.ravel(),
+        "eigenvalues": width_design.placement.eigenvalues,
+        "disks": [{"center": d.center, "radius": d.radius} for d in width_design.disks],
+        "disk_margins": width_design.placement.margins,
+        "constraint_regions": [repr(r) for r in width_design.regions],
+        "v1_condition": width_design.placement.modal.condition,
+        "separation": width_design.placement.modal.separation,
+        "weights": width_design.weights,
+        "output_radius_assumed": width_design.output_radius,
+        "phi_radius": example.PHI_RADIUS,
+        "bound_width_mean_theorem45": width_design.bound.mean,
+        "bound_width_sup_theorem45": width_design.bound.sup,
+        "measured_width_mean_theorem45": (w45[1] - w45[0])[:, window].mean(axis=(0, 1)),
+        "width_mean": width_w,
+        "width_mean_per_run": width_w_runs,
+        "width_over_hull": width_w / hull,
+        "goal": {"x1_max": 0.3, "x2_max": 8.0, "x3_max": 5.5, "met": bool(np.all(width_w <= [0.3, 8.0, 5.5]))},
+        "enclosure": est_w.enclosure(sim.x).as_dict(),
+        "output_width_mean": (est_w.meta["output_upper"] - est_w.meta["output_lower"])[:, window].mean(),
+        "radius_matrix_abscissa": width_design.placement.radius_abscissa,
+        "theorem44_sound": _theta_dict(width_theta),
+        "output_gain": widthwise.output_gain.ravel(),
+        "output_radius_abscissa": widthwise.output_radius_abscissa,
+    }
+    all_runs = {
+        "recommended": est_w.enclosure(sim.x).as_dict(),
+        "width_design_theorem45": enclosure_report(t, w45[0], sim.x, w45[1]).as_dict(),
+        "constructive_refined": est_c.enclosure(sim.x).as_dict(),
+        "constructive_theorem45": enclosure_report(t, *c45[:1], sim.x, c45[1]).as_dict(),
+        "arbitrary_theta1000_theorem45": enclosure_report(t, a45[0], sim.x, a45[1]).as_dict(),
+        **({"binomial_theta1000_theorem45": studies["binomial_enclosure"]} if full else {}),
+        "output_Cx": output_report.as_dict(),
+    }
+
+    summary = base_summary(
+        example=NAME,
+        seed_file=SEED_FILE,
+        observer="HighGainIntervalObserver.design_for_width (refined report)",
+        t=t,
+        x=sim.x[0],
+        x_lower=est_w.lower[0],
+        x_upper=est_w.upper[0],
+        transient_s=0.0,
+    )
+    p1 = placement.modal.p1
+    summary["design"] = {
+        "width_design": width_summary,
+        "reference": {**HULL_REFERENCE, "width_design_over_hull": width_w / hull},
+        "constructive_label": "paper-faithful constructive design: the paper's disks, least-norm Algorithm 1 "
+        "(L1 = 0 here), Theorems 4.2/4.5 with the box predictor, no re-wrap; the keys below without a prefix",
+        **paper_design_facts(constructive, printed_modal, printed),
+        "theta_used_by_observer": "none: theta cancels in exact arithmetic; the observer works in zeta = e^{theta t} z",
+        "euler_radius_factor": {
+            f"theta={th:g}": [euler_radius_factor(float(p), th, example.STEP) for p in sorted(set(np.round(p1, 6)))]
+            for th in (0.0, ours.theta_sound, printed.theta_paper, THETA_ARBITRARY)
+        },
+        **design_studies,
+        "arbitrary_design": {
+            "theta": THETA_ARBITRARY,
+            "K": K_ARBITRARY,
+            "L": l_arbitrary.ravel(),
+            "eigenvalues": arbitrary.state_modal.decomposition.eigenvalues,
+            "width_mean_theorem45": width_a,
+            **({"continuous_output": studies["continuous_output"]} if full else {}),
+        },
+        "constructive_width_mean_theorem45": width_c,
+        "constructive_width_mean_refined": width_r,
+        "recommended_width_mean": width_w,
+        "previous_recommended_width_mean": width_r,
+        "width_ratio_constructive_over_theta1000": width_c / width_a,
+        "width_window_s": [WIDTH_WINDOW, example.T_FINAL],
+        "output_width_mean": (est_c.meta["output_upper"] - est_c.meta["output_lower"])[:, window].mean(),
+        "enclosure_all_runs": all_runs,
+        "runs": RUNS,
+        "truth_substeps": SUBSTEPS,
+        "sample_period_s": example.SAMPLE_PERIOD,
+        "general_path": general_path(t, sim, window, width_w),
+    }
+    summary["paper"] = {
+        "p1": example.PAPER["p1"],
+        "omega1": example.PAPER["omega1"],
+        "L1": example.PAPER["L1"],
+        "alpha": example.PAPER["alpha"],
+        "theta": example.PAPER["theta"],
+        "theta_arbitrary": THETA_ARBITRARY,
+        "claim": "constructive bounds narrower than the theta = 1000 design (Fig. 2)",
+    }
+    summary["runtime_s"] = {
+        "design": design_time,
+        "run": run_time,
+        "width_design": width_design_time,
+        "width_run": width_run_time,
+    }
+    write_reproduction(
+        out_dir,
+        summary,
+        {
+            "t": t,
+            "x": sim.x[0],
+            "x_lower": est_w.lower[0],
+            "x_upper": est_w.upper[0],
+            "width_design_x_lower": est_w.lower[0],
+            "width_design_x_upper": est_w.upper[0],
+            "width_design_theorem45_x_lower": w45[0][0],
+            "width_design_theorem45_x_upper": w45[1][0],
+            "constructive_x_lower": c45[0][0],
+            "constructive_x_upper": c45[1][0],
+            "constructive_refined_x_lower": est_c.lower[0],
+            "constructive_refined_x_upper": est_c.upper[0],
+            "arbitrary_theta1000_x_lower": a45[0][0],
+            "arbitrary_theta1000_x_upper": a45[1][0],
+            "y": sim.y[0],
+            "y_lower": est_w.meta["output_lower"][0],
+            "y_upper": est_w.meta["output_upper"][0],
+            "constructive_y_lower": est_c.meta["output_lower"][0],
+            "constructive_y_upper": est_c.meta["output_upper"][0],
+        },
+    )
+    if plots:
+        _figures(out_dir, t, sim.x[0], sim.y[0], est_c, est_w, a45)
+    return summary
+
+
+def _short_horizon_studies(
+    system: SampledSystem,
+    bounds: Bounds,
+    t: np.ndarray,
+    sim: SampledSimulation,
+    designs: tuple[HighGainIntervalObserver, HighGainIntervalObserver, ThetaDesign],
+    est_c: Estimate,
+) -> dict[str, Any]:
+    """The studies over the first seconds: the binomial gain, the paper's Euler scheme, tuned disks, Fig. 2(b).
+
+    Parameters
+    ----------
+    system, bounds : SampledSystem, Bounds
+        The example.
+    t : numpy.ndarray
+        Sample times of the record.
+    sim : SampledSimulation
+        The record (``RUNS`` runs).
+    designs : tuple
+        The constructive observer, the θ = 1000 one and the paper's θ design.
+    est_c : Estimate
+        The constructive observer's estimate over the whole record.
+
+    Returns
+    -------
+    dict
+        ``binomial_design``, ``binomial_enclosure``, ``paper_euler_scheme``, ``tuned_disks_design``,
+        ``continuous_output``: entries of the summary's ``design``.
+    """
+    constructive, arbitrary, printed = designs
+    assert constructive.placement is not None
+    placement = constructive.placement
     # textbook binomial K over a short horizon (its gains reach 1e9: the widths say why)
     short = t <= BINOMIAL_HORIZON
     binomial = HighGainIntervalObserver(
@@ -355,108 +543,11 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             axis=(0, 1)
         ),
     }
-
     c45 = (est_c.meta["theorem45_lower"], est_c.meta["theorem45_upper"])
-    a45 = (est_a.meta["theorem45_lower"], est_a.meta["theorem45_upper"])
-    window = t >= WIDTH_WINDOW
-    width_c = (c45[1] - c45[0])[:, window].mean(axis=(0, 1))
-    width_a = (a45[1] - a45[0])[:, window].mean(axis=(0, 1))
-    width_r = (est_c.upper - est_c.lower)[:, window].mean(axis=(0, 1))
     b45 = (est_b.meta["theorem45_lower"], est_b.meta["theorem45_upper"])
     width_c_short = (c45[1] - c45[0])[:, short].mean(axis=(0, 1))
     width_b_short = (b45[1] - b45[0]).mean(axis=(0, 1))
-    cx = sim.x[..., :1]
-    output_report = enclosure_report(t, est_c.meta["output_lower"], cx, est_c.meta["output_upper"])
-    width_design = widthwise.width_design
-    w45 = (est_w.meta["theorem45_lower"], est_w.meta["theorem45_upper"])
-    width_w = (est_w.upper - est_w.lower)[:, window].mean(axis=(0, 1))
-    width_w_runs = (est_w.upper - est_w.lower)[:, window].mean(axis=1)
-    width_theta = theta_design(
-        width_design.placement.modal,
-        width_design.L,
-        system.C,
-        d_radius,
-        delta,
-        example.ALPHA_D,
-        example.ALPHA_N,
-    )
-    hull = np.array(HULL_REFERENCE["width_mean"])
-    width_summary = {
-        "label": "designed for width (recommended): gain minimising the modal steady-state width bound, "
-        "disks derived from the optimum, Algorithm 1 in them; modal predictor and re-wrap on",
-        "L1": width_design.L.ravel(),
-        "optimum_L1": width_design.optimum_L.ravel(),
-        "eigenvalues": width_design.placement.eigenvalues,
-        "disks": [{"center": d.center, "radius": d.radius} for d in width_design.disks],
-        "disk_margins": width_design.placement.margins,
-        "constraint_regions": [repr(r) for r in width_design.regions],
-        "v1_condition": width_design.placement.modal.condition,
-        "separation": width_design.placement.modal.separation,
-        "weights": width_design.weights,
-        "output_radius_assumed": width_design.output_radius,
-        "phi_radius": example.PHI_RADIUS,
-        "bound_width_mean_theorem45": width_design.bound.mean,
-        "bound_width_sup_theorem45": width_design.bound.sup,
-        "measured_width_mean_theorem45": (w45[1] - w45[0])[:, window].mean(axis=(0, 1)),
-        "width_mean": width_w,
-        "width_mean_per_run": width_w_runs,
-        "width_over_hull": width_w / hull,
-        "goal": {"x1_max": 0.3, "x2_max": 8.0, "x3_max": 5.5, "met": bool(np.all(width_w <= [0.3, 8.0, 5.5]))},
-        "enclosure": est_w.enclosure(sim.x).as_dict(),
-        "output_width_mean": (est_w.meta["output_upper"] - est_w.meta["output_lower"])[:, window].mean(),
-        "radius_matrix_abscissa": width_design.placement.radius_abscissa,
-        "theorem44_sound": _theta_dict(width_theta),
-        "output_gain": widthwise.output_gain.ravel(),
-        "output_radius_abscissa": widthwise.output_radius_abscissa,
-    }
-    all_runs = {
-        "recommended": est_w.enclosure(sim.x).as_dict(),
-        "width_design_theorem45": enclosure_report(t, w45[0], sim.x, w45[1]).as_dict(),
-        "constructive_refined": est_c.enclosure(sim.x).as_dict(),
-        "constructive_theorem45": enclosure_report(t, *c45[:1], sim.x, c45[1]).as_dict(),
-        "arbitrary_theta1000_theorem45": enclosure_report(t, a45[0], sim.x, a45[1]).as_dict(),
-        "binomial_theta1000_theorem45": enclosure_report(t[short], b45[0], sim.x[:, short], b45[1]).as_dict(),
-        "output_Cx": output_report.as_dict(),
-    }
-
-    summary = base_summary(
-        example=NAME,
-        seed_file=SEED_FILE,
-        observer="HighGainIntervalObserver.design_for_width (refined report)",
-        t=t,
-        x=sim.x[0],
-        x_lower=est_w.lower[0],
-        x_upper=est_w.upper[0],
-        transient_s=0.0,
-    )
-    p1 = placement.modal.p1
-    summary["design"] = {
-        "width_design": width_summary,
-        "reference": {**HULL_REFERENCE, "width_design_over_hull": width_w / hull},
-        "constructive_label": "paper-faithful constructive design: the paper's disks, least-norm Algorithm 1 "
-        "(L1 = 0 here), Theorems 4.2/4.5 with the box predictor, no re-wrap; the keys below without a prefix",
-        **paper_design_facts(constructive, printed_modal, printed),
-        "theta_used_by_observer": "none: theta cancels in exact arithmetic; the observer works in zeta = e^{theta t} z",
-        "euler_radius_factor": {
-            f"theta={th:g}": [euler_radius_factor(float(p), th, example.STEP) for p in sorted(set(np.round(p1, 6)))]
-            for th in (0.0, ours.theta_sound, printed.theta_paper, THETA_ARBITRARY)
-        },
-        "paper_euler_scheme": euler,
-        "tuned_disks_design": tuned_summary,
-        "arbitrary_design": {
-            "theta": THETA_ARBITRARY,
-            "K": K_ARBITRARY,
-            "L": l_arbitrary.ravel(),
-            "eigenvalues": arbitrary.state_modal.decomposition.eigenvalues,
-            "width_mean_theorem45": width_a,
-            "continuous_output": continuous_summary,
-        },
-        "constructive_width_mean_theorem45": width_c,
-        "constructive_width_mean_refined": width_r,
-        "recommended_width_mean": width_w,
-        "previous_recommended_width_mean": width_r,
-        "width_ratio_constructive_over_theta1000": width_c / width_a,
-        "width_window_s": [WIDTH_WINDOW, example.T_FINAL],
+    return {
         "binomial_design": {
             "K": K_BINOMIAL,
             "L": high_gain_gain(THETA_ARBITRARY, K_BINOMIAL).ravel(),
@@ -464,56 +555,11 @@ def run(out_dir: Path, seed: int, plots: bool) -> dict[str, Any]:
             "horizon_s": BINOMIAL_HORIZON,
             "width_ratio_constructive_over_binomial": width_c_short / width_b_short,
         },
-        "output_width_mean": (est_c.meta["output_upper"] - est_c.meta["output_lower"])[:, window].mean(),
-        "enclosure_all_runs": all_runs,
-        "runs": RUNS,
-        "truth_substeps": SUBSTEPS,
-        "sample_period_s": example.SAMPLE_PERIOD,
-        "general_path": general_path(t, sim, window, width_w),
+        "binomial_enclosure": enclosure_report(t[short], b45[0], sim.x[:, short], b45[1]).as_dict(),
+        "paper_euler_scheme": euler,
+        "tuned_disks_design": tuned_summary,
+        "continuous_output": continuous_summary,
     }
-    summary["paper"] = {
-        "p1": example.PAPER["p1"],
-        "omega1": example.PAPER["omega1"],
-        "L1": example.PAPER["L1"],
-        "alpha": example.PAPER["alpha"],
-        "theta": example.PAPER["theta"],
-        "theta_arbitrary": THETA_ARBITRARY,
-        "claim": "constructive bounds narrower than the theta = 1000 design (Fig. 2)",
-    }
-    summary["runtime_s"] = {
-        "design": design_time,
-        "run": run_time,
-        "width_design": width_design_time,
-        "width_run": width_run_time,
-    }
-    write_reproduction(
-        out_dir,
-        summary,
-        {
-            "t": t,
-            "x": sim.x[0],
-            "x_lower": est_w.lower[0],
-            "x_upper": est_w.upper[0],
-            "width_design_x_lower": est_w.lower[0],
-            "width_design_x_upper": est_w.upper[0],
-            "width_design_theorem45_x_lower": w45[0][0],
-            "width_design_theorem45_x_upper": w45[1][0],
-            "constructive_x_lower": c45[0][0],
-            "constructive_x_upper": c45[1][0],
-            "constructive_refined_x_lower": est_c.lower[0],
-            "constructive_refined_x_upper": est_c.upper[0],
-            "arbitrary_theta1000_x_lower": a45[0][0],
-            "arbitrary_theta1000_x_upper": a45[1][0],
-            "y": sim.y[0],
-            "y_lower": est_w.meta["output_lower"][0],
-            "y_upper": est_w.meta["output_upper"][0],
-            "constructive_y_lower": est_c.meta["output_lower"][0],
-            "constructive_y_upper": est_c.meta["output_upper"][0],
-        },
-    )
-    if plots:
-        _figures(out_dir, t, sim.x[0], sim.y[0], est_c, est_w, a45)
-    return summary
 
 
 def _theta_dict(design: Any) -> dict[str, Any]:
