@@ -81,6 +81,11 @@ class LTISystem:
         if self.A.shape != (n, n):
             raise DimensionError(f"A: expected a square matrix, got shape {self.A.shape}")
         self.C = as_matrix("C", C, (None, n))
+        if self.C.shape[0] == 0:
+            raise DimensionError(
+                f"C: expected at least one output row, got shape (0, {n}); to predict without measurements, "
+                "give one all-zero row (C = [[0, ..., 0]]) and record zeros for it"
+            )
         self.B = np.zeros((n, 0)) if B is None else as_matrix("B", B, (n, None))
         self.E = np.eye(n) if E is None else as_matrix("E", E, (n, None))
         self.F = np.eye(self.C.shape[0]) if F is None else as_matrix("F", F, (self.C.shape[0], None))
