@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Sequence
@@ -212,7 +213,7 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
 
     from tqdm import tqdm
 
-    chosen = list(examples) if args.name == "all" else [args.name]
+    chosen = sorted(examples, key=lambda name: -examples[name].weight) if args.name == "all" else [args.name]
     out = args.out
     tasks = [(name, out, args.seed, not args.no_plots, args.full) for name in chosen]
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
@@ -220,6 +221,8 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
     written: list[str] = []
     progress = tqdm(total=len(tasks), desc="reproduce", unit="example", disable=len(tasks) == 1, file=sys.stderr)
     pool = multiprocessing.get_context("spawn").Pool(jobs, initializer=_ignore_sigint) if jobs > 1 else None
+    handles_term = pool is not None and threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, lambda signum, _: sys.exit(128 + signum)) if handles_term else None
     try:
         results = pool.imap_unordered(_run_example, tasks) if pool is not None else map(_run_example, tasks)
         for name, state, seconds in results:
@@ -239,9 +242,11 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
         ) from None
     finally:
         progress.close()
-        if pool is not None:
+        if pool is not None:  # killed or done: the workers stop with this process
             pool.terminate()
             pool.join()
+        if handles_term:
+            signal.signal(signal.SIGTERM, previous)
     return 0
 
 
