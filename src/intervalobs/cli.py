@@ -326,7 +326,7 @@ def _tightness(example: Example, results: Path | None, seed: int) -> int:
         if "tightness" not in summary:
             raise FileError(
                 f"argument --results: expected a folder holding {example.name}/summary.json with a tightness report "
-                f"(written by `intervalobs reproduce {example.name}`), got {str(results)!r}"
+                f"(written by `intervalobs reproduce {example.name} --full`), got {str(results)!r}"
             )
     else:
         with tempfile.TemporaryDirectory() as tmp:
