@@ -290,7 +290,7 @@ def test_manipulator_reproduction_meets_the_issue(tmp_path):
     from intervalobs.cli import main
     from paper_notes import misquoted
 
-    assert main(["reproduce", "manipulator-lpv", "--out", str(tmp_path)]) == 0
+    assert main(["reproduce", "manipulator-lpv", "--full", "--out", str(tmp_path)]) == 0
     folder = tmp_path / "manipulator-lpv"
     s = json.loads((folder / "summary.json").read_text())
     sc = s["design"]["scenarios"]

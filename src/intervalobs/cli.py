@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Sequence
@@ -219,7 +220,7 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
 
     from tqdm import tqdm
 
-    chosen = list(examples) if args.name == "all" else [args.name]
+    chosen = sorted(examples, key=lambda name: -examples[name].weight) if args.name == "all" else [args.name]
     out = args.out
     tasks = [(name, out, args.seed, not args.no_plots, args.full) for name in chosen]
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
@@ -227,6 +228,8 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
     written: list[str] = []
     progress = tqdm(total=len(tasks), desc="reproduce", unit="example", disable=len(tasks) == 1, file=sys.stderr)
     pool = multiprocessing.get_context("spawn").Pool(jobs, initializer=_ignore_sigint) if jobs > 1 else None
+    handles_term = pool is not None and threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, lambda signum, _: sys.exit(128 + signum)) if handles_term else None
     try:
         results = pool.imap_unordered(_run_example, tasks) if pool is not None else map(_run_example, tasks)
         for name, state, seconds in results:
@@ -246,9 +249,11 @@ def _reproduce(args: argparse.Namespace, examples: dict[str, Example]) -> int:
         ) from None
     finally:
         progress.close()
-        if pool is not None:
+        if pool is not None:  # killed or done: the workers stop with this process
             pool.terminate()
             pool.join()
+        if handles_term:
+            signal.signal(signal.SIGTERM, previous)
     return 0
 
 
@@ -328,7 +333,7 @@ def _tightness(example: Example, results: Path | None, seed: int) -> int:
         if "tightness" not in summary:
             raise FileError(
                 f"argument --results: expected a folder holding {example.name}/summary.json with a tightness report "
-                f"(written by `intervalobs reproduce {example.name}`), got {str(results)!r}"
+                f"(written by `intervalobs reproduce {example.name} --full`), got {str(results)!r}"
             )
     else:
         with tempfile.TemporaryDirectory() as tmp:

@@ -492,4 +492,5 @@ EXAMPLE = Example(
     SEED_FILE,
     "unknown-input interval observer on the 5-state lateral aircraft model (state and input bounds)",
     run,
+    weight=8.0,
 )

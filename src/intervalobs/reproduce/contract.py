@@ -57,12 +57,16 @@ class Example:
     run : Reproduction
         ``run(out_dir, seed, plots, full=True) -> dict``: runs the example, writes the contract files
         into ``out_dir`` and returns the summary; ``full=False`` skips the comparison analyses.
+    weight : float
+        Rough cost of ``run(..., full=False)`` relative to the cheapest examples (1): ``intervalobs
+        reproduce all`` starts the heaviest first, so that its processes finish together.
     """
 
     name: str
     seed_file: str
     description: str
     run: Reproduction
+    weight: float = 1.0
 
 
 def to_json(value: Any) -> Any:

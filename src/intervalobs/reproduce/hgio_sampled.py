@@ -646,5 +646,9 @@ def _figures(
 
 
 EXAMPLE = Example(
-    NAME, SEED_FILE, "seed 004: sampled-output HGIO designed for width, constructive and θ = 1000 designs", run
+    NAME,
+    SEED_FILE,
+    "seed 004: sampled-output HGIO designed for width, constructive and θ = 1000 designs",
+    run,
+    weight=16.0,
 )

@@ -156,4 +156,6 @@ def _tightness(
         save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
 
 
-EXAMPLE = Example(NAME, "-", "our own 4-state uncertain spring-mass system: IntervalObserver, tube vs framer", run)
+EXAMPLE = Example(
+    NAME, "-", "our own 4-state uncertain spring-mass system: IntervalObserver, tube vs framer", run, weight=2.0
+)
