@@ -298,7 +298,7 @@ class HighGainIntervalObserver(Observer):
         self.output_radius_abscissa = self._output_radius_abscissa()
         if self.output_radius_abscissa >= 0:
             raise AssumptionError(
-                "output_gain: the radius system of the output-bound observer (Theorem 4.2) is not Hurwitz "
+                "output_gain: the width of the output bounds does not decay (its radius system is not Hurwitz) "
                 f"(spectral abscissa {self.output_radius_abscissa:.3g}); its bounds would diverge. "
                 "Use a smaller output gain"
             )
