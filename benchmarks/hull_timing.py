@@ -1,4 +1,4 @@
-"""Per-step cost of `HullEstimator` on seed 002's (68) under both kinds of bang-bang noise (issue 9).
+"""Per-step cost of `HullEstimator` on numerical-3state (68) under both kinds of bang-bang noise (issue 9).
 
 Same system, record and width measure as benchmarks/tightness.py (seed 0, 200 steps), but both noise
 kinds, the best of ``REPEATS`` runs per cell (the machine is shared), and the width ratio of every

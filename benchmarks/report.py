@@ -76,10 +76,10 @@ def recursion_section() -> list[str]:
 
 
 def tightness_section() -> list[str]:
-    """Width ratios to the exact hull on seed 002's (68), the learned FIR bank, and LP costs."""
+    """Width ratios to the exact hull on numerical-3state (68), the learned FIR bank, and LP costs."""
     results = HERE / "tightness.json"
     lines = [
-        "## Tightness: width / exact hull width on seed 002's (68)",
+        "## Tightness: width / exact hull width on numerical-3state (68)",
         "",
         *_docstring(HERE / "tightness.py").splitlines(),
         "",

@@ -1,4 +1,4 @@
-"""Tightness benchmark (issue 9): width ratios to the exact hull on seed 002's (68), and LP costs.
+"""Tightness benchmark (issue 9): width ratios to the exact hull on numerical-3state (68), and LP costs.
 
 Settings of the issue's reference measurement: system (68) with θ = 0 (no ΔA, so the hull is exact),
 paper gain L = [0.3 0.2 0.8], x0 ∈ [−1, 1]³, 200 steps, mean over steps 20–199 of the summed widths,

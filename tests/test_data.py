@@ -203,3 +203,16 @@ def test_a_python_control_response_is_a_truth(setup):
         estimate.enclosure(late)
     fig = estimate.plot(truth=resp)
     np.testing.assert_array_equal(fig.axes[1].lines[-1].get_ydata(), resp.states[1])
+
+
+def test_a_model_with_default_names_takes_the_columns_by_position() -> None:
+    system = LTISystem([[0.9, 0.1], [0.0, 0.8]], [[1.0, 0.0], [0.0, 1.0]], dt=1.0)  # outputs y1, y2
+    bounds = Bounds(x0=(-1, 1), w=(-0.01, 0.01), v=(-0.01, 0.01))
+    t = np.arange(10.0)
+    truth = simulate(system, bounds, t)
+    frame = pd.DataFrame({"position": truth.y[:, 0], "speed": truth.y[:, 1]}, index=t)
+    observer = IntervalObserver.design(system, bounds)
+    by_position = observer.run(t, frame)
+    np.testing.assert_array_equal(by_position.lower, observer.run(t, truth.y).lower)
+    with pytest.raises(DataError, match="missing"):
+        observer.run(t, frame[["position"]])  # one column for two outputs: not matched by position

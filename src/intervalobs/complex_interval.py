@@ -38,7 +38,9 @@ def _radius(name: str, r: ArrayLike) -> ComplexArray:
     if not np.all(np.isfinite(arr)):
         raise BoundsError(f"{name}: expected a finite radius, got NaN or inf")
     if np.any(arr.real < 0) or np.any(arr.imag < 0):
-        raise BoundsError(f"{name}: expected a radius with nonnegative real and imaginary parts (seed 004, eq. (1))")
+        raise BoundsError(
+            f"{name}: expected a radius with nonnegative real and imaginary parts (a box around each complex value)"
+        )
     return arr
 
 

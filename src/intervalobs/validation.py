@@ -253,7 +253,8 @@ def as_signal(
     A 1-D array is read as (T,) when ``width == 1``. A pandas ``Series``/``DataFrame`` or an xarray
     ``DataArray`` is accepted too (see :func:`labelled_parts`): its channels are taken by name when
     they are labelled with strings (every name of ``names`` must be there; other columns are
-    ignored), in order otherwise, and its time index, when it has one, must be ``t``.
+    ignored; a model whose names are the defaults ``y1``, ``y2`` … takes as many columns by
+    position), in order otherwise, and its time index, when it has one, must be ``t``.
 
     Parameters
     ----------
@@ -466,11 +467,19 @@ def _select_channels(
     if channels is None or names is None or not any(isinstance(c, str) for c in channels):
         return values  # unlabelled channels (or no model names): taken in order, as for an array
     missing = [n for n in names if n not in channels]
+    if missing and len(channels) == len(names) and _default_names(names):
+        return values  # a model with unnamed channels (y1, y2, …): the columns are matched by position
     if missing:
         raise DataError(
             f"{name}: expected columns named {list(names)} (the model's names), got {channels}: missing {missing}"
         )
     return np.take(np.asarray(values), [channels.index(n) for n in names], axis=-1)
+
+
+def _default_names(names: Sequence[str]) -> bool:
+    """Whether ``names`` are the default names of a model's channels: one letter and 1, 2, … (``y1``, ``y2``)."""
+    prefix = names[0][:1] if names else ""
+    return bool(names) and list(names) == [f"{prefix}{i + 1}" for i in range(len(names))]
 
 
 def _seconds(value: Any) -> Any:

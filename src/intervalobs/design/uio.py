@@ -203,25 +203,30 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
     rank_cd, rank_d = _rank(cd), _rank(d)
     if q > p:
         raise AssumptionError(
-            f"Hypothesis 4 (seed 000, eq. (10)): expected q ≤ p unknown inputs, got q = {q} > p = {p} outputs"
+            f"D: the unknown inputs cannot be decoupled: expected q ≤ p (no more than outputs), got q = {q} > p = {p}"
         )
     if rank_d != q:
-        raise AssumptionError(f"Hypothesis 4 (seed 000, eq. (10)): expected rank(D) = q = {q}, got rank(D) = {rank_d}")
+        raise AssumptionError(
+            f"D: expected independent unknown-input directions, rank(D) = q = {q}, got rank(D) = {rank_d}"
+        )
     if rank_cd != rank_d:
         raise AssumptionError(
-            f"Hypothesis 4 (seed 000, eq. (10)): rank(CD) = {rank_cd} but rank(D) = {rank_d}: "
+            f"C, D: the outputs do not see every unknown input (rank(CD) = {rank_cd} but rank(D) = {rank_d}): "
             "the unknown inputs cannot be decoupled"
         )
     m0 = np.asarray(np.linalg.pinv(cd), dtype=float)
     e = -d @ m0 + w @ (np.eye(p) - cd @ m0)
     if _rank(np.eye(p) + c @ w) < p:
-        raise AssumptionError("Hypothesis 5 (seed 000): expected I_p + C W nonsingular, got a singular matrix")
+        raise AssumptionError(
+            "W: expected I_p + C W nonsingular (the decoupled outputs must stay independent), got a singular matrix"
+        )
     pmat = np.eye(n) + e @ c
     pa = pmat @ a
     bad = _undetectable_modes(pa, c)
     if bad:
         raise AssumptionError(
-            f"Hypothesis 5 (seed 000): expected (PA, C) detectable, got unobservable modes with Re ≥ 0 at {bad}"
+            "the state, decoupled from the unknown inputs, is not detectable: "
+            f"(PA, C) has unobservable modes with Re ≥ 0 at {bad}"
         )
     residual = float(np.abs(pmat @ d).max()) if d.size else 0.0
     scale = max(1.0, float(np.abs(d).max()) * max(1.0, float(np.abs(e @ c).max())))
@@ -494,27 +499,27 @@ def check_cooperative(
     k = as_matrix("K", K, (n, c.shape[0]))
     t = None if T is None else as_matrix("T", T, (n, n))
     if t is not None and np.linalg.cond(t) > 1e12:
-        raise AssumptionError(
-            f"Hypothesis 6 (seed 000): expected an invertible T, got cond(T) = {np.linalg.cond(t):.3g}"
-        )
+        raise AssumptionError(f"T: expected an invertible change of coordinates, got cond(T) = {np.linalg.cond(t):.3g}")
     try:
         coords = _coordinates(decoupling.P @ a, c, decoupling.E, k, t)
     except DesignError as exc:
-        raise AssumptionError(f"Hypothesis 6 (seed 000): {exc}") from exc
+        raise AssumptionError(f"no coordinates make the observer error cooperative: {exc}") from exc
     scale = max(1.0, float(np.abs(coords.J).max()))
     if coords.metzler_check < -_DIAGONAL_TOL * scale:
         raise AssumptionError(
-            "Hypothesis 6 (seed 000): expected T (PA - KC) T⁻¹ Metzler, "
+            "K, T: the error dynamics are not cooperative: expected T (PA - KC) T⁻¹ Metzler, "
             f"got smallest off-diagonal entry {coords.metzler_check:.4g}"
         )
     top = float(np.max(coords.poles.real))
     if top >= 0:
         raise AssumptionError(
-            f"Hypothesis 6 (seed 000): expected T (PA - KC) T⁻¹ Hurwitz, got an eigenvalue with real part {top:.4g}"
+            "K, T: the observer error does not decay: expected T (PA - KC) T⁻¹ Hurwitz, "
+            f"got an eigenvalue with real part {top:.4g}"
         )
     if coords.form_residual > _DIAGONAL_TOL * scale:
         raise AssumptionError(
-            f"Hypothesis 6 (seed 000): T (PA - KC) T⁻¹ departs from its Metzler form by {coords.form_residual:.3g}"
+            "K, T: the error dynamics are not cooperative: T (PA - KC) T⁻¹ departs from its Metzler form "
+            f"by {coords.form_residual:.3g}"
         )
     return coords
 

@@ -187,7 +187,8 @@ class GSISIO(Observer):
             if q_h < system.q:
                 hidden = f"; H has rank {q_h} < {system.q}, so (I - K1 + L1) G V2 = 0 for H V2 = 0"
             raise AssumptionError(
-                f"condition (8) of Theorem 1 fails: rk(I - K1 - L1) = {d.rank_condition_8[0]}, "
+                "the gains cannot bound the state from both sides (condition (8)): "
+                f"rk(I - K1 - L1) = {d.rank_condition_8[0]}, "
                 f"rk(I - K1 + L1) = {d.rank_condition_8[1]}, expected both = n = {n}{hidden}"
             )
         if not d.correctness_radius < 1.0:

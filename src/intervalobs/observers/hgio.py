@@ -299,7 +299,7 @@ class HighGainIntervalObserver(Observer):
         if self.output_radius_abscissa >= 0:
             raise DesignError(
                 f"output_gain ({'the placed gain L' if output_gain is None else 'as given'}): the output-bound "
-                "observer (Theorem 4.2) with this gain diverges: the worst case of its error radii, fed back "
+                "observer with this gain diverges: the worst case of its error radii, fed back "
                 f"through the gain from its own box, grows like exp({self.output_radius_abscissa:.3g} t) (its radius "
                 "system is not Hurwitz), so its bounds of y between samples, and every state bound built on them, "
                 "would grow without bound on this system. Give a smaller output_gain (zeros: the model's own modes) "

@@ -332,11 +332,10 @@ class NullSpaceGSISIO(Observer):
                     self._m_inverse.append(inverse)
             if not self.preconditioners:
                 raise AssumptionError(
-                    "NullSpaceGSISIO: existence condition fails: the global slope of the d-free outputs U2'g "
-                    f"along the hidden state directions G V2 (bounds {np.round(self.slope[0], 4).tolist()} to "
-                    f"{np.round(self.slope[1], 4).tolist()}) is not an H-matrix under any preconditioner "
-                    "(one hidden direction: U2'g is not strictly monotone along G V2): the hidden state "
-                    "cannot be recovered"
+                    "NullSpaceGSISIO: the outputs free of unknown inputs do not determine the hidden state: "
+                    f"their slope along the hidden directions G V2 (bounds {np.round(self.slope[0], 4).tolist()} "
+                    f"to {np.round(self.slope[1], 4).tolist()}) is not invertible under any preconditioner "
+                    "(one hidden direction: those outputs are not strictly monotone along it)"
                 )
             # fixed certificate gains: cancel the t-sensitivity at the centre of x0
             lam, mu = self._cancelling(centre)

@@ -115,7 +115,7 @@ class ZonotopicObserver(Observer):
         if not isinstance(bounds, Bounds):
             raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if system.continuous:
-            raise AssumptionError("system: the zonotopic observer of seed 002 is discrete time, got dt=None")
+            raise AssumptionError("system: the zonotopic observer is for discrete time only (give dt), got dt=None")
         self.system = system
         self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m
@@ -284,7 +284,7 @@ class IntegratedObserver(IntervalObserver):
 
     def __init__(self, system: LTISystem, bounds: Bounds, L: ArrayLike) -> None:
         if isinstance(system, LTISystem) and system.continuous:
-            raise AssumptionError("system: the integrated observer of seed 002 is discrete time, got dt=None")
+            raise AssumptionError("system: the integrated observer is for discrete time only (give dt), got dt=None")
         super().__init__(system, bounds, L, method="framer")
         self.gain_design: GainDesign | None = None
         self.fallback: str | None = None

@@ -115,7 +115,9 @@ class NonlinearSystem:
         self.g_jacobian: MatrixFunction = automatic_jacobian(g, n) if g_jacobian is None else g_jacobian
         rank = int(np.linalg.matrix_rank(np.vstack([self.G, self.H])))
         if rank < q:
-            raise AssumptionError(f"[G; H]: expected full column rank {q} (seed 003, Section III), got rank {rank}")
+            raise AssumptionError(
+                f"[G; H]: expected full column rank {q} (unknown inputs that act independently), got rank {rank}"
+            )
         zero = np.zeros(n)
         self.evaluate_f(zero)
         self.evaluate_g(zero)
