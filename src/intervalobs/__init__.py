@@ -34,6 +34,7 @@ from .observers.hull import HullEstimator, HullLowerBound, hull_lower_bound
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from .observers.null_space_gsisio import NullSpaceGSISIO
+from .observers.reaction_invariant import ReactionInvariantObserver
 from .observers.robust_fir import RobustFiniteMemoryObserver
 from .observers.robust_hull import RobustHullEstimator, robust_hull_lower_bound
 from .observers.unknown_input import UnknownInputIntervalObserver
@@ -53,6 +54,7 @@ from .systems.continuous_nonlinear import ContinuousNonlinearSystem
 from .systems.flow_enclosure import FlowEnclosure, flow_enclosure
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem
+from .systems.reaction import ReactionSystem
 from .tightness import format_tightness, tightness_reference, tightness_report
 from .zonotope import Zonotope
 
@@ -166,3 +168,7 @@ __all__ += [
     "FlowEnclosure",
     "flow_enclosure",
 ]
+
+# issue 32 (c): reaction systems with unknown kinetics
+
+__all__ += ["ReactionInvariantObserver", "ReactionSystem"]
