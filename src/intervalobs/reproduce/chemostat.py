@@ -23,7 +23,7 @@ Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlin
 And :class:`~intervalobs.observers.reaction_invariant.ReactionInvariantObserver`, the interval
 asymptotic observer, which uses no kinetic model at all (the yield, the dilution and the inlet only):
 its biomass width falls to :math:`2\,Y\,|v|` (the noise on :math:`S`, ``kinetics_free_biomass_noise_floor``)
-at the dilution rate, the same as the validated run's over the 12 h record at a sixtieth of the cost;
+at the dilution rate, the same as the validated run's over the 12 h record at a small fraction of the cost;
 over 60 h (``benchmarks/chemostat_long.py``) the validated run, which knows the kinetics, ends tighter.
 
 The reference is a lower bound of the consistent set: the inner hull of trajectories simulated
