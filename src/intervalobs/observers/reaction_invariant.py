@@ -17,12 +17,12 @@ concentrations also :math:`x \ge 0` and :math:`z \ge G x_M`. The width of :math:
 the bounds hold for every kinetics, known or not — and they cannot be tighter than what the
 noise on :math:`x_M` leaves.
 
-References
-----------
-.. [1] G. Bastin, D. Dochain, *On-line Estimation and Adaptive Control of Bioreactors*, Elsevier, 1990
-   (asymptotic observers, ch. 3).
-.. [2] J.-L. Gouzé, A. Rapaport, M. Z. Hadj-Sadok, "Interval observers for uncertain biological
-   systems", *Ecological Modelling* 133(1-2):45-56, 2000. doi:10.1016/S0304-3800(00)00279-9
+**References.**
+
+* G. Bastin, D. Dochain, *On-line Estimation and Adaptive Control of Bioreactors*, Elsevier, 1990
+  (asymptotic observers, ch. 3).
+* J.-L. Gouzé, A. Rapaport, M. Z. Hadj-Sadok, "Interval observers for uncertain biological
+  systems", *Ecological Modelling* 133(1-2):45-56, 2000. doi:10.1016/S0304-3800(00)00279-9
 """
 
 from __future__ import annotations

@@ -19,9 +19,9 @@ kinetics. :math:`G` is computed exactly in rational arithmetic from the floating
 :math:`K` and kept as the enclosing interval matrix, so :math:`[G\;\, I]K = 0` holds exactly for the
 invariant the bounds are about, not only up to rounding.
 
-References
-----------
-.. [1] G. Bastin, D. Dochain, *On-line Estimation and Adaptive Control of Bioreactors*, Elsevier, 1990.
+**References.**
+
+* G. Bastin, D. Dochain, *On-line Estimation and Adaptive Control of Bioreactors*, Elsevier, 1990.
 """
 
 from __future__ import annotations
