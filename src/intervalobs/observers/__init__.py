@@ -10,6 +10,7 @@ from .intersection import IntersectionObserver, output_contraction
 from .interval_observer import IntervalObserver
 from .lpv import LPVIntervalObserver, LPVIntervalUIO
 from .null_space_gsisio import NullSpaceGSISIO
+from .reaction_invariant import ReactionInvariantObserver
 from .robust_fir import RobustFiniteMemoryObserver
 from .robust_hull import RobustHullEstimator
 from .unknown_input import UnknownInputIntervalObserver
@@ -29,6 +30,7 @@ __all__ = [
     "NullSpaceGSISIO",
     "Observer",
     "ObserverState",
+    "ReactionInvariantObserver",
     "RobustFiniteMemoryObserver",
     "RobustHullEstimator",
     "UnknownInputIntervalObserver",

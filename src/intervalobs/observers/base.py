@@ -478,3 +478,25 @@ def _short(value: Any) -> str:
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_short(v) for v in value) + "]"
     return type(value).__name__
+
+
+def record_consistency(estimate: Estimate, flags: NDArray[np.bool_]) -> list[float | None]:
+    """Write ``consistent`` and ``inconsistent_from`` into ``estimate.meta`` from per-row consistency flags.
+
+    Parameters
+    ----------
+    estimate : Estimate
+        The run's estimate (its ``t`` gives the times).
+    flags : numpy.ndarray of bool, shape (T,) or (M, T)
+        Whether the record up to each row is consistent with the model.
+
+    Returns
+    -------
+    list of float or None
+        Per run, the first time the record contradicts the model (None when it never does).
+    """
+    first = np.where(flags.all(-1), -1, np.argmin(flags, axis=-1))
+    starts = [None if k < 0 else float(estimate.t[k]) for k in np.atleast_1d(first)]
+    estimate.meta["consistent"] = bool(flags.all()) if flags.ndim == 1 else flags.all(-1).tolist()
+    estimate.meta["inconsistent_from"] = starts[0] if flags.ndim == 1 else starts
+    return starts

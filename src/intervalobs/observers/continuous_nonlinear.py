@@ -50,7 +50,7 @@ from ..interval import Interval
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.flow_enclosure import ORDER_FACTOR, StateZonotope, interval_product, propagate
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, record_consistency
 
 __all__ = ["ContinuousNonlinearObserver"]
 
@@ -336,10 +336,7 @@ class ContinuousNonlinearObserver(Observer):
         estimate, extras = self._loop(times, ys, us, collect=("consistent", "lost_flag"))
         flags = extras["consistent"][..., 0] > 0
         lost = extras["lost_flag"][..., 0] > 0
-        first = np.where(flags.all(-1), -1, np.argmin(flags, axis=-1))
-        starts = [None if k < 0 else float(times[k]) for k in np.atleast_1d(first)]
-        estimate.meta["consistent"] = bool(flags.all()) if flags.ndim == 1 else flags.all(-1).tolist()
-        estimate.meta["inconsistent_from"] = starts[0] if flags.ndim == 1 else starts
+        record_consistency(estimate, flags)
         estimate.meta["diverging"] = self._diverging(estimate, flags, lost)
         return estimate
 

@@ -6,6 +6,7 @@ from .flow_enclosure import FlowEnclosure, StateZonotope, flow_enclosure
 from .lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from .lti import LTISystem
 from .nonlinear import NonlinearSystem
+from .reaction import ReactionSystem
 from .sampled import SampledSystem
 from .sampling import DeltaLinearisation, SampledModel, delta_linearisation, sampled_model
 
@@ -17,6 +18,7 @@ __all__ = [
     "LPVSystem",
     "LTISystem",
     "NonlinearSystem",
+    "ReactionSystem",
     "ResolvedBounds",
     "SampledLPVModel",
     "SampledModel",
