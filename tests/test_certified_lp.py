@@ -64,3 +64,26 @@ def test_the_old_design_paths_warn_and_give_the_lp_layers_objects(old: str, new:
             assert getattr(module, name) is getattr(target, name)
     with pytest.raises(AttributeError):
         module.no_such_name  # noqa: B018
+
+
+def test_the_time_limit_holds_for_each_run_not_for_the_instance_s_life(monkeypatch: pytest.MonkeyPatch) -> None:
+    """HiGHS reads ``time_limit`` against the run time an instance has accumulated: a limit set once would end
+    every run "time limit reached" once the runs together took that long (the window LPs keep one instance for a
+    whole record). ``run_highs`` gives each run its own limit."""
+    from highspy import _core
+
+    from intervalobs.lp import certified
+
+    monkeypatch.setattr(certified, "LP_TIME_LIMIT", 0.4)
+    rng = np.random.default_rng(5)
+    matrix = rng.standard_normal((20, 30))
+    solver = certified.new_highs()
+    inf = float(solver.getInfinity())
+    solver.passModel(certified.highs_model(matrix, -np.ones(30), np.ones(30), -np.full(20, 5.0), np.full(20, 5.0), inf))
+    statuses = []
+    while solver.getRunTime() < 1.0:  # runs of 2.5 limits in all, each far below one (a few milliseconds)
+        solver.changeColsCost(30, np.arange(30, dtype=np.int32), rng.standard_normal(30))
+        solver.clearSolver()
+        certified.run_highs(solver)
+        statuses.append(solver.getModelStatus())
+    assert len(statuses) > 5 and all(status == _core.HighsModelStatus.kOptimal for status in statuses)

@@ -262,7 +262,7 @@ def test_learned_bank_with_shared_noise_channels() -> None:
 
 def test_filter_lp_status_is_retried_or_reported(monkeypatch: pytest.MonkeyPatch) -> None:
     """A status other than "infeasible" is retried with other methods, then named; never an observability hint."""
-    import intervalobs.observers.fir as fir
+    import intervalobs.design.fir_bank as fir
 
     system, bounds = small_discrete()
     real = fir.linprog

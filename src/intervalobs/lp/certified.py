@@ -96,6 +96,12 @@ def run_highs(solver: Any) -> None:
     An error can also come from a restored basis (an alien one that HiGHS completed badly): the run is
     first repeated from scratch, and only an error that persists is taken for the thread refusal.
 
+    Each run may take :data:`LP_TIME_LIMIT` seconds: HiGHS's ``time_limit`` is read against the run time the
+    instance has accumulated over all its runs (``getRunTime``), so it is moved on before every run. (Set once, it
+    made every run of a long-lived instance end "time limit reached" once its runs had taken 30 s together: the
+    McCormick LP of the two-tank reproduction lost 4.5 % of its mean width, by an amount that depended on the
+    machine's load.)
+
     Parameters
     ----------
     solver : highspy.Highs
@@ -103,6 +109,7 @@ def run_highs(solver: Any) -> None:
     """
     from highspy import _core
 
+    solver.setOptionValue("time_limit", solver.getRunTime() + LP_TIME_LIMIT)
     error = _core.HighsStatus.kError
     if solver.run() == error and solver.getOptionValue("threads")[1] == 1:
         solver.clearSolver()

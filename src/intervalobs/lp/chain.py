@@ -11,7 +11,7 @@ Which of them answered never decides soundness (every bound comes from weak dual
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from typing import Literal
 
 __all__ = ["SOLVERS", "RecordsPath", "Solver", "SolverPath", "as_solver"]
@@ -83,8 +83,8 @@ class SolverPath:
         ----------
         other : SolverPath
         """
-        for name, value in asdict(other).items():
-            setattr(self, name, getattr(self, name) + value)
+        for field in fields(self):
+            setattr(self, field.name, getattr(self, field.name) + getattr(other, field.name))
 
     def as_dict(self) -> dict[str, int]:
         """The counts by name (JSON-ready).
@@ -93,7 +93,7 @@ class SolverPath:
         -------
         dict
         """
-        return asdict(self)
+        return {field.name: getattr(self, field.name) for field in fields(self)}
 
 
 class RecordsPath:

@@ -58,12 +58,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..design.fir_bank import _worst_case_gains
 from ..errors import AssumptionError, DataError
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation
 from .base import Observer
-from .fir import FiniteMemoryObserver, _worst_case_gains
+from .fir import FiniteMemoryObserver
 from .interval_observer import IntervalObserver
 
 __all__ = ["RobustFiniteMemoryObserver"]
