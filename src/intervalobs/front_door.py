@@ -23,23 +23,27 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from .errors import ArgumentError, AssumptionError
+from .errors import ArgumentError
 from .estimate import Estimate
 from .interval import matvec_bounds
 from .observers.base import Observer
+from .observers.continuous_nonlinear import ContinuousNonlinearObserver
 from .observers.fir import FiniteMemoryObserver
 from .observers.hull import HullEstimator
 from .observers.intersection import output_contraction
 from .observers.interval_observer import IntervalObserver
 from .observers.lpv import LPVIntervalObserver
 from .observers.null_space_gsisio import NullSpaceGSISIO
+from .observers.reaction_invariant import ReactionInvariantObserver
 from .observers.robust_fir import RobustFiniteMemoryObserver
 from .observers.robust_hull import RobustHullEstimator
 from .observers.unknown_input import UnknownInputIntervalObserver
 from .systems.bounds import Bounds
+from .systems.continuous_nonlinear import ContinuousNonlinearSystem
 from .systems.lpv import LPVSystem
 from .systems.lti import LTISystem
 from .systems.nonlinear import NonlinearSystem
+from .systems.reaction import ReactionSystem
 from .validation import as_time
 
 __all__ = ["ESTIMATORS", "Problem", "Suitable", "filtered_rows", "memory_horizon", "observe", "suggest"]
@@ -85,11 +89,16 @@ class Problem:
 
     @property
     def kind(self) -> str:
-        """``"lti"``, ``"lti-dA"`` (interval ΔA), ``"lti-unknown-input"``, ``"lpv"`` or ``"nonlinear"``."""
+        """``"lti"``, ``"lti-dA"`` (interval ΔA), ``"lti-unknown-input"``, ``"lpv"``, ``"nonlinear"``,
+        ``"nonlinear-continuous"`` or ``"reaction"`` (unknown kinetics)."""
         if isinstance(self.system, LPVSystem):
             return "lpv"
         if isinstance(self.system, NonlinearSystem):
             return "nonlinear"
+        if isinstance(self.system, ContinuousNonlinearSystem):
+            return "nonlinear-continuous"
+        if isinstance(self.system, ReactionSystem):
+            return "reaction"
         if self.unknown_input is not None:
             return "lti-unknown-input"
         return "lti" if self.system.dA is None else "lti-dA"
@@ -207,7 +216,15 @@ def _null_space(problem: Problem) -> Observer:
 
 
 def _continuous_nonlinear(problem: Problem) -> Observer:
-    raise AssumptionError("system: no estimator for continuous-time nonlinear models yet (see ESTIMATORS)")
+    if problem.h is None:
+        raise ArgumentError("t: a continuous-time model needs at least two sample times (their spacing is h)")
+    return ContinuousNonlinearObserver(problem.system, problem.bounds, problem.h, **problem.options)
+
+
+def _reaction_invariant(problem: Problem) -> Observer:
+    if problem.h is None:
+        raise ArgumentError("t: a continuous-time model needs at least two sample times (their spacing is h)")
+    return ReactionInvariantObserver(problem.system, problem.bounds, problem.h)
 
 
 ESTIMATORS: tuple[Suitable, ...] = (
@@ -234,8 +251,20 @@ ESTIMATORS: tuple[Suitable, ...] = (
         "interval maps",
         _null_space,
     ),
-    # Continuous-time nonlinear models: the estimator of branch `nonlinear` plugs in here (its kind and build).
-    Suitable("continuous-time nonlinear", "nonlinear-continuous", "not available yet", "-", _continuous_nonlinear),
+    Suitable(
+        "ContinuousNonlinearObserver",
+        "nonlinear-continuous",
+        "validated flow enclosure cut by every sample (first order: wide where reaction terms cancel)",
+        "validated integration",
+        _continuous_nonlinear,
+    ),
+    Suitable(
+        "ReactionInvariantObserver",
+        "reaction",
+        "no kinetic model: floored by the measurement noise",
+        "a few products",
+        _reaction_invariant,
+    ),
 )
 """Every estimator :func:`observe` can choose, tightest first within each kind of model."""
 
@@ -362,8 +391,12 @@ def _problem(
     options: dict[str, Any] | None,
 ) -> Problem:
     """The checked :class:`Problem` (the model's type and the unknown-input matrix)."""
-    if not isinstance(system, (LTISystem, LPVSystem, NonlinearSystem)):
-        raise ArgumentError(f"system: expected an LTISystem, LPVSystem or NonlinearSystem, got {type(system).__name__}")
+    models = (LTISystem, LPVSystem, NonlinearSystem, ContinuousNonlinearSystem, ReactionSystem)
+    if not isinstance(system, models):
+        raise ArgumentError(
+            "system: expected an LTISystem, LPVSystem, NonlinearSystem, ContinuousNonlinearSystem or ReactionSystem, "
+            f"got {type(system).__name__}"
+        )
     if unknown_input is not None and not isinstance(system, LTISystem):
         raise ArgumentError("unknown_input: expected None for this model (its unknown inputs are part of it)")
     matrix = None if unknown_input is None else np.atleast_2d(np.asarray(unknown_input, dtype=float))

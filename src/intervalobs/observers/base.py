@@ -133,8 +133,9 @@ def check_growth(estimate: Estimate) -> None:
     growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * middle)
     worst = float(np.max(ratio)) if ratio.size else 0.0
     diverging = bool(np.any(lost) or np.any(growing))
-    estimate.meta.update(width_growth=np.inf if np.any(lost) else worst, diverging=diverging)
-    if diverging:
+    reported = bool(estimate.meta.get("diverging", False))  # an estimator's own verdict (it warned already)
+    estimate.meta.update(width_growth=np.inf if np.any(lost) else worst, diverging=diverging or reported)
+    if diverging and not reported:
         warnings.warn(
             f"{estimate.meta.get('method', 'the observer')}: the widths grow without bound (a state's width grew "
             f"{estimate.meta['width_growth']:.3g} times from the first tenth of the record to the last and is still "

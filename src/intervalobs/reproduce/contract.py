@@ -20,7 +20,6 @@ from ..estimate import enclosure_report
 __all__ = [
     "SUMMARY_KEYS",
     "Example",
-    "Reproduction",
     "base_summary",
     "check_reproduction",
     "to_json",
@@ -28,7 +27,7 @@ __all__ = [
 ]
 
 
-class Reproduction(Protocol):
+class _Reproduction(Protocol):
     """What an example runs: ``run(out_dir, seed, plots, full=True) -> summary``.
 
     ``full=False`` leaves out the analyses that only compare (tightness references, lower bounds, banks of
@@ -54,7 +53,7 @@ class Example:
         Identifier of the source paper (``"-"`` for our own examples).
     description : str
         One line for ``intervalobs list``.
-    run : Reproduction
+    run : callable
         ``run(out_dir, seed, plots, full=True) -> dict``: runs the example, writes the contract files
         into ``out_dir`` and returns the summary; ``full=False`` skips the comparison analyses.
     weight : float
@@ -65,7 +64,7 @@ class Example:
     name: str
     seed_file: str
     description: str
-    run: Reproduction
+    run: _Reproduction
     weight: float = 1.0
 
 
