@@ -269,24 +269,25 @@ class IntervalObserver(Observer):
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         z_c = self.T @ (0.5 * (lo + hi))
         z_r = self.norms.vector(self._abs_T @ (0.5 * (hi - lo)))
-        internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r}
+        internal: dict[str, Any] = {"z_center": z_c, "z_radius": z_r, "drive": np.zeros_like(z_c)}
         if self.method == "tube":  # every gain starts from the same box: a leading gain axis
             gains, longest = self.gains.shape[0], self._abs_powers.shape[1] - 1
             internal.update(
                 z_center=np.repeat(z_c[None, :], gains, axis=0),
                 z_radius=np.repeat(z_r[None, :], gains, axis=0),
+                drive=np.zeros((gains, self.n)),
                 k=0,
                 rho_queue=np.repeat(z_r[None, None, :], gains, axis=0).repeat(longest, axis=1),
                 d_history=np.zeros((gains, longest, self.norms.count)),
             )
-        lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
+        lower, upper = self._x_box(internal["z_center"], internal["z_radius"], internal["drive"])
         # In coordinates T ≠ I the z-box maps back wider than the prior: report their intersection.
         return ObserverState(np.maximum(lower, lo), np.minimum(upper, hi), internal=internal)
 
     def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
         """Propagate the box from ``t_k`` to ``t_{k+1}`` with ``y_k`` and ``u_k`` (held over the step)."""
         internal = self._advance(state.internal, y, u)
-        lower, upper = self._x_box(internal["z_center"], internal["z_radius"])
+        lower, upper = self._x_box(internal["z_center"], internal["z_radius"], internal["drive"])
         return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
@@ -318,12 +319,13 @@ class IntervalObserver(Observer):
             lead = ys.shape[:-2]
             z_c = np.empty((times.size, *lead, *gains, self.n))  # time first, moved after the runs' axes
             z_r = np.empty((times.size, *lead, *gains, self.norms.count))
+            drive = np.empty_like(z_c)
             internal = state.internal
             for k in range(times.size):
-                z_c[k], z_r[k] = internal["z_center"], internal["z_radius"]
+                z_c[k], z_r[k], drive[k] = internal["z_center"], internal["z_radius"], internal["drive"]
                 if k + 1 < times.size:
                     internal = self._advance(internal, ys[..., k, :], us[..., k, :])
-            z_c, z_r = np.moveaxis(z_c, 0, len(lead)), np.moveaxis(z_r, 0, len(lead))
+            z_c, z_r, drive = (np.moveaxis(a, 0, len(lead)) for a in (z_c, z_r, drive))
         else:
             known = us[..., :-1, :] @ self._TGamma.T
             start = np.reshape(state.internal["z_center"], (-1, self.n))
@@ -333,7 +335,18 @@ class IntervalObserver(Observer):
             ]
             z_c = np.stack(centres, axis=-2) if gains else centres[0]
             z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
-        lower, upper = self._x_box(z_c, z_r)
+            terms = [
+                np.abs(ys[..., :-1, :]) @ np.abs(self._TL[g]).T + np.abs(known) + np.abs(self._offset[g])
+                for g in range(len(self._center_recursions))
+            ]
+            drive = np.zeros_like(z_c)  # row k: the largest drive of the steps before it
+            for g, term in enumerate(terms):
+                running = np.maximum.accumulate(term, axis=-2)
+                if gains:
+                    drive[..., 1:, g, :] = running
+                else:
+                    drive[..., 1:, :] = running
+        lower, upper = self._x_box(z_c, z_r, drive)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
         return Estimate.from_boxes(times, lower, upper, meta={**self.meta(), "rows": self.rows})
 
@@ -408,7 +421,7 @@ class IntervalObserver(Observer):
             radii[start:stop] = radii[start - horizon : stop - horizon] @ lagged + constant
         return radii[:steps]
 
-    def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray) -> FloatArray:
+    def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray, drive: FloatArray) -> FloatArray:
         """Radius of the box of everything unknown that enters one step (in z-coordinates), per gain."""
         radius = self._radius_input if self.method == "tube" else self._radius_input[0]
         if not self._uncertain:
@@ -418,7 +431,7 @@ class IntervalObserver(Observer):
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
             return np.asarray(radius + x_abs @ self._K_phi.T + inputs)
         if self._identity:  # |x_k| from the box the observer reports: the gains' boxes intersected
-            lower, upper = self._x_box(z_c, z_r)
+            lower, upper = self._x_box(z_c, z_r, drive)
             x_abs = np.maximum(np.abs(lower), np.abs(upper))
             return np.asarray(radius + (x_abs @ self._K_phi.T + inputs)[..., None, :])
         # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
@@ -428,12 +441,16 @@ class IntervalObserver(Observer):
         return np.asarray(radius + inputs[..., None, :] + centre + z_r @ self._S_phi.T)
 
     def _advance(self, internal: dict[str, Any], y: FloatArray, u: FloatArray) -> dict[str, Any]:
-        z_c, z_r = internal["z_center"], internal["z_radius"]
-        disturbance = self._disturbance_radius(z_c, z_r, u)
+        z_c, z_r, drive = internal["z_center"], internal["z_radius"], internal["drive"]
+        disturbance = self._disturbance_radius(z_c, z_r, u, drive)
         known = u @ self._TGamma.T
+        # the largest drive so far (the terms added to the centres): the scale of their rounding (_x_box)
+        term = np.einsum("gip,...p->...gi", np.abs(self._TL), np.abs(y)) + np.abs(known)[..., None, :]
+        term = term + np.abs(self._offset)
         if self.method == "framer":
             new_c = z_c @ self.M.T + y @ self._TL[0].T + known + self._offset[0]
-            return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance}
+            new_drive = np.maximum(drive, term[..., 0, :])
+            return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance, "drive": new_drive}
         # every gain at once: centres and radii carry a gain axis before the state axis
         new_c = (
             np.einsum("gij,...gj->...gi", self._Ms, z_c)
@@ -458,19 +475,32 @@ class IntervalObserver(Observer):
         flat = history.reshape(*lead, gains, 1, -1)
         new_r = np.einsum("gjl,...gl->...gj", lag, oldest) + (flat @ self._terms)[..., 0, :]
         queue = np.concatenate([queue[..., 1:, :], new_r[..., None, :]], axis=-2)
-        return {"z_center": new_c, "z_radius": new_r, "k": k + 1, "rho_queue": queue, "d_history": history}
+        return {
+            "z_center": new_c,
+            "z_radius": new_r,
+            "drive": np.maximum(drive, term),
+            "k": k + 1,
+            "rho_queue": queue,
+            "d_history": history,
+        }
 
-    def _x_box(self, z_c: FloatArray, z_r: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """The x box of a z box; for the tube the intersection of the gains' boxes (axis -2 of ``z_c``)."""
+    def _x_box(self, z_c: FloatArray, z_r: FloatArray, drive: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The x box of a z box; for the tube the intersection of the gains' boxes (axis -2 of ``z_c``).
+
+        The margin is relative to the centre's magnitude plus ``drive``, the largest of the terms added to the
+        centres so far (``|TL||y| + |TΓ||u| + |offset|``): where they cancel (a large gain on exact data) the
+        rounding of the centre is of the size of the terms, not of the centre.
+        """
         if self._identity:  # the products with T⁻¹ = I below are exact: skip them (once a step for the tube)
-            return self._intersected(*inflate(z_c - z_r, z_c + z_r, self.margin, scale=np.abs(z_c) + z_r))
+            scale = np.abs(z_c) + z_r + drive
+            return self._intersected(*inflate(z_c - z_r, z_c + z_r, self.margin, scale=scale))
         x_c = z_c @ self.T_inv.T
         if self.norms.singleton:
             x_r = z_r @ self._abs_T_inv.T
-            scale = (np.abs(z_c) + z_r) @ self._abs_T_inv.T
+            scale = (np.abs(z_c) + z_r + drive) @ self._abs_T_inv.T
         else:
             x_r = z_r @ self._back.T
-            scale = np.abs(z_c) @ self._abs_T_inv.T + x_r
+            scale = (np.abs(z_c) + drive) @ self._abs_T_inv.T + x_r
         return self._intersected(*inflate(x_c - x_r, x_c + x_r, self.margin, scale=scale))
 
     def _intersected(self, lower: FloatArray, upper: FloatArray) -> tuple[FloatArray, FloatArray]:
