@@ -218,3 +218,35 @@ def test_write_example_is_reproducible(tmp_path):
     first = write_example(tmp_path / "a", seconds=0.5, seed=3)
     second = write_example(tmp_path / "b", seconds=0.5, seed=3)
     assert [p.read_text() for p in first] == [p.read_text() for p in second]
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["disconnected-sensor", "point-prior-no-noise", "two-samples", "huge-values"],
+)
+def test_degenerate_but_valid_files_give_bounds_or_one_line(tmp_path, capsys, case):
+    """Degenerate but valid models and records: exit 0 with sound bounds, or 2 with one line; never a traceback."""
+    system, bounds, steps, scale = SYSTEM, BOUNDS, 40, 1.0
+    if case == "disconnected-sensor":
+        system = LTISystem(SYSTEM.A, C=[[0.0, 0.0]], B=SYSTEM.B, output_names=["sensor"], input_names=["drive"])
+    if case == "point-prior-no-noise":
+        bounds = Bounds(x0=([0.1, -0.2], [0.1, -0.2]), w=(0.0, 0.0), v=(0.0, 0.0))
+    if case == "two-samples":
+        steps = 2
+    if case == "huge-values":
+        scale = 1e9
+        bounds = Bounds(x0=([-5e8, -5e8], [5e8, 5e8]), w=([-5e7, -2e8], [5e7, 2e8]), v=([-1e7], [1e7]))
+    model = write_model(tmp_path / "model.toml", system, bounds)
+    t = H * np.arange(steps)
+    drive = scale * np.where(np.sin(1.3 * t) > 0, 1.0, -0.5)[:, None]
+    truth = simulate(system, bounds, t, u=drive, noise="extreme", seed=1)
+    data = _write_csv(tmp_path / "record.csv", ["t", "sensor", "drive"], [t, truth.y, drive])
+    code = main(["estimate", str(model), str(data), "--observer", "tube", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code in (0, 2), err
+    assert "Traceback" not in err
+    if code == 2:
+        assert len(err.strip().splitlines()) == 1, err
+        return
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary  # written
