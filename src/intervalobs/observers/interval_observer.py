@@ -335,17 +335,16 @@ class IntervalObserver(Observer):
             ]
             z_c = np.stack(centres, axis=-2) if gains else centres[0]
             z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
-            terms = [
-                np.abs(ys[..., :-1, :]) @ np.abs(self._TL[g]).T + np.abs(known) + np.abs(self._offset[g])
-                for g in range(len(self._center_recursions))
-            ]
-            drive = np.zeros_like(z_c)  # row k: the largest drive of the steps before it
-            for g, term in enumerate(terms):
-                running = np.maximum.accumulate(term, axis=-2)
-                if gains:
-                    drive[..., 1:, g, :] = running
-                else:
-                    drive[..., 1:, :] = running
+            magnitudes = np.stack(  # (..., T - 1, G, n): what each step adds to each gain's centre, in absolute value
+                [
+                    np.abs(ys[..., :-1, :]) @ np.abs(self._TL[g]).T + np.abs(known) + np.abs(self._offset[g])
+                    for g in range(len(self._center_recursions))
+                ],
+                axis=-2,
+            )
+            running = np.maximum.accumulate(magnitudes, axis=-3)  # row k: the largest drive of the steps before it
+            drive = np.concatenate([np.zeros_like(running[..., :1, :, :]), running], axis=-3)
+            drive = drive if gains else drive[..., 0, :]
         lower, upper = self._x_box(z_c, z_r, drive)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
         return Estimate.from_boxes(times, lower, upper, meta={**self.meta(), "rows": self.rows})

@@ -8,6 +8,7 @@ an observer.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -17,8 +18,11 @@ from ..design.hinf import GainDesign, gain_properties
 from ..estimate import Estimate, enclosure_report
 from ..interval import interval_matvec_bounds, matvec_bounds
 from ..observers.base import Observer
+from ..observers.intersection import IntersectionObserver
+from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
 from ..systems import Bounds, LTISystem
+from ..tightness import add_tightness
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -151,3 +155,60 @@ def plot_comparison(
     axes[-1, 0].set_xlabel("t")
     fig.tight_layout()
     return fig
+
+
+def add_seed002_tightness(
+    summary: dict[str, Any],
+    out_dir: Path,
+    plots: bool,
+    system: LTISystem,
+    bounds: Bounds,
+    record: tuple[NDArray[np.float64], Any, NDArray[np.float64] | None],
+    estimates: dict[str, Estimate],
+    observers: dict[str, Observer],
+    **options: Any,
+) -> None:
+    """The tightness report of a seed-002 example (``--full``): its observers and their intersection.
+
+    The zonotopic, interval, integrated and tube estimates, and the IntersectionObserver of the last three
+    observers, go to :func:`~intervalobs.tightness.add_tightness` from sample 20 with a window of 40; the
+    figure ``tightness.png`` is written with ``plots``.
+
+    Parameters
+    ----------
+    summary : dict
+        The example's summary (the report is added to it).
+    out_dir : pathlib.Path
+        The example's folder.
+    plots : bool
+        Also write ``tightness.png``.
+    system, bounds : LTISystem, Bounds
+        The example.
+    record : tuple
+        ``(t, sim, u)``: sample times, the simulation (its ``y``, ``x`` and ``dA``) and the known input.
+    estimates, observers : dict
+        The example's estimates and observers by name.
+    **options
+        Further arguments of :func:`~intervalobs.tightness.add_tightness` (windows, strides, steps).
+    """
+    t, sim, u = record
+    compared = {name: estimates[name] for name in ("zonotopic", "interval", "integrated", "tube")}
+    members = [observers["interval"], observers["tube"], observers["zonotopic"]]
+    compared["intersection"] = IntersectionObserver.design(system, bounds, extra=members).run(t, sim.y, u)
+    tightness = add_tightness(
+        summary,
+        system,
+        bounds,
+        t,
+        sim.y,
+        u,
+        compared,
+        start=20,
+        horizon=40,
+        samples=0,
+        truth=(sim.dA, sim.x),
+        **options,
+    )
+    if plots:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")

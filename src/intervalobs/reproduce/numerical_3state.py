@@ -30,12 +30,11 @@ from ..errors import AssumptionError
 from ..examples import numerical3
 from ..observers import IntervalObserver
 from ..observers.base import Observer
-from ..observers.intersection import IntersectionObserver
 from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
-from ..tightness import add_tightness
 from ._seed002 import (
+    add_seed002_tightness,
     gain_entries,
     mean_width,
     monte_carlo_enclosure,
@@ -239,29 +238,20 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     summary["runtime_s"] = timing
     # Tightness (issue 9) on (68): widths against the lower bound no sound estimator can beat.
     if full:
-        compared = {name: est68[name] for name in ("zonotopic", "interval", "integrated", "tube")}
-        members = [observers68["interval"], observers68["tube"], observers68["zonotopic"]]
-        compared["intersection"] = IntersectionObserver.design(sys68, bounds, extra=members).run(t, sim68.y, u)
-        tightness = add_tightness(
+        add_seed002_tightness(
             summary,
+            out_dir,
+            plots,
             sys68,
             bounds,
-            t,
-            sim68.y,
-            u,
-            compared,
-            start=20,
-            horizon=40,
-            samples=0,
-            truth=(sim68.dA, sim68.x),
+            (t, sim68, u),
+            est68,
+            observers68,
             robust_horizon=ROBUST_HORIZON,
             stride=BOUND_STRIDE,
             fir_window=FIR_WINDOW,
             mccormick_horizon=MCCORMICK_HORIZON,
         )
-        if plots:
-            out_dir.mkdir(parents=True, exist_ok=True)
-            save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         shown68 = {k: (e.lower, e.upper) for k, e in est68.items() if k in ("zonotopic", "interval", "integrated")}

@@ -24,12 +24,11 @@ from ..design.hinf import hinf_gain, zonotope_size_gain
 from ..examples import two_tank
 from ..observers import IntervalObserver
 from ..observers.base import Observer
-from ..observers.intersection import IntersectionObserver
 from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import simulate
-from ..tightness import add_tightness
 from ._seed002 import (
+    add_seed002_tightness,
     gain_entries,
     mean_width,
     monte_carlo_enclosure,
@@ -171,30 +170,21 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     summary["runtime_s"] = {"design": design_time, "run": run_time}
     # Tightness (issue 9): widths against the lower bound no sound estimator can beat.
     if full:
-        compared = {name: estimates[name] for name in ("zonotopic", "interval", "integrated", "tube")}
-        members = [observers["interval"], observers["tube"], observers["zonotopic"]]
-        compared["intersection"] = IntersectionObserver.design(system, bounds, extra=members).run(t, sim.y, u)
-        tightness = add_tightness(
+        add_seed002_tightness(
             summary,
+            out_dir,
+            plots,
             system,
             bounds,
-            t,
-            sim.y,
-            u,
-            compared,
-            start=20,
-            horizon=40,
-            samples=0,
-            truth=(sim.dA, sim.x),
+            (t, sim, u),
+            estimates,
+            observers,
             robust_horizon=ROBUST_HORIZON,
             stride=BOUND_STRIDE,
             fir_window=FIR_WINDOW,
             mccormick_horizon=MCCORMICK_HORIZON,
             steps=TIGHTNESS_STEPS,
         )
-        if plots:
-            out_dir.mkdir(parents=True, exist_ok=True)
-            save_figure(plot_widths(tightness.t, tightness.widths), out_dir / "tightness.png")
     write_reproduction(out_dir, summary, trajectories)
     if plots:
         sound = {k: (e.lower, e.upper) for k, e in estimates.items() if k in ("zonotopic", "interval", "integrated")}

@@ -687,7 +687,7 @@ def _delta_remainder(
     base: FloatArray,
     M: FloatArray,
     N: FloatArray,
-    radius: FloatArray,
+    weights: FloatArray,
     sampled: SampledModel,
 ) -> tuple[FloatArray, FloatArray]:
     r"""Bounds of the state and input terms of the second-order remainder of :func:`delta_linearisation`.
@@ -700,15 +700,14 @@ def _delta_remainder(
     * the triangle inequality :math:`|R| \le |\Phi(\delta) - \Phi_c| + \sum_l |\delta_l| |M_l|`, with the
       first term bounded by the sound sampled model's ``dPhi`` (which keeps the decay of a stiff :math:`A`)
       plus the difference of its midpoint matrix and ``base`` (both ``expm`` of the same matrix), and
-      :math:`|\delta_l| \le` the radius of entry :math:`l`; likewise for the input term with ``dGamma`` and
-      :math:`N`.
+      :math:`|\delta_l| \le` ``weights[l]``, the radius of entry :math:`l`; likewise for the input term
+      with ``dGamma`` and :math:`N`.
 
     Both are padded by ``_MODEL_PAD`` of the largest finite exponential for the rounding of ``expm``.
     """
+    linear_x = np.einsum("l,lij->ij", weights, np.abs(M))  # Σ_l |δ_l| |M_l| (zero without uncertain entries)
+    linear_u = np.einsum("l,lij->ij", weights, np.abs(N))
     n = M.shape[1]
-    weights = np.array([radius[a, b] for a, b in zip(*np.nonzero(radius > 0), strict=True)])
-    linear_x = np.einsum("l,lij->ij", weights, np.abs(M)) if len(weights) else np.zeros((n, n))
-    linear_u = np.einsum("l,lij->ij", weights, np.abs(N)) if len(weights) else np.zeros(N.shape[1:])
     triangle = np.concatenate(
         [
             sampled.dPhi + np.abs(sampled.Phi - base[:n, :n]) + linear_x,
@@ -784,7 +783,8 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
             direction[a, b] = step
             _, derivative = expm_frechet(aug * step, direction)
             M[index], N[index] = derivative[:n, :n], derivative[:n, n:]
-        R_x, R_u = _delta_remainder(aug * step, rad * step, base, M, N, radius, sampled)
+        weights = np.array([radius[a, b] for a, b in entries], dtype=float)  # |δ_l| ≤ radius of entry l
+        R_x, R_u = _delta_remainder(aug * step, rad * step, base, M, N, weights, sampled)
     else:
         phi, gamma = system.A + center, system.B.copy()
         for index, (a, b) in enumerate(entries):
