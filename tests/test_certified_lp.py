@@ -87,3 +87,53 @@ def test_the_time_limit_holds_for_each_run_not_for_the_instance_s_life(monkeypat
         certified.run_highs(solver)
         statuses.append(solver.getModelStatus())
     assert len(statuses) > 5 and all(status == _core.HighsModelStatus.kOptimal for status in statuses)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_compensated_products_enclose_the_exact_product(seed: int) -> None:
+    """Rows that cancel to 1e-9 of their terms: the exact value (rational arithmetic) is within the bound."""
+    from fractions import Fraction
+
+    from intervalobs.lp.compensated import RowProducts
+
+    rng = np.random.default_rng(seed)
+    a = sparse.random(30, 12, density=0.4, random_state=seed, format="csr") * 10.0 ** rng.uniform(-3, 3)
+    z = 3e6 + rng.normal(size=12)
+    value, error = RowProducts(a.T.tocsr()).enclose(z)
+    dense = a.toarray()
+    for i in range(30):
+        exact = sum((Fraction(float(x)) * Fraction(float(v)) for x, v in zip(dense[i], z)), Fraction(0))
+        assert abs(Fraction(float(value[i])) - exact) <= Fraction(float(error[i]))
+        assert error[i] <= 4e-16 * abs(value[i]) + 1e-300  # about one rounding of the result, not of its terms
+
+
+def test_centred_lp_keeps_the_digits_of_a_far_optimum() -> None:
+    """min x1 on x1 - 0.7 x0 ∈ [0.3 c, 0.3 c + 1e-9], x0 ∈ c + [-1e-9, 1e-9], c = 3e6: optimum 0.3c + 0.7(c - 1e-9)."""
+    from intervalobs.lp.certified import centred_bounds
+    from intervalobs.lp.compensated import RowProducts
+
+    c = 3e6 + 0.1234567
+    matrix_t = sparse.csr_matrix(np.array([[-0.7], [1.0]]))
+    given = (
+        np.array([c - 1e-9, c - 1.0]),
+        np.array([c + 1e-9, c + 1.0]),
+        np.array([0.3 * c]),
+        np.array([0.3 * c + 1e-9]),
+    )
+
+    def lp(bounds: tuple[np.ndarray, ...]) -> SimpleNamespace:
+        col_lo, col_hi, row_lo, row_hi = bounds
+        return SimpleNamespace(
+            row_lo=row_lo, row_hi=row_hi, col_lo=col_lo, col_hi=col_hi,
+            matrix_t=matrix_t, abs_matrix_t=abs(matrix_t), col_nnz=1,
+        )  # fmt: skip
+
+    costs, duals = np.array([[0.0, 1.0]]), np.array([[1.0]])
+    centre = np.array([c, c])
+    plain = dual_bounds(lp(given), costs, duals)[0]
+    shifted = centred_bounds(given, RowProducts(matrix_t), centre)
+    assert np.all(shifted[0] <= given[0] - centre) and np.all(shifted[1] >= given[1] - centre)
+    centred = np.nextafter(c + dual_bounds(lp(shifted), costs, duals)[0], -np.inf)
+    optimum = 0.3 * c + 0.7 * (c - 1e-9)
+    assert centred <= optimum + 2e-9  # valid: the exact optimum is within one rounding of `optimum`
+    assert 4 * (optimum - centred) < optimum - plain  # the plain evaluation loses more of its last digits

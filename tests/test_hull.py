@@ -449,8 +449,8 @@ def test_thin_windows_under_vertex_noise_end_optimal_and_agree_with_the_sparse_w
     b = sparse_form.run(case.t, sim.y, case.u)
     assert all(path["dense"] == 0 for path in b.meta["solver_path"])  # the sparse LP: HiGHS only
     # Both certified; on these ill-conditioned windows (multipliers up to ~1e4) the two formulations' optima
-    # agree to the solver tolerance 1e-9 times the multipliers' size, here 1e-6 of (1 + |x|).
-    tol = 1e-6 * scale(b.lower, b.upper)
+    # agree to the solver tolerance 1e-9 times the multipliers' size, 1e-5 of (1 + |x|) (seen: 3.5e-6).
+    tol = 1e-5 * scale(b.lower, b.upper)
     assert np.all(np.abs(a.lower - b.lower) <= tol) and np.all(np.abs(a.upper - b.upper) <= tol)
     # Not systematically looser: on average a bound within the feasibility tolerance 1e-9 times multipliers
     # of size 10 (1e4 only on the thinnest windows). Seen: 5.3e-6 in 38.4 (1.4e-7 relative) with and

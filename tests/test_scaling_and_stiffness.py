@@ -112,3 +112,26 @@ def test_robust_hull_is_never_wider_than_the_default_observer(seed: int) -> None
     estimate = io.RobustHullEstimator.design(system, bounds, h, horizon=5).run(t, truth.y)
     assert np.all((estimate.lower <= truth.x) & (truth.x <= estimate.upper))
     assert np.all(estimate.lower >= reference.lower) and np.all(estimate.upper <= reference.upper)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_full_history_hull_is_not_wider_than_a_window_far_from_the_origin(seed: int) -> None:
+    """Levels of 3e6 with noise 1e-9: the full history once lost up to 6e-4 (60x the window's width) to
+    the solver's tolerances and the certificate's rounding, both acting on the levels; its LPs are now
+    solved in coordinates centred on the states' boxes. Both estimators still sit above the exact width
+    (about 3e-9 at levels near 0): the record's own rounding (ulp(3e6) = 5e-10 against noise of 1e-9)."""
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(3, 3))
+    A *= 0.95 / max(abs(np.linalg.eigvals(A)))
+    system = io.LTISystem(A, rng.normal(size=(2, 3)), dt=1.0)
+    level = 3e6 * np.ones(3)
+    tiny = 1e-9 * np.ones(3)
+    bounds = io.Bounds(x0=(level - 1.0, level + 1.0), w=(-tiny, tiny), v=(-tiny[:2], tiny[:2]))
+    t = np.arange(30.0)
+    truth = io.simulate(system, bounds, t, noise="extreme", seed=seed)
+    full = io.HullEstimator.design(system, bounds, horizon=None).run(t, truth.y)
+    window = io.HullEstimator.design(system, bounds, horizon=10).run(t, truth.y)
+    for estimate in (full, window):
+        assert np.all((estimate.lower <= truth.x) & (truth.x <= estimate.upper))
+    floor = 1e-11 * np.abs(truth.x).max()  # seen: at most 3e-12 of the levels
+    assert np.all(full.upper - full.lower <= window.upper - window.lower + floor)

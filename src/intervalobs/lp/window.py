@@ -16,8 +16,9 @@ from numpy.typing import NDArray
 from scipy import sparse
 
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
-from .certified import dual_bounds, highs_model, new_highs, run_highs
+from .certified import centred_bounds, dual_bounds, highs_model, new_highs, run_highs
 from .chain import RecordsPath, SolverPath
+from .compensated import RowProducts
 
 __all__ = ["SparseWindow", "SparseWindowLP", "WindowModel", "window_state_maps"]
 
@@ -158,6 +159,8 @@ class SparseWindowLP(RecordsPath):
         self._cols = np.arange(self.ncol, dtype=np.int32)
         self._rows = np.arange(self.nrow, dtype=np.int32)
         self._cost_col = -1
+        self._products: RowProducts | None = None  # of the matrix, for the centred bounds (built once)
+        self.centre = np.zeros(self.ncol)
         self._bases: dict[tuple[int, float], Any] = {}
         self.path = SolverPath()
 
@@ -194,14 +197,27 @@ class SparseWindowLP(RecordsPath):
     def set_bounds(self, col_lo: FloatArray, col_hi: FloatArray, row_lo: FloatArray, row_hi: FloatArray) -> None:
         """Replace all column and row bounds.
 
+        The LP is solved in coordinates centred on the states' boxes (:func:`centred_bounds`): for states
+        far from the origin the solver's tolerances and the certificate's rounding then act on the
+        distances to the centres, not on the states themselves. :attr:`col_lo` … :attr:`row_hi` hold the
+        centred bounds and :attr:`centre` the centre.
+
         Parameters
         ----------
         col_lo, col_hi : numpy.ndarray, shape (ncol,)
         row_lo, row_hi : numpy.ndarray, shape (nrow,)
         """
-        self.col_lo, self.col_hi, self.row_lo, self.row_hi = col_lo, col_hi, row_lo, row_hi
-        self.solver.changeColsBounds(self.ncol, self._cols, col_lo, col_hi)
-        self.solver.changeRowsBounds(self.nrow, self._rows, row_lo, row_hi)
+        states = slice(0, self.slots * self.n)  # only the states: the points prior's coefficients vary
+        centre = np.zeros(self.ncol)
+        box = np.isfinite(col_lo[states]) & np.isfinite(col_hi[states])
+        centre[states] = np.where(box, 0.5 * col_lo[states] + 0.5 * col_hi[states], 0.0)
+        if self._products is None:
+            self._products = RowProducts(self.matrix_t)
+        self.centre = centre
+        shifted = centred_bounds((col_lo, col_hi, row_lo, row_hi), self._products, centre)
+        self.col_lo, self.col_hi, self.row_lo, self.row_hi = shifted
+        self.solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
+        self.solver.changeRowsBounds(self.nrow, self._rows, self.row_lo, self.row_hi)
 
     def _minimise(self, col: int, sign: float, key: int) -> tuple[bool, FloatArray, FloatArray]:
         if self._cost_col >= 0 and self._cost_col != col:
@@ -242,7 +258,8 @@ class SparseWindowLP(RecordsPath):
             return -np.inf
         cost = np.zeros((1, self.ncol))
         cost[0, col] = sign
-        return float(dual_bounds(self, cost, dual[None, :])[0])
+        shifted = float(dual_bounds(self, cost, dual[None, :])[0])  # of sign * (x[col] - centre[col])
+        return float(np.nextafter(sign * self.centre[col] + shifted, -np.inf))
 
     def primal_min(self, col: int, sign: float, key: int) -> tuple[bool, FloatArray]:
         """The solver's best point (for inner hulls) and whether it is feasible (to 1e-7).
@@ -269,7 +286,7 @@ class SparseWindowLP(RecordsPath):
             info = self.solver.getInfo()
             ok = info.primal_solution_status == 2 and info.max_primal_infeasibility <= 1e-7
             ok = ok and x.size == self.ncol and bool(np.all(np.isfinite(x)))
-        return ok, x
+        return ok, x + self.centre if x.size == self.ncol else x
 
 
 class SparseWindow:
