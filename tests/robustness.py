@@ -93,6 +93,9 @@ BUILDERS: dict[str, Callable[[io.LTISystem, io.Bounds, float | None], Any]] = {
 }
 """Every linear estimator's default design, with short windows (the cases are short records)."""
 
+CLI = "cli-estimate"
+"""``intervalobs estimate`` (automatic choice) on the case written as a model file and a CSV record."""
+
 UNCERTAIN = {"robust-hull", "robust-fir"}
 """Estimators that take an interval ΔA (the others get the case without it)."""
 
@@ -106,12 +109,52 @@ def outcome(name: str, case: Case) -> str:
     t, x, y = simulate_case(case, rng)
     try:
         system, bounds, h = model(case)
+        if name == CLI:
+            return _command_line(system, bounds, h, t, x, y)
         estimate = BUILDERS[name](system, bounds, h).run(t, y)
     except io.IntervalObserverError as error:
         return f"named {type(error).__name__}"
     except Exception as error:  # the point: any other exception is a finding
         return f"raw {type(error).__name__}: {error}"
-    lower, upper = np.asarray(estimate.lower), np.asarray(estimate.upper)
+    return _judged(np.asarray(estimate.lower), np.asarray(estimate.upper), x)
+
+
+def _command_line(system: io.LTISystem, bounds: io.Bounds, h: float | None, t: Any, x: Any, y: Any) -> str:
+    """``intervalobs estimate`` on the case's files: one line and exit code 2, or bounds judged as above."""
+    import contextlib
+    import csv
+    import io as text
+    import tempfile
+    from pathlib import Path
+
+    from intervalobs.cli import main
+    from intervalobs.records import write_model
+
+    with tempfile.TemporaryDirectory() as folder:
+        root = Path(folder)
+        model = write_model(root / "model.toml", system, bounds, h)
+        with open(root / "record.csv", "w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(["t", *system.output_names])
+            writer.writerows(np.column_stack([t, y]).tolist())
+        errors = text.StringIO()
+        with contextlib.redirect_stderr(errors), contextlib.redirect_stdout(text.StringIO()):
+            code = main(["estimate", str(model), str(root / "record.csv"), "--out", str(root / "out")])
+        message = errors.getvalue().strip()
+        if code == 2 and len(message.splitlines()) == 1 and "Traceback" not in message:
+            return "named command-line error"
+        if code != 0:
+            return f"raw exit code {code}: {message}"
+        with open(root / "out" / "bounds.csv", newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    names = system.state_names
+    lower = np.array([[float(row[f"{name}_lower"]) for name in names] for row in rows])
+    upper = np.array([[float(row[f"{name}_upper"]) for name in names] for row in rows])
+    return _judged(lower, upper, x)
+
+
+def _judged(lower: Any, upper: Any, x: Any) -> str:
+    """``"ok"``, ``"nonfinite"`` or ``"violation ..."`` of the boxes ``lower``, ``upper`` against the truth ``x``."""
     if np.any(np.isnan(lower)) or np.any(np.isnan(upper)):
         return "nonfinite"
     slack = TRUTH_ERROR * (1.0 + np.abs(x))

@@ -199,3 +199,26 @@ def test_continuous_nonlinear_model_picks_the_validated_observer_and_is_sound() 
     estimate = observe(system, bounds, t, y, budget=1e4)
     assert estimate.meta["estimator"] == "ContinuousNonlinearObserver"
     assert np.all((estimate.lower <= x) & (x <= estimate.upper))
+
+
+def test_an_estimator_that_refuses_the_model_is_passed_over_with_its_reason() -> None:
+    """A disconnected sensor: the learned bank's filter LP has no solution; the choice goes on, and sound."""
+    system = LTISystem([[0.5, 0.1], [0.0, 0.5]], [[0.0, 0.0]], dt=1.0)
+    bounds = Bounds(x0=([-1, -1], [1, 1]), w=(-0.01, 0.01), v=(-0.01, 0.01))
+    t = np.arange(30.0)
+    truth = simulate(system, bounds, t, noise="extreme", seed=0)
+    estimate = observe(system, bounds, t, truth.y, budget=1e-9)  # every row over the budget: all are tried
+    assert any("FiniteMemoryObserver: cannot be designed" in line for line in estimate.meta["considered"])
+    assert estimate.enclosure(truth.x).max_violation == 0.0
+
+
+def test_when_the_cheapest_estimator_refuses_the_model_the_last_one_designed_runs() -> None:
+    """Not detectable (a state that is neither seen nor stable): no observer gain, but the hull bounds it."""
+    system = LTISystem(np.eye(2), [[1.0, 0.0]], dt=1.0)
+    bounds = Bounds(x0=([-1, -1], [1, 1]), w=(-0.01, 0.01), v=(-0.01, 0.01))
+    t = np.arange(20.0)
+    truth = simulate(system, bounds, t, noise="extreme", seed=0)
+    estimate = observe(system, bounds, t, truth.y, budget=1e-9)
+    assert estimate.meta["estimator"] != "IntervalObserver"
+    assert any("IntervalObserver: cannot be designed" in line for line in estimate.meta["considered"])
+    assert estimate.enclosure(truth.x).max_violation == 0.0

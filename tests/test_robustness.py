@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from robustness import BUILDERS, Case
+from robustness import BUILDERS, CLI, Case
 
 CASE_TIME_LIMIT = 60.0
 """Seconds a case may take (design and a 12-sample run) before it counts as a hang."""
@@ -132,7 +132,7 @@ def test_the_reported_crash_case_gives_sound_bounds() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(BUILDERS))
+@pytest.mark.parametrize("name", [*sorted(BUILDERS), CLI])
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
 @given(case=cases())
 def test_degenerate_cases_end_in_sound_bounds_or_a_named_error(name: str, case: Case) -> None:

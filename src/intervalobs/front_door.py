@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from .errors import ArgumentError
+from .errors import ArgumentError, AssumptionError, DesignError
 from .estimate import Estimate
 from .interval import matvec_bounds
 from .observers.base import Observer
@@ -312,7 +312,9 @@ def observe(
 
     The rows of :data:`ESTIMATORS` that fit the model are tried tightest first: each is designed,
     its cost per sample measured on the first :data:`PILOT_SAMPLES` samples, and the first within
-    ``budget`` runs on the whole record (the last that fits runs whatever its cost).
+    ``budget`` runs on the whole record (the last that fits runs whatever its cost). A row whose design
+    refuses the model (a :class:`DesignError` or :class:`AssumptionError`: e.g. a window too short to
+    observe the state) is passed over with its reason.
     ``meta["estimator"]`` names it, ``meta["why"]`` says why, ``meta["considered"]`` lists the
     tighter ones passed over and ``meta["ms_per_sample"]`` the measured cost.
 
@@ -364,13 +366,7 @@ def observe(
             names = [s.name for s in ESTIMATORS if s.fits(problem)]
             raise ArgumentError(f"estimator: expected 'auto' or one of {names} for this model, got {estimator!r}")
     extra = {} if theta is None else {"theta": theta}
-    considered: list[str] = []
-    for row in fitting:
-        observer = row.build(problem)
-        cost = _cost_per_sample(observer, times, y, u, extra)
-        if cost <= budget or row is fitting[-1]:
-            break
-        considered.append(f"{row.name}: {cost:.3g} ms a sample, over the budget")
+    row, observer, cost, considered = _choose(fitting, problem, times, y, u, extra, budget)
     estimate = observer.run(times, y, u, **extra)
     why = f"the tightest estimator for this model ({problem.kind}) within {budget:g} ms a sample: {row.width}"
     if cost > budget:
@@ -380,6 +376,37 @@ def observe(
     if filtered and estimate.meta.get("rows") == "predicted" and isinstance(system, LTISystem):
         return filtered_rows(estimate, system, bounds, y)
     return estimate
+
+
+def _choose(
+    fitting: list[Suitable],
+    problem: Problem,
+    times: FloatArray,
+    y: ArrayLike,
+    u: ArrayLike | None,
+    extra: dict[str, ArrayLike],
+    budget: float,
+) -> tuple[Suitable, Observer, float, list[str]]:
+    """The first row within ``budget`` (else the last one that could be designed), its observer, cost and
+    the rows passed over with their reasons."""
+    considered: list[str] = []
+    found: tuple[Suitable, Observer, float] | None = None
+    for row in fitting:
+        try:
+            observer = row.build(problem)
+            cost = _cost_per_sample(observer, times, y, u, extra)
+        except (AssumptionError, DesignError) as error:  # this model is outside the estimator's conditions
+            if found is None and row is fitting[-1]:
+                raise
+            considered.append(f"{row.name}: cannot be designed for this model ({error})")
+            continue
+        if found is not None:
+            considered.append(f"{found[0].name}: {found[2]:.3g} ms a sample, over the budget")
+        found = (row, observer, cost)
+        if cost <= budget:
+            break
+    assert found is not None
+    return (*found, considered)
 
 
 def _problem(
