@@ -92,3 +92,22 @@ def test_load_refuses_what_save_did_not_write(tmp_path, content, pattern):
         path.write_bytes(content)
     with pytest.raises(FileError, match=pattern):
         Estimate.load(path)
+
+
+def test_every_simulation_kind_is_a_truth_for_enclosure_and_plot() -> None:
+    """A NonlinearSimulation (no times: by position) and a SampledSimulation (its grid) as the truth."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from intervalobs import Bounds, observe
+    from intervalobs.simulate import simulate_nonlinear
+    from intervalobs.systems import NonlinearSystem
+
+    system = NonlinearSystem(
+        lambda x: [0.9 * x[0] + 0.1 * np.sin(x[1]), 0.8 * x[1]], lambda x: [x[0]], [[1.0], [0.0]], [[1.0]]
+    )
+    bounds = Bounds(x0=([-1, -1], [1, 1]), w=(-0.01, 0.01), v=(-0.01, 0.01))
+    truth = simulate_nonlinear(system, bounds, np.zeros((15, 1)), seed=2)
+    estimate = observe(system, bounds, np.arange(15.0), truth.y)
+    assert estimate.enclosure(truth).max_violation == 0.0
+    assert estimate.plot(truth=truth) is not None

@@ -88,3 +88,16 @@ def test_simulation_satisfies_the_model_equations_and_noise_bounds():
     assert np.all(np.abs(sim.w) <= 0.2 + 1e-15) and np.all(np.isclose(np.abs(sim.v), 0.2))  # bang-bang
     with pytest.raises(DataError, match="d"):
         simulate_nonlinear(s, gsisio.paper_bounds(), np.zeros((10, 3)))
+
+
+def test_a_matrix_product_is_a_component_map_on_batches_and_other_forms_get_one_line() -> None:
+    """``lambda x: A @ x`` once passed design and crashed the simulation of Monte Carlo batches."""
+    from intervalobs import Bounds
+
+    A, C = np.array([[0.9, 0.1], [0.0, 0.8]]), np.array([[1.0, 0.0]])
+    system = NonlinearSystem(lambda x: A @ x, lambda x: C @ x, [[1.0], [0.0]], [[1.0]])
+    bounds = Bounds(x0=([-1, -1], [1, 1]), w=(-0.01, 0.01), v=(-0.01, 0.01))
+    sim = simulate_nonlinear(system, bounds, np.zeros((3, 12, 1)), seed=0, runs=3)
+    np.testing.assert_allclose(sim.x[:, 1:], sim.x[:, :-1] @ A.T + sim.w[:, :-1], rtol=1e-12, atol=1e-14)
+    with pytest.raises(DimensionError, match="list of state components"):  # rows of points: said at once
+        NonlinearSystem(lambda x: x @ A.T, lambda x: C @ x, [[1.0], [0.0]], [[1.0]])

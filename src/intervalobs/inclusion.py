@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import DimensionError
+from .errors import DimensionError, IntervalObserverError
 from .interval import SUPPORTED_UFUNCS, Interval  # noqa: F401  (re-exported: the former home of both)
 
 __all__ = [
@@ -57,7 +57,8 @@ def evaluate_function(
     Parameters
     ----------
     func : callable
-        Takes a sequence of n component arrays, returns a sequence of m components.
+        Takes a sequence of n component arrays (each of shape (N,): the points, leading axes
+        flattened), returns a sequence of m components; a matrix product ``A @ x`` is such a function.
     x : array_like, shape (..., n)
         Points; leading axes are carried through.
     size : int, optional
@@ -68,10 +69,25 @@ def evaluate_function(
     Returns
     -------
     numpy.ndarray, shape (..., m)
+
+    Raises
+    ------
+    DimensionError
+        ``func`` does not take or return components (the message shows the form it needs).
     """
     xa = np.asarray(x, dtype=float)
-    out = func([xa[..., j] for j in range(xa.shape[-1])])
-    return _stack(list(out), xa.shape[:-1], name, size)
+    flat = xa.reshape(-1, xa.shape[-1])  # one axis of points: `A @ x` then maps them all
+    try:
+        values = _stack(list(func([flat[:, j] for j in range(flat.shape[-1])])), flat.shape[:1], name, size)
+    except (ValueError, TypeError, IndexError) as error:
+        if isinstance(error, IntervalObserverError):
+            raise
+        raise DimensionError(
+            f"{name}: expected a function of the list of state components x[0] … x[n-1] (each an array of "
+            f"points) that returns its components, e.g. lambda x: A @ x or lambda x: [x[0] * x[1], -x[1]]; "
+            f"calling it raised {type(error).__name__}: {error}"
+        ) from error
+    return values.reshape(*xa.shape[:-1], values.shape[-1])
 
 
 def interval_function(

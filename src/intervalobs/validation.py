@@ -9,6 +9,7 @@ inside NumPy. The command-line interface converts its options through the same f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 import tempfile
@@ -325,10 +326,11 @@ def check_finite(name: str, values: FloatArray, missing: bool = False) -> None:
 def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> FloatArray:
     """The true state of a record, time-first, from an array, a simulation or a python-control response.
 
-    Accepted: an array of shape (T, n) or (M, T, n); an :class:`~intervalobs.simulate.Simulation`
-    (its ``x``); a python-control ``TimeResponseData`` (its ``states``, which python-control stores
-    time-last, (n, T) or (n, M, T): moved to time-first here); a pandas ``DataFrame`` or an xarray
-    ``DataArray``. The last three carry times, which must be ``t``, and state labels, which select
+    Accepted: an array of shape (T, n) or (M, T, n); any simulation of the library (its ``x``:
+    :class:`~intervalobs.simulate.Simulation`, ``SampledSimulation`` on its grid, ``NonlinearSimulation``);
+    a python-control ``TimeResponseData`` (its ``states``, which python-control stores time-last, (n, T)
+    or (n, M, T): moved to time-first here); a pandas ``DataFrame`` or an xarray ``DataArray``. The last
+    three carry times, which must be ``t``, and state labels, which select
     the states by ``names`` when they are all there (in order otherwise).
 
     Parameters
@@ -356,8 +358,12 @@ def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> Floa
         if value.states is None:
             raise DataError(f"{name}: expected a response with states (return_x=True), got none")
         parts = (np.moveaxis(np.asarray(value.states, dtype=float), 0, -1), _seconds(value.time), value.state_labels)
-    elif hasattr(value, "x") and hasattr(value, "t") and hasattr(value, "state_names"):  # a Simulation
-        parts = (value.x, value.t, list(value.state_names))
+    elif dataclasses.is_dataclass(value) and hasattr(value, "x"):  # any of the library's simulations
+        if not hasattr(value, "t"):  # NonlinearSimulation: time-first, on the samples
+            return as_array(name, value.x)
+        names_of = getattr(value, "state_names", None)
+        times = value.t  # type: ignore[union-attr]  # checked above
+        parts = (value.x, times, None if names_of is None else list(names_of))
     else:
         parts = labelled_parts(value)
     if parts is None:
