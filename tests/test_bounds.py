@@ -3,7 +3,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, BoundsError, DimensionError, LTISystem, ResolvedBounds, SampledSystem
+from intervalobs import Bounds, LTISystem, SampledSystem
+from intervalobs.errors import BoundsError, DimensionError
+from intervalobs.systems import ResolvedBounds
 
 
 @pytest.fixture

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import BoundsError, DimensionError
 from intervalobs.complex_interval import cabs, ctimes, delta_operator, linear_image, real_part_bounds
+from intervalobs.errors import BoundsError, DimensionError
 
 
 def _random(seed: int, k: int = 3, n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, BoundsError, ContinuousNonlinearSystem, DimensionError, LTISystem
+from intervalobs import Bounds, ContinuousNonlinearSystem, LTISystem
+from intervalobs.errors import BoundsError, DimensionError
 from intervalobs.interval import Interval
 
 

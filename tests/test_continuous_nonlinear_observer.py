@@ -8,7 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, BoundsError, ContinuousNonlinearObserver, ContinuousNonlinearSystem
+from intervalobs import Bounds, ContinuousNonlinearObserver, ContinuousNonlinearSystem
+from intervalobs.errors import BoundsError
 from intervalobs.estimate import enclosure_report
 from nonlinear_cases import Case, chemostat, compartments, cstr, measure, pendulum, simulate_truth
 

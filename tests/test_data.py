@@ -5,7 +5,8 @@ import sys
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, DataError, DimensionError, Estimate, IntervalObserver, LTISystem, Simulation, simulate
+from intervalobs import Bounds, Estimate, IntervalObserver, LTISystem, Simulation, simulate
+from intervalobs.errors import DataError, DimensionError
 
 pd = pytest.importorskip("pandas")
 xr = pytest.importorskip("xarray")

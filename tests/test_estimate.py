@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from intervalobs import BoundsError, Estimate
+from intervalobs import Estimate
+from intervalobs.errors import BoundsError
 
 
 def test_enclosure_report_and_roundtrip(tmp_path):

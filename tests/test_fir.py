@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from conftest import random_system
-from intervalobs import AssumptionError, Bounds, IntervalObserver, LTISystem, simulate
-from intervalobs.errors import IntervalObserverError
+from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import AssumptionError, IntervalObserverError
 from intervalobs.examples import scale_cases
 from intervalobs.observers.fir import FiniteMemoryObserver
 from intervalobs.observers.hull import HullEstimator

@@ -7,7 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, Bounds, BoundsError, ContinuousNonlinearSystem, flow_enclosure
+from intervalobs import Bounds, ContinuousNonlinearSystem
+from intervalobs.errors import AssumptionError, BoundsError
+from intervalobs.systems import flow_enclosure
 from intervalobs.systems.flow_enclosure import StateZonotope
 from nonlinear_cases import Case, cstr, pendulum, simulate_truth
 

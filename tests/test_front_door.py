@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from intervalobs import (
-    ArgumentError,
     Bounds,
     HullEstimator,
     IntervalObserver,
@@ -20,6 +19,7 @@ from intervalobs import (
     simulate_nonlinear,
     suggest,
 )
+from intervalobs.errors import ArgumentError
 from intervalobs.examples import aircraft as ac
 from intervalobs.examples import gsisio as nonlinear_example
 from intervalobs.examples import numerical3

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, DataError, DesignError
+from intervalobs import DesignError
 from intervalobs.design.regions import place_in_disks
+from intervalobs.errors import AssumptionError, DataError
 from intervalobs.estimate import enclosure_report
 from intervalobs.examples import hgio as example
 from intervalobs.interval import matvec_bounds

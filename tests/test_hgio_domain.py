@@ -7,7 +7,8 @@ import warnings
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, BoundsError, DesignError, DivergenceWarning, Estimate
+from intervalobs import DesignError, DivergenceWarning, Estimate
+from intervalobs.errors import AssumptionError, BoundsError
 from intervalobs.observers.base import GROWTH_LIMIT, check_growth
 from intervalobs.observers.hgio import HighGainIntervalObserver
 from intervalobs.simulate import simulate_sampled

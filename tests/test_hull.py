@@ -11,8 +11,8 @@ import pytest
 from scipy.optimize import linprog
 
 from conftest import random_system
-from intervalobs import AssumptionError, Bounds, Estimate, IntervalObserver, LTISystem, simulate
-from intervalobs.errors import DataError, IntervalObserverError
+from intervalobs import Bounds, Estimate, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import AssumptionError, DataError, IntervalObserverError
 from intervalobs.observers.hull import HullEstimator
 from intervalobs.tightness import HullLowerBound, hull_lower_bound
 

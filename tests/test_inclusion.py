@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from intervalobs.errors import BoundsError, DimensionError
-from intervalobs.inclusion import Interval, evaluate_function, interval_function, interval_matrix
+from intervalobs.inclusion import evaluate_function, interval_function, interval_matrix
+from intervalobs.interval import Interval
 
 centre = st.floats(-20, 20, allow_nan=False)
 radius = st.floats(0, 8, allow_nan=False)

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from conftest import random_system
-from intervalobs import DataError, IntervalObserver, simulate
+from intervalobs import IntervalObserver, simulate
+from intervalobs.errors import DataError
 from intervalobs.observers.intersection import IntersectionObserver, output_contraction
 
 

@@ -4,9 +4,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from intervalobs import BoundsError, DimensionError, Interval, interval_matvec_bounds, matvec_bounds, neg, pos
-from intervalobs.errors import AssumptionError
-from intervalobs.interval import ROUNDING_MARGIN, inflate, recursion_margin, round_outward, sandwich_bounds
+from intervalobs import Interval
+from intervalobs.errors import AssumptionError, BoundsError, DimensionError
+from intervalobs.interval import (
+    ROUNDING_MARGIN,
+    inflate,
+    interval_matvec_bounds,
+    matvec_bounds,
+    neg,
+    pos,
+    recursion_margin,
+    round_outward,
+    sandwich_bounds,
+)
 
 finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from intervalobs.errors import DimensionError
-from intervalobs.inclusion import SUPPORTED_UFUNCS, Interval, evaluate_matrix, interval_matrix
+from intervalobs.inclusion import evaluate_matrix, interval_matrix
+from intervalobs.interval import SUPPORTED_UFUNCS, Interval
 from intervalobs.interval_dual import IntervalDual, automatic_jacobian
 
 # The analytic derivative below is evaluated in floating point: a few operations, each with a relative

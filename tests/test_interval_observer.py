@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from conftest import random_system, simulate_truth, unit_bounds
-from intervalobs import DataError, DesignError, DimensionError, IntervalObserver, LTISystem, simulate
+from intervalobs import DesignError, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import DataError, DimensionError
 from intervalobs.systems import Bounds
 
 CASES = [

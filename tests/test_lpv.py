@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, Bounds, BoundsError, DesignError, DimensionError
+from intervalobs import Bounds, DesignError
 from intervalobs.design.lpv import IntervalJet, boundedness_lmi, uio_observer_matrix, verify_boundedness
+from intervalobs.errors import AssumptionError, BoundsError, DimensionError
 from intervalobs.examples.manipulator import (
     FAULT_BOUND,
     NOMINAL,

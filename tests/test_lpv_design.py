@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, Bounds, DataError, DesignError, LPVIntervalObserver, LPVIntervalUIO, LPVSystem
+from intervalobs import Bounds, DesignError, LPVIntervalObserver, LPVIntervalUIO, LPVSystem
 from intervalobs.design.lpv_gains import design_lpv_observer, rotate_bounds
+from intervalobs.errors import AssumptionError, DataError
 from intervalobs.simulate import runge_kutta_step
 
 H = 0.02

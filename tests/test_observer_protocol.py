@@ -7,7 +7,8 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from intervalobs import ArgumentError, ArgumentTypeError, Bounds, BoundsError, DataError, LTISystem
+from intervalobs import Bounds, LTISystem
+from intervalobs.errors import ArgumentError, ArgumentTypeError, BoundsError, DataError
 from intervalobs.examples import gsisio as gsisio_example
 from intervalobs.examples import hgio as hgio_example
 from intervalobs.examples import spring_mass

@@ -9,7 +9,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, DimensionError, Estimate, IntervalObserver, LTISystem, simulate
+from intervalobs import Bounds, Estimate, IntervalObserver, LTISystem, simulate
+from intervalobs.errors import DimensionError
 from intervalobs.plotting import plot_estimate, plot_widths
 
 RUNS = 5

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from intervalobs import AssumptionError, DesignError
+from intervalobs import DesignError
 from intervalobs.design.regions import Disk, canonical_eigenvectors, modal_decomposition, place_in_disks, radius_matrix
+from intervalobs.errors import AssumptionError
 from intervalobs.examples import hgio as example
 
 A, C = example.A, example.C

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import AssumptionError, BoundsError, DataError, DimensionError
+from intervalobs.errors import AssumptionError, BoundsError, DataError, DimensionError
 from intervalobs.examples import hgio as example
 from intervalobs.simulate import simulate_sampled
 from intervalobs.systems.sampled import SampledSystem

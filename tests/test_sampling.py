@@ -10,17 +10,10 @@ import pytest
 from scipy.linalg import block_diag, expm
 
 from conftest import simulate_truth, unit_bounds
-from intervalobs import (
-    ArgumentTypeError,
-    AssumptionError,
-    DesignError,
-    DimensionError,
-    IntervalObserver,
-    LTISystem,
-    sampled_model,
-)
+from intervalobs import DesignError, IntervalObserver, LTISystem, sampled_model
 from intervalobs.design.cooperative import real_modal_basis, unstable_vertex
 from intervalobs.design.tube import BlockNorms, tube_horizon, tube_stability
+from intervalobs.errors import ArgumentTypeError, AssumptionError, DimensionError
 from intervalobs.systems.sampling import _nodes
 
 STEPS = [0.001, 0.01, 0.1, 0.5, 1.0, 10.0]

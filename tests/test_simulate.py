@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import Bounds, DataError, LTISystem, simulate, simulate_nonlinear, simulate_sampled
+from intervalobs import Bounds, LTISystem, simulate, simulate_nonlinear, simulate_sampled
+from intervalobs.errors import DataError
 from intervalobs.examples import gsisio
 from intervalobs.examples import hgio as sampled_example
 from intervalobs.simulate import NOISE_KINDS, draw_box, noise_signal, runge_kutta_step

@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from intervalobs import ArgumentError, BoundsError, DimensionError, IntervalObserverError, LTISystem
+from intervalobs import IntervalObserverError, LTISystem
+from intervalobs.errors import ArgumentError, BoundsError, DimensionError
 
 
 def test_shapes_are_checked_with_the_argument_name():

@@ -52,3 +52,33 @@ def test_the_scan_finds_a_paper_reference() -> None:
         "seed 00",
         "Hypothesis",
     ]
+
+
+BUILTIN_ERRORS = {"TypeError", "ValueError", "RuntimeError", "KeyError", "IndexError", "OSError", "Exception"}
+"""Builtins the package never raises itself: it raises the named error of :mod:`intervalobs.errors`
+that subclasses the builtin (``AttributeError`` stays in a module's ``__getattr__``, ``NotImplementedError``
+in an abstract method)."""
+
+
+def _raised_builtins(source: str) -> list[tuple[int, str]]:
+    """(line, name) of every ``raise`` of a builtin error in a module's source."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Raise) and node.exc is not None:
+            call = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+            if isinstance(call, ast.Name) and call.id in BUILTIN_ERRORS:
+                found.append((node.lineno, call.id))
+    return found
+
+
+@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_errors_are_the_library_s_named_errors(path: Path) -> None:
+    raised = _raised_builtins(path.read_text(encoding="utf-8"))
+    assert not raised, f"{path.relative_to(ROOT)}: raises {raised}: use the named error of intervalobs.errors"
+
+
+def test_the_scan_finds_a_builtin_error() -> None:
+    assert _raised_builtins("raise ValueError('x')\nraise DataError('y')\nraise TypeError") == [
+        (1, "ValueError"),
+        (3, "TypeError"),
+    ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs import BoundsError, DesignError
+from intervalobs import DesignError
 from intervalobs.design.regions import (
     Disk,
     HalfPlane,
@@ -16,6 +16,7 @@ from intervalobs.design.regions import (
     modal_decomposition,
 )
 from intervalobs.design.width import design_for_width, modal_width_bound
+from intervalobs.errors import BoundsError
 from intervalobs.examples import hgio as example
 from intervalobs.observers.hgio import HighGainIntervalObserver
 from intervalobs.simulate import simulate_sampled

@@ -1,190 +1,173 @@
-"""intervalobs: guaranteed interval estimation for uncertain dynamical systems."""
+"""intervalobs: guaranteed interval estimation for uncertain dynamical systems.
 
-from .complex_interval import cabs, ctimes, linear_image
-from .design.abstraction import AffineAbstraction, affine_abstraction
-from .design.differentiator import HOSMDifferentiator, difference_derivative_bounds, levant_gains
-from .design.gsisio import gsisio_design
-from .design.high_gain import ThetaDesign, theta_design
-from .design.hinf import GainDesign, hinf_gain, zonotope_size_gain
-from .design.lpv import CertifiedVertexBounds, boundedness_lmi, certify_vertex_extremes, verify_boundedness
-from .design.mixed_monotone import JacobianDecomposition, VertexDecomposition, jacobian_bounds
-from .design.regions import Disk, RegionPlacement, place_in_disks
-from .design.uio import check_cooperative, design_uio_coordinates, uio_decoupling
-from .diagnosis import isolation_outcome, psi_hat, run_campaign, runs_for_sigma
-from .errors import (
-    ArgumentError,
-    ArgumentTypeError,
-    AssumptionError,
-    BoundsError,
-    DataError,
-    DesignError,
-    DimensionError,
-    DivergenceWarning,
-    FileError,
-    InconsistentDataError,
-    IntervalObserverError,
-    SchedulerError,
-)
-from .estimate import EnclosureReport, Estimate
+The top level holds what a user calls: the model classes and :class:`Bounds`, the estimators, the
+front door (:func:`observe`, :func:`suggest`), the result :class:`Estimate`, the truth simulators,
+:func:`sampled_model` and the base errors. Everything else lives in its module and is imported from
+there: design tools from :mod:`intervalobs.design` (e.g. ``intervalobs.design.high_gain.theta_design``),
+lower bounds and tightness reports from :mod:`intervalobs.tightness`, fault isolation from
+:mod:`intervalobs.diagnosis`, interval helpers from :mod:`intervalobs.interval`, every named error from
+:mod:`intervalobs.errors`.
+
+.. deprecated:: 0.2.0
+   The names that left the top level (listed in ``MOVED``) still resolve here with a ``FutureWarning``
+   naming their new home; they go in the next release.
+"""
+
+import importlib
+import warnings
+from typing import Any
+
+from .errors import DesignError, DivergenceWarning, InconsistentDataError, IntervalObserverError
+from .estimate import Estimate
 from .front_door import observe, suggest
-from .interval import Box as Box  # former name of Interval, kept importable (not in __all__)
-from .interval import Interval, interval_matvec_bounds, matvec_bounds, neg, pos
-from .observers import HighGainIntervalObserver, IntervalObserver, Observer, ObserverState
-from .observers.continuous_nonlinear import ContinuousNonlinearObserver
-from .observers.fir import FiniteMemoryObserver
-from .observers.gsisio import GSISIO
-from .observers.hull import HullEstimator
-from .observers.intersection import IntersectionObserver
-from .observers.lpv import LPVIntervalObserver, LPVIntervalUIO
-from .observers.null_space_gsisio import NullSpaceGSISIO
-from .observers.reaction_invariant import ReactionInvariantObserver
-from .observers.robust_fir import RobustFiniteMemoryObserver
-from .observers.robust_hull import RobustHullEstimator
-from .observers.unknown_input import UnknownInputIntervalObserver
-from .observers.zonotopic import IntegratedObserver, ZonotopicObserver
+from .interval import Interval
+from .observers import (
+    GSISIO,
+    ContinuousNonlinearObserver,
+    FiniteMemoryObserver,
+    HighGainIntervalObserver,
+    HullEstimator,
+    IntegratedObserver,
+    IntersectionObserver,
+    IntervalObserver,
+    LPVIntervalObserver,
+    LPVIntervalUIO,
+    NullSpaceGSISIO,
+    Observer,
+    ReactionInvariantObserver,
+    RobustFiniteMemoryObserver,
+    RobustHullEstimator,
+    UnknownInputIntervalObserver,
+    ZonotopicObserver,
+)
 from .simulate import Simulation, simulate, simulate_nonlinear, simulate_sampled
 from .systems import (
     Bounds,
-    DeltaLinearisation,
+    ContinuousNonlinearSystem,
+    LPVSystem,
     LTISystem,
-    ResolvedBounds,
-    SampledModel,
+    NonlinearSystem,
+    ReactionSystem,
     SampledSystem,
-    delta_linearisation,
     sampled_model,
 )
-from .systems.continuous_nonlinear import ContinuousNonlinearSystem
-from .systems.flow_enclosure import FlowEnclosure, flow_enclosure
-from .systems.lpv import LPVSystem
-from .systems.nonlinear import NonlinearSystem
-from .systems.reaction import ReactionSystem
-from .tightness import (
-    HullLowerBound,
-    format_tightness,
-    hull_lower_bound,
-    robust_hull_lower_bound,
-    tightness_reference,
-    tightness_report,
-)
-from .zonotope import Zonotope
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "ArgumentError",
-    "ArgumentTypeError",
-    "AssumptionError",
+    "GSISIO",
     "Bounds",
-    "BoundsError",
-    "DataError",
-    "DeltaLinearisation",
+    "ContinuousNonlinearObserver",
+    "ContinuousNonlinearSystem",
     "DesignError",
-    "DimensionError",
-    "Disk",
     "DivergenceWarning",
-    "EnclosureReport",
     "Estimate",
-    "FileError",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",
-    "HullLowerBound",
     "InconsistentDataError",
+    "IntegratedObserver",
     "IntersectionObserver",
+    "Interval",
     "IntervalObserver",
     "IntervalObserverError",
-    "LTISystem",
-    "Observer",
-    "ObserverState",
-    "RegionPlacement",
-    "ResolvedBounds",
-    "RobustFiniteMemoryObserver",
-    "RobustHullEstimator",
-    "SampledModel",
-    "SampledSystem",
-    "SchedulerError",
-    "Simulation",
-    "ThetaDesign",
-    "__version__",
-    "cabs",
-    "ctimes",
-    "delta_linearisation",
-    "format_tightness",
-    "hull_lower_bound",
-    "interval_matvec_bounds",
-    "linear_image",
-    "matvec_bounds",
-    "neg",
-    "place_in_disks",
-    "pos",
-    "robust_hull_lower_bound",
-    "sampled_model",
-    "simulate",
-    "simulate_sampled",
-    "theta_design",
-    "tightness_reference",
-    "tightness_report",
-]
-
-# seed 002
-__all__ += ["GainDesign", "IntegratedObserver", "Zonotope", "ZonotopicObserver", "hinf_gain", "zonotope_size_gain"]
-
-# seed 000
-__all__ += [
-    "HOSMDifferentiator",
-    "UnknownInputIntervalObserver",
-    "check_cooperative",
-    "design_uio_coordinates",
-    "difference_derivative_bounds",
-    "levant_gains",
-    "uio_decoupling",
-]
-
-# seed 001
-
-__all__ += [
-    "CertifiedVertexBounds",
     "LPVIntervalObserver",
     "LPVIntervalUIO",
     "LPVSystem",
-    "boundedness_lmi",
-    "certify_vertex_extremes",
-    "isolation_outcome",
-    "psi_hat",
-    "run_campaign",
-    "runs_for_sigma",
-    "verify_boundedness",
-]
-
-# seed 003
-
-__all__ += [
-    "GSISIO",
-    "AffineAbstraction",
-    "Interval",
-    "JacobianDecomposition",
+    "LTISystem",
     "NonlinearSystem",
     "NullSpaceGSISIO",
-    "VertexDecomposition",
-    "affine_abstraction",
-    "gsisio_design",
-    "jacobian_bounds",
+    "Observer",
+    "ReactionInvariantObserver",
+    "ReactionSystem",
+    "RobustFiniteMemoryObserver",
+    "RobustHullEstimator",
+    "SampledSystem",
+    "Simulation",
+    "UnknownInputIntervalObserver",
+    "ZonotopicObserver",
+    "__version__",
+    "observe",
+    "sampled_model",
+    "simulate",
     "simulate_nonlinear",
+    "simulate_sampled",
+    "suggest",
 ]
 
-# issue 32: continuous-time nonlinear systems
+MOVED: dict[str, str] = {
+    "AffineAbstraction": "intervalobs.design.abstraction",
+    "ArgumentError": "intervalobs.errors",
+    "ArgumentTypeError": "intervalobs.errors",
+    "AssumptionError": "intervalobs.errors",
+    "BoundsError": "intervalobs.errors",
+    "CertifiedVertexBounds": "intervalobs.design.lpv",
+    "DataError": "intervalobs.errors",
+    "DeltaLinearisation": "intervalobs.systems",
+    "DimensionError": "intervalobs.errors",
+    "Disk": "intervalobs.design.regions",
+    "EnclosureReport": "intervalobs.estimate",
+    "FileError": "intervalobs.errors",
+    "FlowEnclosure": "intervalobs.systems",
+    "GainDesign": "intervalobs.design.hinf",
+    "HOSMDifferentiator": "intervalobs.design.differentiator",
+    "HullLowerBound": "intervalobs.tightness",
+    "JacobianDecomposition": "intervalobs.design.mixed_monotone",
+    "ObserverState": "intervalobs.observers",
+    "RegionPlacement": "intervalobs.design.regions",
+    "ResolvedBounds": "intervalobs.systems",
+    "SampledModel": "intervalobs.systems",
+    "SchedulerError": "intervalobs.errors",
+    "ThetaDesign": "intervalobs.design.high_gain",
+    "VertexDecomposition": "intervalobs.design.mixed_monotone",
+    "Zonotope": "intervalobs.zonotope",
+    "affine_abstraction": "intervalobs.design.abstraction",
+    "boundedness_lmi": "intervalobs.design.lpv",
+    "cabs": "intervalobs.complex_interval",
+    "certify_vertex_extremes": "intervalobs.design.lpv",
+    "check_cooperative": "intervalobs.design.uio",
+    "ctimes": "intervalobs.complex_interval",
+    "delta_linearisation": "intervalobs.systems",
+    "design_uio_coordinates": "intervalobs.design.uio",
+    "difference_derivative_bounds": "intervalobs.design.differentiator",
+    "flow_enclosure": "intervalobs.systems",
+    "format_tightness": "intervalobs.tightness",
+    "gsisio_design": "intervalobs.design.gsisio",
+    "hinf_gain": "intervalobs.design.hinf",
+    "hull_lower_bound": "intervalobs.tightness",
+    "interval_matvec_bounds": "intervalobs.interval",
+    "isolation_outcome": "intervalobs.diagnosis",
+    "jacobian_bounds": "intervalobs.design.mixed_monotone",
+    "levant_gains": "intervalobs.design.differentiator",
+    "linear_image": "intervalobs.complex_interval",
+    "matvec_bounds": "intervalobs.interval",
+    "neg": "intervalobs.interval",
+    "place_in_disks": "intervalobs.design.regions",
+    "pos": "intervalobs.interval",
+    "psi_hat": "intervalobs.diagnosis",
+    "robust_hull_lower_bound": "intervalobs.tightness",
+    "run_campaign": "intervalobs.diagnosis",
+    "runs_for_sigma": "intervalobs.diagnosis",
+    "theta_design": "intervalobs.design.high_gain",
+    "tightness_reference": "intervalobs.tightness",
+    "tightness_report": "intervalobs.tightness",
+    "uio_decoupling": "intervalobs.design.uio",
+    "verify_boundedness": "intervalobs.design.lpv",
+    "zonotope_size_gain": "intervalobs.design.hinf",
+    "Box": "intervalobs.interval",
+}
+"""Names that left the top level, each with the module to import it from (read here, they warn)."""
 
-__all__ += [
-    "ContinuousNonlinearObserver",
-    "ContinuousNonlinearSystem",
-    "FlowEnclosure",
-    "flow_enclosure",
-]
 
-# the front door
-
-__all__ += ["observe", "suggest"]
-
-# issue 32 (c): reaction systems with unknown kinetics
-
-__all__ += ["ReactionInvariantObserver", "ReactionSystem"]
+def __getattr__(name: str) -> Any:
+    """A name that left the top level: its object, with a ``FutureWarning`` naming the module it moved to."""
+    home = MOVED.get(name)
+    if home is None:
+        raise AttributeError(f"module 'intervalobs' has no attribute {name!r}")
+    new = "Interval" if name == "Box" else name
+    warnings.warn(
+        f"intervalobs.{name} is deprecated and goes in the next release: use 'from {home} import {new}'",
+        FutureWarning,
+        stacklevel=2,
+    )
+    return getattr(importlib.import_module(home), new)

@@ -1,17 +1,17 @@
 r"""Inclusion functions: interval arithmetic over NumPy arrays, for sound ranges of user functions.
 
-The interval type is :class:`intervalobs.interval.Interval` (re-exported here with
-:data:`SUPPORTED_UFUNCS`): arithmetic (``+ - * /``, integer powers) and the NumPy functions ``sin``,
-``cos``, ``exp``, ``log``, ``sqrt``, ``tanh``, ``arctan``, ``abs``, ``square`` return intervals that
-contain every value the operation takes on the operands' boxes (the *natural extension*), rounded
-outward per operation (:func:`intervalobs.interval.round_outward`). This module evaluates user
-functions over boxes with it.
+The interval type is :class:`intervalobs.interval.Interval` (its former names here, ``Interval`` and
+``SUPPORTED_UFUNCS``, warn and go in the next release): arithmetic (``+ - * /``, integer powers) and
+the NumPy functions ``sin``, ``cos``, ``exp``, ``log``, ``sqrt``, ``tanh``, ``arctan``, ``abs``,
+``square`` return intervals that contain every value the operation takes on the operands' boxes (the
+*natural extension*), rounded outward per operation (:func:`intervalobs.interval.round_outward`). This
+module evaluates user functions over boxes with it.
 
 User functions follow one convention everywhere in the library (``NonlinearSystem``,
 :mod:`intervalobs.design.mixed_monotone`): a vector function :math:`q:\mathbb{R}^n\to\mathbb{R}^m` is a
 Python callable that takes a *sequence of its n components* and returns a sequence of its m components
 (a Jacobian returns m rows of n entries). Components are arrays over leading axes when evaluated at
-points and :class:`Interval` objects when evaluated over boxes, so one definition written with
+points and :class:`~intervalobs.interval.Interval` objects when evaluated over boxes, so one definition written with
 ``numpy`` functions serves both, e.g.::
 
     def f(x):
@@ -22,14 +22,15 @@ Constants in the returned sequence are broadcast.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import interval
 from .errors import DimensionError, IntervalObserverError
-from .interval import SUPPORTED_UFUNCS, Interval  # noqa: F401  (re-exported: the former home of both)
 
 __all__ = [
     "evaluate_function",
@@ -98,7 +99,8 @@ def interval_function(
     Parameters
     ----------
     func : callable
-        Component-convention vector function, written with the operations :class:`Interval` supports.
+        Component-convention vector function, written with the operations
+        :class:`~intervalobs.interval.Interval` supports.
     lower, upper : array_like, shape (..., n)
         Boxes; leading axes are carried through.
     size : int, optional
@@ -113,8 +115,8 @@ def interval_function(
     """
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)
-    out = func([Interval._raw(lo[..., j], hi[..., j]) for j in range(lo.shape[-1])])
-    comps = [Interval._wrap(c) for c in out]
+    out = func([interval.Interval._raw(lo[..., j], hi[..., j]) for j in range(lo.shape[-1])])
+    comps = [interval.Interval._wrap(c) for c in out]
     return (
         _stack([c.lower for c in comps], lo.shape[:-1], name, size),
         _stack([c.upper for c in comps], lo.shape[:-1], name, size),
@@ -175,11 +177,28 @@ def interval_matrix(
     """
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)
-    rows = list(func([Interval._raw(lo[..., j], hi[..., j]) for j in range(lo.shape[-1])]))
+    rows = list(func([interval.Interval._raw(lo[..., j], hi[..., j]) for j in range(lo.shape[-1])]))
     if shape is not None and len(rows) != shape[0]:
         raise DimensionError(f"{name}: expected {shape[0]} rows, got {len(rows)}")
     cols = None if shape is None else shape[1]
-    wrapped = [[Interval._wrap(c) for c in r] for r in rows]
+    wrapped = [[interval.Interval._wrap(c) for c in r] for r in rows]
     low = np.stack([_stack([c.lower for c in r], lo.shape[:-1], name, cols) for r in wrapped], axis=-2)
     high = np.stack([_stack([c.upper for c in r], lo.shape[:-1], name, cols) for r in wrapped], axis=-2)
     return low, high
+
+
+def __getattr__(name: str) -> Any:
+    """``Interval`` and ``SUPPORTED_UFUNCS``, formerly at home here: the object, with a ``FutureWarning``.
+
+    .. deprecated:: 0.2.0
+       Both go from this module in the next release; import them from :mod:`intervalobs.interval`.
+    """
+    if name not in ("Interval", "SUPPORTED_UFUNCS"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        f"intervalobs.inclusion.{name} is deprecated and goes in the next release: "
+        f"use 'from intervalobs.interval import {name}'",
+        FutureWarning,
+        stacklevel=2,
+    )
+    return getattr(interval, name)

@@ -51,6 +51,7 @@ in the library.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -572,8 +573,18 @@ class Interval:
         return handler(*inputs)
 
 
-Box = Interval
-"""Former name of :class:`Interval` (kept for compatibility; infinite ends are now allowed)."""
+def __getattr__(name: str) -> Any:
+    """``Box``, the former name of :class:`Interval`: the class, with a ``FutureWarning``.
+
+    .. deprecated:: 0.2.0
+       ``Box`` goes in the next release; use :class:`Interval`.
+    """
+    if name != "Box":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        "intervalobs.interval.Box is deprecated and goes in the next release: use Interval", FutureWarning, stacklevel=2
+    )
+    return Interval
 
 
 def _matvec(alo: FloatArray, ahi: FloatArray, xlo: FloatArray, xhi: FloatArray) -> Interval:

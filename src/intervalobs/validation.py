@@ -523,7 +523,7 @@ def check_no_kwargs(function: str, kwargs: dict[str, Any], allowed: Sequence[str
     """
     unknown = [k for k in kwargs if k not in allowed]
     if unknown:
-        raise TypeError(f"{function}: unexpected keyword argument {unknown[0]!r}; allowed: {sorted(allowed)}")
+        raise ArgumentTypeError(f"{function}: unexpected keyword argument {unknown[0]!r}; allowed: {sorted(allowed)}")
 
 
 def _describe(value: object) -> str:

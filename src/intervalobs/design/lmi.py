@@ -30,7 +30,7 @@ import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import DesignError
+from ..errors import ArgumentTypeError, DesignError
 
 __all__ = ["RTOL", "LMISolution", "constraint_residual", "solve_lmi", "verify_definite"]
 
@@ -115,7 +115,7 @@ def constraint_residual(constraint: cp.constraints.constraint.Constraint) -> flo
     elif isinstance(constraint, (cp.constraints.Equality, cp.constraints.Zero)):
         violation = float(np.abs(mat).max())
     else:
-        raise TypeError(
+        raise ArgumentTypeError(
             f"constraint: expected a PSD, inequality or equality constraint, got {type(constraint).__name__}"
         )
     return violation / scale

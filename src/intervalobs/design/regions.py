@@ -582,9 +582,9 @@ def _subspace_gain(closed: FloatArray, c: FloatArray, basis: FloatArray, targets
     rank = int(np.sum(sv > 1e-10 * max(1.0, float(sv[0]) if sv.size else 1.0)))
     try:
         if rank == 0:
-            raise ValueError("C sees none of these modes")
+            raise DesignError("C sees none of these modes")
         placed = place_poles(block.T, u[:, :rank] * sv[:rank], np.asarray(targets, dtype=complex))
-    except ValueError as exc:
+    except (ValueError, DesignError) as exc:
         raise DesignError(
             f"place_in_disks: the eigenvalues {np.round(np.linalg.eigvals(block), 6)} cannot be moved to "
             f"{np.round(np.asarray(targets), 6)} by output injection (the modes may be unobservable from C: {exc})"

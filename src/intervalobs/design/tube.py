@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 from scipy.linalg import solve_discrete_are
 from scipy.optimize import minimize
 
+from ..errors import ArgumentError
 from ..systems.sampling import SampledModel
 from .cooperative import real_modal_form
 
@@ -105,7 +106,7 @@ class BlockNorms:
     def __init__(self, sizes: Sequence[int]) -> None:
         self.sizes = tuple(int(size) for size in sizes)
         if any(size not in (1, 2) for size in self.sizes):
-            raise ValueError(f"sizes: expected block sizes 1 or 2, got {self.sizes}")
+            raise ArgumentError(f"sizes: expected block sizes 1 or 2, got {self.sizes}")
         self.count = len(self.sizes)
         self.n = sum(self.sizes)
         self.singleton = self.count == self.n

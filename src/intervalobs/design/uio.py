@@ -49,7 +49,7 @@ _DIAGONAL_TOL = 1e-9
 # aircraft's PA has a triple zero eigenvalue): the same design gave Σρ_x 0.35 on one machine and 0.37 on another.
 # Every pole set is placed on PA; the _REFINED_SETS best are placed again on _PLACEMENT_TRIALS copies of PA
 # perturbed by _PLACEMENT_JITTER (relative, fixed pattern) and the best-scoring gain of all is kept, so that each
-# machine tries the same branches (one placement costs ~20 ms: jittering every set made the design 8x slower).
+# machine tries the same branches (jittering every set made the design several times slower).
 _REFINED_SETS = 2
 _PLACEMENT_TRIALS = 4
 _PLACEMENT_JITTER = 1e-13

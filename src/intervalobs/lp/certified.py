@@ -81,8 +81,8 @@ def new_highs() -> Any:
     solver.setOptionValue("output_flag", False)
     solver.setOptionValue("presolve", "off")
     solver.setOptionValue("solver", "simplex")
-    # One thread: the default (0) makes every run() count the physical cores from sysfs twice (≈ 35 µs,
-    # a third of the run time of a warm-started window LP). See run_highs for the fallback.
+    # One thread: the default (0) makes every run() count the physical cores from sysfs twice (a large share
+    # of the run time of a warm-started window LP). See run_highs for the fallback.
     solver.setOptionValue("threads", 1)
     solver.setOptionValue("time_limit", LP_TIME_LIMIT)
     solver.setOptionValue("primal_feasibility_tolerance", FEASIBILITY_TOLERANCE)

@@ -56,10 +56,10 @@ certified on the exact rows (``dual_bounds``), which loses at most ``MEASUREMENT
 
 Under vertex noise the truth lies on many measurement faces at once and the exact feasible set is thin: on 30
 steps of the 30-tank cascade, HiGHS ended 634 of 2 800 runs "infeasible", 182 "unknown" and 99 with a solve error,
-and those failures took two thirds of the time. The rows are residuals of about 0.1 once the prior's centre is
+and those failures took most of the time. The rows are residuals of about 0.1 once the prior's centre is
 taken out, so the widening is about 1.1e-10 there. Measured with the primal simplex's bound perturbation off but
 HiGHS's default ``small_matrix_value``: a factor of 1e-9 lost width (mean summed width 2.7279 against 2.7234
-with 1e-10); with 2e-12 the failures came back (0.83 s a step, the perturbation on)."""
+with 1e-10); with 2e-12 the failures came back (with the perturbation on)."""
 
 SMALL_MATRIX_VALUE = 1e-12
 """Matrix entries HiGHS drops from the condensed window LP (its option ``small_matrix_value``, default 1e-9).
@@ -99,23 +99,22 @@ class CondensedWindowLP(RecordsPath):
     **Warm start.** The ``2n`` objectives of a window are solved as a chain: the lower bounds of
     components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`), by the dense simplex of
     :class:`~intervalobs.lp.dense_simplex.DenseSimplex`, which keeps the basis inverse from one objective to
-    the next (HiGHS spends a fixed time on every ``run()``: about 0.7 ms on the 30-tank cascade, against about
-    40 µs a pivot and 15 pivots a solve). The first objective of the chain starts from its own optimal basis of
+    the next (HiGHS spends a fixed time on every ``run()``, large against the 15 or so pivots of a solve on the
+    30-tank cascade). The first objective of the chain starts from its own optimal basis of
     the previous step, shifted by one step (each variable and row keeps the status it had *at the same time*:
     the active measurements are a property of the data, not of the lag; the noise entering at the new end starts
     at the bound its cost prefers), made square and nonsingular, by the dual simplex. Every later objective
     starts from the optimum of the one before it, which is feasible for the same window, by the primal simplex.
     An objective the dense simplex gives up on (pivot limit, an inaccurate or singular basis) is solved by
     HiGHS's dual simplex, from the basis the dense simplex reached or from the shifted one, and the chain goes on
-    from that optimum. Measured on a 30-tank record (30 and 40 steps of vertex noise, one core): 112 and 121 ms a
-    step when HiGHS solved the whole chain (its primal simplex from one optimum to the next), 44–56 with the
-    dense simplex (repeated runs), mean summed widths 2.72286796 → 2.72286703 and 2.70532032 → 2.70533071.
+    from that optimum. On a 30-tank record (30 and 40 steps of vertex noise, one core) the dense simplex took
+    less time than HiGHS's primal simplex over the whole chain (the hull's cost a step is in
+    ``benchmarks/scale.json``), mean summed widths 2.72286796 → 2.72286703 and 2.70532032 → 2.70533071.
 
     **Scaling.** HiGHS solves the LP unscaled. Its default scaling is computed again after every restored
-    basis: without it the 30-tank hull record is 2.0× faster (1457 ms a step scaled, 738 unscaled, same widths
-    to 2e-8) and learning a bank on the 12-tank cascade 2.4× faster (25.8 s scaled, 10.6 s unscaled).
-    Equilibrating the matrix once with power-of-2 factors was slower than either (5.3 s a step at 30 tanks:
-    more pivots). The certificates do not depend on the scaling.
+    basis, which cost more time than it saved on the 30-tank hull record (same widths to 2e-8) and on learning a
+    bank on the 12-tank cascade. Equilibrating the matrix once with power-of-2 factors was slower than either
+    (more pivots). The certificates do not depend on the scaling.
 
     **Thin windows.** Under vertex noise the truth sits on many measurement faces at once and the window's
     feasible set is thin. HiGHS solves every LP with its measurement rows widened by ``MEASUREMENT_RELAX``
@@ -123,7 +122,7 @@ class CondensedWindowLP(RecordsPath):
     ``SMALL_MATRIX_VALUE`` (its default drops entries below 1e-9, which moved the rows by more than such a set is
     wide); and the primal simplex runs without its random bound perturbation, which on such a set often made it
     end "infeasible". On the 30-tank cascade (records of 30 and 40 steps of vertex noise, one BLAS thread) the
-    three took the hull from 1023 and 399 ms a step to 111 and 126, with no failed solve left, and its mean summed
+    three left no failed solve (those had taken most of the hull's time), and took its mean summed
     width from 2.72565 and 2.71030 to 2.72287 and 2.70532: the fallbacks of the failed solves had certified less.
     On the vehicle the widening costs 6e-5 of the width.
 

@@ -3,10 +3,11 @@ r"""A bounded simplex method on a small dense LP, for a chain of objectives over
 The window hull (:class:`~intervalobs.observers.hull.HullEstimator`) solves ``2n`` LPs a step that differ only in
 their objective: ``min c·z`` over ``row_lo ≤ A z ≤ row_hi``, ``col_lo ≤ z ≤ col_hi``. The optimum of one is a
 feasible vertex of the next, so each is a few primal simplex pivots away from the one before. HiGHS spends a fixed
-time on every ``run()`` that is large against those pivots on a dense matrix (about 0.7 ms a run on the
-30-tank cascade of :mod:`intervalobs.examples.scale_cases`, 231 × 330, against about 40 µs a pivot, with 15 pivots
-a solve): it checks and copies the matrix and refactorises the basis. :class:`DenseSimplex` keeps the basis inverse
-from one objective to the next and pivots on it in compiled code (Numba).
+time on every ``run()`` that is large against those pivots on a dense matrix (on the 30-tank cascade of
+:mod:`intervalobs.examples.scale_cases`, 231 × 330, about 15 pivots a solve): it checks and copies the matrix and
+refactorises the basis. :class:`DenseSimplex` keeps the basis inverse from one objective to the next and pivots
+on it in compiled code (Numba). The hull's cost a step is measured by ``benchmarks/scale.py``
+(``benchmarks/scale.json``).
 
 **Method.** The standard form has the row activities as variables, :math:`[A\;\; -I]\,(z, s) = 0` with the row
 bounds on :math:`s`; a basis :math:`B` (``rows`` of the ``cols + rows`` columns) is held as its explicit inverse,

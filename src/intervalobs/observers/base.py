@@ -48,8 +48,7 @@ _Result = TypeVar("_Result")
 
 def _one_blas_thread(run: Callable[_Params, _Result]) -> Callable[_Params, _Result]:
     """Run with one BLAS thread: the recursions multiply tiny matrices, where BLAS threads only
-    fight over the cores (n = 20: 10 µs instead of 0.6 µs per step under OpenBLAS's default).
-    Entering and leaving the limit costs about 2.6 µs."""
+    fight over the cores (``benchmarks/results.json`` has the cost a step of the recursions)."""
 
     @functools.wraps(run)
     def limited(*args: _Params.args, **kwargs: _Params.kwargs) -> _Result:

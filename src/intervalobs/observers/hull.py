@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
-from ..errors import AssumptionError, DataError, DimensionError, InconsistentDataError
+from ..errors import ArgumentTypeError, AssumptionError, DataError, DimensionError, InconsistentDataError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds
 from ..lp.chain import RecordsPath, Solver, SolverPath, as_solver
@@ -197,9 +197,9 @@ class HullEstimator(Observer):
         solver: Solver = "auto",
     ) -> None:
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
-            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+            raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if system.dA is not None:
             raise AssumptionError(
                 "system.dA: the consistent set of an interval ΔA is not convex, so its hull is not an LP; "
@@ -361,8 +361,8 @@ class HullEstimator(Observer):
 
         With a finite horizon the state keeps the last ``horizon`` samples only, so a step costs the
         same time and memory at every ``k``; the given state is not modified. Like :meth:`run`, a step runs
-        on one BLAS thread: on the 30-tank cascade OpenBLAS's default two threads took twice the CPU time
-        (205 against 88 ms a step), spinning between the small products of the certificates.
+        on one BLAS thread: on the 30-tank cascade OpenBLAS's default threads took more CPU time for the same
+        boxes, spinning between the small products of the certificates.
 
         Parameters
         ----------

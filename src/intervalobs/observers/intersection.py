@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import coordinate_candidates
-from ..errors import DataError, DesignError, DimensionError, InconsistentDataError
+from ..errors import ArgumentTypeError, DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -137,7 +137,7 @@ class IntersectionObserver(Observer):
         if not members:
             raise DimensionError("members: expected at least one observer, got none")
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         for obs in members:
             if (obs.n, obs.p, obs.m) != (system.n, system.p, system.m):
                 raise DimensionError(

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable, unstable_vertex
 from ..design.tube import BlockNorms, TubeDesign, abs_powers, coupling, design_tube_gain, tube_horizon, tube_stability
-from ..errors import DesignError, DimensionError
+from ..errors import ArgumentTypeError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
 from ..recursion import LinearRecursion
@@ -126,9 +126,9 @@ class IntervalObserver(Observer):
         blocks: Sequence[int] | None = None,
     ) -> None:
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
-            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+            raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         as_choice("method", method, METHODS)
         self.system = system
         self.method = method
@@ -235,7 +235,7 @@ class IntervalObserver(Observer):
         """
         check_no_kwargs("IntervalObserver.design", options, ("candidates", "method"))
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         method = as_choice("method", options.get("method", "tube"), METHODS)
         full = bounds.resolve(system)
         scales = state_scales(system, full, powers_of_two=False)  # the observer is verified as built

@@ -67,7 +67,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
 from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer, rotate_bounds
-from ..errors import AssumptionError, DataError, DesignError, DimensionError
+from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
@@ -394,7 +394,7 @@ class LPVIntervalObserver(Observer):
         unknown = {"R", "grid", "fine_grid", "eps2", "q_scale", "gain_bound"}
         for key in design_options:
             if key not in unknown:
-                raise TypeError(f"design() got an unexpected keyword argument {key!r}")
+                raise ArgumentTypeError(f"design() got an unexpected keyword argument {key!r}")
         return cls._generic(system, bounds, h, theta_rate, design_lpv_observer(system, **design_options), None)
 
     @classmethod
@@ -802,7 +802,7 @@ class LPVIntervalUIO(LPVIntervalObserver):
         """
         for key in design_options:
             if key not in {"grid", "fine_grid", "eps2", "q_scale", "gain_bound"}:
-                raise TypeError(f"design() got an unexpected keyword argument {key!r}")
+                raise ArgumentTypeError(f"design() got an unexpected keyword argument {key!r}")
         if system.B_un is None:
             raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
         box = cls._unknown_input_box(system, unknown_input)

@@ -75,7 +75,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, DataError, DesignError, DimensionError, InconsistentDataError
+from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate
 from ..lp.certified import DenseLP
 from ..lp.chain import Solver, SolverPath, as_solver
@@ -146,9 +146,9 @@ class RobustHullEstimator(Observer):
         solver: Solver = "auto",
     ) -> None:
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
-            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+            raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if system.dA is None:
             raise AssumptionError("system.dA: expected an interval ΔA (without it, use HullEstimator: exact)")
         if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:

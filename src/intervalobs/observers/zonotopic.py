@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
-from ..errors import AssumptionError, DesignError
+from ..errors import ArgumentTypeError, AssumptionError, DesignError
 from ..interval import inflate
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
@@ -111,9 +111,9 @@ class ZonotopicObserver(Observer):
         allow_unstable: bool = False,
     ) -> None:
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
-            raise TypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+            raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if system.continuous:
             raise AssumptionError("system: the zonotopic observer is for discrete time only (give dt), got dt=None")
         self.system = system
@@ -172,7 +172,7 @@ class ZonotopicObserver(Observer):
         """
         check_no_kwargs("ZonotopicObserver.design", options, ("lmi", "rho", "E_theta", "order"))
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         lmi = options.get("lmi", "(26)")
         args = (system.A, system.C, system.E, system.F, options.get("E_theta"))
         if lmi == "(26)":
@@ -319,7 +319,7 @@ class IntegratedObserver(IntervalObserver):
         """
         check_no_kwargs("IntegratedObserver.design", options, ("E_theta", "fallback"))
         if not isinstance(system, LTISystem):
-            raise TypeError(f"system: expected an LTISystem, got {type(system).__name__}")
+            raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not system.continuous:
             system.sampling_period(h)  # refuses an h other than dt
         fallback: Literal["raise", "hinf"] = options.get("fallback", "raise")

@@ -446,9 +446,9 @@ CAMPAIGN_H = 2e-3
 CAMPAIGN_SUBSTEPS = 2
 CAMPAIGN_T_FINAL = 26.0
 CAMPAIGN_TASK_OVERHEAD = 60.0
-"""Fixed cost of a campaign task in runs: its 13 000-step time loop costs 13.4-13.7 s of CPU whatever the batch
-(one run), 50 runs about 24 s (issue 36). benchmarks/campaign_scaling.py measures it; on the loaded shared
-machine it found 26 to 130 runs, a range over which the cut for 2 to 16 workers is the same."""
+"""Fixed cost of a campaign task in runs: its 13 000-step time loop costs the same whatever the batch (issue 36).
+benchmarks/campaign_scaling.py measures it (``task_cost`` in benchmarks/campaign_scaling.json); on the loaded
+shared machine it found 26 to 130 runs, a range over which the cut for 2 to 16 workers is the same."""
 
 
 @functools.lru_cache(maxsize=16)

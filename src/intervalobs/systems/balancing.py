@@ -4,7 +4,7 @@ A model written in pascals and kilometres, or any coordinates :math:`z = Dx` wit
 many decades, is the same estimation problem as the model in units of order one, but not for the
 solvers: the LPs of the framer and hull designs work with absolute tolerances (1e-9) and bounded gains,
 so a state of size 1e-6 is solved to no digit and a gain that must be 1e12 is clipped (hull boxes 7–157×
-wider per component and a framer design that did not return in 10 minutes at :math:`D` over
+wider per component and a framer design that did not return at :math:`D` over
 :math:`10^{\pm 6}`).
 
 The estimators that solve LPs therefore design, and the hull solves, in balanced coordinates

@@ -457,7 +457,8 @@ def flow_enclosure(
     Examples
     --------
     >>> import numpy as np
-    >>> from intervalobs import Bounds, ContinuousNonlinearSystem, flow_enclosure
+    >>> from intervalobs import Bounds, ContinuousNonlinearSystem
+    >>> from intervalobs.systems import flow_enclosure
     >>> decay = ContinuousNonlinearSystem(lambda x, u, p: (-p[0] * x[0],), lambda x, u: (x[0],), n=1, n_params=1)
     >>> box = flow_enclosure(decay, Bounds(x0=(1.0, 1.0), p=(1.0, 1.0)), h=1.0)
     >>> bool(box.lower[0] <= np.exp(-1.0) <= box.upper[0]), float(box.upper[0] - box.lower[0]) < 1e-3

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DimensionError, IntervalObserverError
-from ..inclusion import Interval
+from ..interval import Interval
 from ..validation import as_box, as_matrix, as_vector
 
 __all__ = ["LPVSystem", "SampledLPVModel", "StepEnclosure"]
@@ -44,8 +44,8 @@ class LPVSystem:
     Matrix functions follow the library's component convention (:mod:`intervalobs.inclusion`): they
     take the *sequence of the* :math:`n_\vartheta` *scheduling components* and return the rows of
     entries, e.g. ``A=lambda th: [[-1.0, th[0]], [0.0, -2.0]]``. Written with ``+ - * /`` and the
-    NumPy functions of :data:`~intervalobs.inclusion.SUPPORTED_UFUNCS`, one definition is evaluated at
-    points (arrays) and over boxes (:class:`~intervalobs.inclusion.Interval`), which is what the
+    NumPy functions of :data:`~intervalobs.interval.SUPPORTED_UFUNCS`, one definition is evaluated at
+    points (arrays) and over boxes (:class:`~intervalobs.interval.Interval`), which is what the
     generic sampled observer needs between samples (:meth:`matrix_box`). A function may instead
     return an array of shape ``(N, rows, cols)`` at points (then it cannot be evaluated over boxes).
     Bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` are either constant ``(lower, upper)`` arrays

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import BoundsError, DimensionError
+from ..errors import ArgumentTypeError, BoundsError, DimensionError
 from ..validation import as_matrix, as_names, as_positive
 
 __all__ = ["LTISystem"]
@@ -174,7 +174,7 @@ class LTISystem:
         """
         unknown = set(kwargs) - {"E", "F", "dA", "state_names", "output_names", "input_names"}
         if unknown:
-            raise TypeError(f"LTISystem.from_control: unexpected keyword argument {sorted(unknown)[0]!r}")
+            raise ArgumentTypeError(f"LTISystem.from_control: unexpected keyword argument {sorted(unknown)[0]!r}")
         for attr in ("A", "B", "C", "D"):
             if not hasattr(sys, attr):
                 raise DimensionError(f"sys: expected a python-control StateSpace, got {type(sys).__name__}")
