@@ -343,82 +343,156 @@ def add_tightness(
         The times used, the reference and the widths of every estimator and reference.
     """
     clock = time.perf_counter()
-    cut = slice(None) if steps is None else slice(0, int(steps))
-    t = np.asarray(t, dtype=float)[cut]
-    y = np.asarray(y, dtype=float)[cut]
-    u = None if u is None else np.asarray(u, dtype=float)[cut]
-    if truth is not None:
-        truth = (truth[0], np.asarray(truth[1], dtype=float)[cut])
-    estimates = {
-        k: Estimate(e.t[cut], e.lower[..., cut, :], e.upper[..., cut, :], meta=e.meta) for k, e in estimates.items()
-    }
-    costs: dict[str, float] = {}
-    learn_s: float | None = None
-    candidates = None
+    t, y, u, truth, estimates = _first_steps(steps, t, y, u, truth, estimates)
+    comparisons = _Comparisons()
     chosen = None
     if system.dA is not None:
         chosen = np.arange(start, t.size, max(int(stride), 1))
-        if robust_horizon is not None:
-            robust = RobustHullEstimator.design(system, bounds, horizon=robust_horizon, h=h)
-            clock_run = time.perf_counter()
-            estimates["RobustHullEstimator"] = robust.run(t, y, u)
-            costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
-            candidates = robust.extremal_deltas(t.size)
-        if mccormick_horizon is not None:
-            tight = RobustHullEstimator.design(
-                system, bounds, horizon=mccormick_horizon, h=h, identify=False, mccormick=True
-            )
-            part = t.size if mccormick_steps is None else min(int(mccormick_steps), t.size)
-            clock_run = time.perf_counter()
-            estimates[MCCORMICK] = tight.run(t[:part], y[:part], None if u is None else u[:part])
-            costs[MCCORMICK] = 1e3 * (time.perf_counter() - clock_run) / max(part, 1)
-        if fir_window is not None:
-            clock_learn = time.perf_counter()
-            fallback = IntervalObserver.design(system, bounds, h=h)
-            bank = RobustFiniteMemoryObserver.learn(system, bounds, window=fir_window, h=h, fallback=fallback)
-            learn_s = time.perf_counter() - clock_learn
-            clock_run = time.perf_counter()
-            estimates["RobustFiniteMemoryObserver"] = bank.run(t, y, u)
-            costs["RobustFiniteMemoryObserver"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
+        comparisons = _run_comparisons(
+            system, bounds, t, y, u, h, estimates, robust_horizon, mccormick_horizon, mccormick_steps, fir_window
+        )
     clock_bound = time.perf_counter()
     reference = tightness_reference(
-        system, bounds, t, y, u, h=h, horizon=horizon, samples=samples, truth=truth, candidates=candidates, steps=chosen
+        system, bounds, t, y, u, h, horizon, samples, truth=truth, candidates=comparisons.candidates, steps=chosen
     )
     reference_s = time.perf_counter() - clock_bound
-    report = tightness_report(t, estimates, reference, start=start, costs=costs)
+    report = tightness_report(t, estimates, reference, start=start, costs=comparisons.costs)
     report["reference"]["runtime_s"] = reference_s
-    if learn_s is not None:
-        report["observers"]["RobustFiniteMemoryObserver"]["learn_s"] = learn_s
+    if comparisons.learn_s is not None:
+        report["observers"]["RobustFiniteMemoryObserver"]["learn_s"] = comparisons.learn_s
     if MCCORMICK in report["observers"]:
         report["observers"][MCCORMICK]["horizon"] = mccormick_horizon
+    oracle = None
     if truth is not None:
         for key, est in estimates.items():
             report["observers"][key]["enclosure"] = est.enclosure(truth[1][: est.t.size]).fraction
-    oracle = None
-    if system.dA is not None and truth is not None:
-        known = LTISystem(
-            system.A + np.asarray(truth[0], dtype=float), system.C, B=system.B, E=system.E, F=system.F, dt=system.dt
-        )
-        oracle = HullEstimator.design(known, bounds, horizon=horizon, h=h).run(t, y, u)
-        inner = tightness_report(t, estimates, oracle, start=start)
-        report["oracle_hull"] = {
-            "label": "hull if ΔA were known (= the true ΔA), sound sampled model, predicted: the true hull for "
-            "unknown ΔA lies between the lower bound and this only when the window is long enough; an "
-            "estimator below it is not a bug",
-            "mean_width": inner["reference"]["mean_width"],
-            "ratios": {k: v["ratio"] for k, v in inner["observers"].items()},
-        }
+        if system.dA is not None:
+            oracle = _oracle_hull(system, bounds, t, y, u, h, horizon, truth[0])
+            report["oracle_hull"] = _oracle_report(t, estimates, oracle, start)
     report["runtime_s"] = time.perf_counter() - clock
     summary["tightness"] = report
-    name = "hull" if report["reference"]["kind"] == "hull" else "lower bound (no sound estimator below)"
+    widths = _width_curves(t, estimates, reference, report["reference"]["kind"], oracle)
+    return Tightness(t, reference, widths)
+
+
+def _first_steps(
+    steps: int | None,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None,
+    truth: tuple[ArrayLike, ArrayLike] | None,
+    estimates: Mapping[str, Estimate],
+) -> tuple[FloatArray, FloatArray, FloatArray | None, tuple[ArrayLike, FloatArray] | None, dict[str, Estimate]]:
+    """The record, the truth's states and the estimates cut to their first ``steps`` samples (all if None)."""
+    cut = slice(None) if steps is None else slice(0, int(steps))
+    t_cut = np.asarray(t, dtype=float)[cut]
+    y_cut = np.asarray(y, dtype=float)[cut]
+    u_cut = None if u is None else np.asarray(u, dtype=float)[cut]
+    truth_cut = None if truth is None else (truth[0], np.asarray(truth[1], dtype=float)[cut])
+    cut_estimates = {
+        k: Estimate(e.t[cut], e.lower[..., cut, :], e.upper[..., cut, :], meta=e.meta) for k, e in estimates.items()
+    }
+    return t_cut, y_cut, u_cut, truth_cut, cut_estimates
+
+
+def _width_curves(
+    t: FloatArray,
+    estimates: Mapping[str, Estimate],
+    reference: Estimate | HullLowerBound,
+    kind: str,
+    oracle: Estimate | None,
+) -> dict[str, FloatArray]:
+    """The width of every estimate and reference per step: NaN (not drawn) after an estimate's last row."""
+    name = "hull" if kind == "hull" else "lower bound (no sound estimator below)"
     widths: dict[str, FloatArray] = {}
-    for key, est in estimates.items():  # NaN (not drawn) after the rows of an estimate of the first rows only
+    for key, est in estimates.items():
         widths[key] = np.full((t.size, est.lower.shape[-1]), np.nan)
         widths[key][: est.t.size] = est.width()
     widths[name] = reference.upper - reference.lower
     if oracle is not None:
         widths["hull if ΔA were known"] = oracle.width()
-    return Tightness(t, reference, widths)
+    return widths
+
+
+@dataclass
+class _Comparisons:
+    """What the optional estimators of a model with ΔA add to :func:`add_tightness`'s report."""
+
+    costs: dict[str, float] = field(default_factory=dict)
+    """Milliseconds per sample of each estimator run here."""
+    learn_s: float | None = None
+    """Design time of the robust finite-memory bank."""
+    candidates: FloatArray | None = None
+    """The robust hull's extremal ΔA values (they seed the lower bound)."""
+
+
+def _run_comparisons(
+    system: LTISystem,
+    bounds: Bounds,
+    t: FloatArray,
+    y: FloatArray,
+    u: FloatArray | None,
+    h: float | None,
+    estimates: dict[str, Estimate],
+    robust_horizon: int | None,
+    mccormick_horizon: int | None,
+    mccormick_steps: int | None,
+    fir_window: int | None,
+) -> _Comparisons:
+    """Run the robust hull, its McCormick form and the robust finite-memory bank where asked (into ``estimates``)."""
+    out = _Comparisons()
+    if robust_horizon is not None:
+        robust = RobustHullEstimator.design(system, bounds, horizon=robust_horizon, h=h)
+        clock_run = time.perf_counter()
+        estimates["RobustHullEstimator"] = robust.run(t, y, u)
+        out.costs["RobustHullEstimator"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
+        out.candidates = robust.extremal_deltas(t.size)
+    if mccormick_horizon is not None:
+        tight = RobustHullEstimator.design(
+            system, bounds, horizon=mccormick_horizon, h=h, identify=False, mccormick=True
+        )
+        part = t.size if mccormick_steps is None else min(int(mccormick_steps), t.size)
+        clock_run = time.perf_counter()
+        estimates[MCCORMICK] = tight.run(t[:part], y[:part], None if u is None else u[:part])
+        out.costs[MCCORMICK] = 1e3 * (time.perf_counter() - clock_run) / max(part, 1)
+    if fir_window is not None:
+        clock_learn = time.perf_counter()
+        fallback = IntervalObserver.design(system, bounds, h=h)
+        bank = RobustFiniteMemoryObserver.learn(system, bounds, window=fir_window, h=h, fallback=fallback)
+        out.learn_s = time.perf_counter() - clock_learn
+        clock_run = time.perf_counter()
+        estimates["RobustFiniteMemoryObserver"] = bank.run(t, y, u)
+        out.costs["RobustFiniteMemoryObserver"] = 1e3 * (time.perf_counter() - clock_run) / max(t.size, 1)
+    return out
+
+
+def _oracle_hull(
+    system: LTISystem,
+    bounds: Bounds,
+    t: FloatArray,
+    y: FloatArray,
+    u: FloatArray | None,
+    h: float | None,
+    horizon: int | None,
+    true_delta: ArrayLike,
+) -> Estimate:
+    """The hull of the model with ΔA known (the simulation's true ΔA): an inner reference, not a bound."""
+    known = LTISystem(
+        system.A + np.asarray(true_delta, dtype=float), system.C, B=system.B, E=system.E, F=system.F, dt=system.dt
+    )
+    return HullEstimator.design(known, bounds, horizon=horizon, h=h).run(t, y, u)
+
+
+def _oracle_report(t: FloatArray, estimates: Mapping[str, Estimate], oracle: Estimate, start: int) -> dict[str, Any]:
+    """The report's ``oracle_hull`` entry: the known-ΔA hull's mean width and every estimator's ratio to it."""
+    inner = tightness_report(t, estimates, oracle, start=start)
+    return {
+        "label": "hull if ΔA were known (= the true ΔA), sound sampled model, predicted: the true hull for "
+        "unknown ΔA lies between the lower bound and this only when the window is long enough; an "
+        "estimator below it is not a bug",
+        "mean_width": inner["reference"]["mean_width"],
+        "ratios": {k: v["ratio"] for k, v in inner["observers"].items()},
+    }
 
 
 # -- lower bounds on the box of any sound estimator (the references of a model with ΔA) ----------------

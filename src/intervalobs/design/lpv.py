@@ -488,64 +488,21 @@ def certify_vertex_extremes(
     entries = _entries_from_rational(rational, n_p, aff)
     cores = _entries_from_rational(rational, n_p, aff, with_factor=False)
     edges = np.linspace(s0, s1, cells + 1)
-    n_e = len(names)
-    # denominators: one sign on every cell × the whole box
     general = [j for j in range(n_p) if j not in aff]
     box_jets = [IntervalJet.variable(np.full(cells, plo[j]), np.full(cells, phi[j]), j, n_p + 1) for j in range(n_p)]
     s_cells = IntervalJet.variable(edges[:-1], edges[1:], n_p, n_p + 1)
-    mono = _monomials([box_jets[j] for j in aff])
-    forms = rational(*[box_jets[j] for j in general], s_cells)
-    if len(forms) != n_e:
-        raise DimensionError(f"names: expected {len(forms)} names (one per entry), got {n_e}")
-    factor_max = np.ones((n_e, cells))
-    for e, form in enumerate(forms):
-        if len(form) > 2:
-            factor_max[e] = np.absolute(IntervalJet._lift(form[2], s_cells).value).upper  # |.| is exact
-        den = form[1]
-        d_val: Any = 0.0
-        for cd, mv in zip(den, mono):
-            d_val = d_val + cd * mv
-        d_jet = IntervalJet._lift(d_val, s_cells)
-        if not (np.all(d_jet.lo > 0) or np.all(d_jet.hi < 0)):
-            raise AssumptionError(f"entry {names[e]!r}: its denominator may vanish on the parameter box")
+    factor_max = _factor_bounds(rational, names, box_jets, s_cells, aff, general, cells)
+    n_e = len(names)
     slack = np.zeros((n_e, cells))
     certified = np.ones((n_e, n_p))
     grid = [np.linspace(plo[k], phi[k], splits + 1) for k in range(n_p)]
     along = [np.linspace(plo[k], phi[k], pieces + 1) for k in range(n_p)]
     for k in general:
-        others = [j for j in range(n_p) if j != k]
-        # boxes: (cell, other-parameter slab..., piece of p_k); one line = (cell, slab)
-        idx = np.array(list(itertools.product(range(cells), *[range(splits)] * len(others), range(pieces))))
-        lo_vars: list[FloatArray] = []
-        hi_vars: list[FloatArray] = []
-        for j in range(n_p):
-            if j == k:
-                lo_vars.append(along[k][idx[:, -1]])
-                hi_vars.append(along[k][idx[:, -1] + 1])
-            else:
-                col = 1 + others.index(j)
-                lo_vars.append(grid[j][idx[:, col]])
-                hi_vars.append(grid[j][idx[:, col] + 1])
-        s_lo_c, s_hi_c = edges[idx[:, 0]], edges[idx[:, 0] + 1]
-        jets = [IntervalJet.variable(lo_vars[j], hi_vars[j], j, n_p + 1) for j in range(n_p)]
-        s_jet = IntervalJet.variable(s_lo_c, s_hi_c, n_p, n_p + 1)
-        vals = cores(*jets, s_jet)
-        piece_width = (Interval(hi_vars[k]) - lo_vars[k]).upper
-        lines = idx.shape[0] // pieces
-        for e, v in enumerate(vals):
-            jet = IntervalJet._lift(v, s_jet)
-            dlo = np.broadcast_to(jet.dlo[k], s_lo_c.shape)
-            dhi = np.broadcast_to(jet.dhi[k], s_lo_c.shape)
-            # moving p_k to its upper end loses at most the negative mass, to its lower end the positive
-            # each mass: ``pieces`` products and ``pieces - 1`` sums
-            neg_mass = (piece_width * np.maximum(-dlo, 0.0)).reshape(lines, pieces).sum(axis=1)
-            pos_mass = (piece_width * np.maximum(dhi, 0.0)).reshape(lines, pieces).sum(axis=1)
-            neg_mass = _round_up_nonnegative(neg_mass, 2 * pieces)
-            pos_mass = _round_up_nonnegative(pos_mass, 2 * pieces)
-            line_slack = np.minimum(neg_mass, pos_mass)
+        cell, line_slacks = _line_slacks(cores, k, edges, grid, along, splits, pieces)
+        for e, line_slack in enumerate(line_slacks):
             certified[e, k] = float(np.mean(line_slack == 0.0))
             per_cell = np.zeros(cells)
-            np.maximum.at(per_cell, idx[::pieces, 0], line_slack)
+            np.maximum.at(per_cell, cell, line_slack)
             slack[e] = _round_up_nonnegative(slack[e] + factor_max[e] * per_cell, 2)
     # |dg/ds| over the full parameter box, per cell (the maximum over cells is used)
     vals = entries(*box_jets, s_cells)
@@ -566,6 +523,87 @@ def certify_vertex_extremes(
         affine=aff,
         entries=entries,
     )
+
+
+def _factor_bounds(
+    rational: RationalForm,
+    names: Sequence[str],
+    box_jets: list[IntervalJet],
+    s_cells: IntervalJet,
+    aff: tuple[int, ...],
+    general: list[int],
+    cells: int,
+) -> FloatArray:
+    """Check that every denominator keeps one sign on every cell × the whole box; the bound of each factor.
+
+    Returns the upper bound of ``|factor|`` per entry and cell (1 for an entry without a factor).
+    """
+    mono = _monomials([box_jets[j] for j in aff])
+    forms = rational(*[box_jets[j] for j in general], s_cells)
+    if len(forms) != len(names):
+        raise DimensionError(f"names: expected {len(forms)} names (one per entry), got {len(names)}")
+    factor_max = np.ones((len(names), cells))
+    for e, form in enumerate(forms):
+        if len(form) > 2:
+            factor_max[e] = np.absolute(IntervalJet._lift(form[2], s_cells).value).upper  # |.| is exact
+        den = form[1]
+        d_val: Any = 0.0
+        for cd, mv in zip(den, mono):
+            d_val = d_val + cd * mv
+        d_jet = IntervalJet._lift(d_val, s_cells)
+        if not (np.all(d_jet.lo > 0) or np.all(d_jet.hi < 0)):
+            raise AssumptionError(f"entry {names[e]!r}: its denominator may vanish on the parameter box")
+    return factor_max
+
+
+def _line_slacks(
+    cores: Callable[..., Sequence[Any]],
+    k: int,
+    edges: FloatArray,
+    grid: list[FloatArray],
+    along: list[FloatArray],
+    splits: int,
+    pieces: int,
+) -> tuple[NDArray[np.intp], list[FloatArray]]:
+    """The slack of coordinate ascent along parameter ``k`` on every line (cell × slab of the other parameters).
+
+    Returns the cell of each line and, per entry, the slack of each line: the smaller of the
+    negative and positive masses of the derivative enclosure along the line (steps 1–2 of the
+    module docstring).
+    """
+    n_p = len(grid)
+    cells = len(edges) - 1
+    others = [j for j in range(n_p) if j != k]
+    # boxes: (cell, other-parameter slab..., piece of p_k); one line = (cell, slab)
+    idx = np.array(list(itertools.product(range(cells), *[range(splits)] * len(others), range(pieces))))
+    lo_vars: list[FloatArray] = []
+    hi_vars: list[FloatArray] = []
+    for j in range(n_p):
+        if j == k:
+            lo_vars.append(along[k][idx[:, -1]])
+            hi_vars.append(along[k][idx[:, -1] + 1])
+        else:
+            col = 1 + others.index(j)
+            lo_vars.append(grid[j][idx[:, col]])
+            hi_vars.append(grid[j][idx[:, col] + 1])
+    s_lo_c, s_hi_c = edges[idx[:, 0]], edges[idx[:, 0] + 1]
+    jets = [IntervalJet.variable(lo_vars[j], hi_vars[j], j, n_p + 1) for j in range(n_p)]
+    s_jet = IntervalJet.variable(s_lo_c, s_hi_c, n_p, n_p + 1)
+    piece_width = (Interval(hi_vars[k]) - lo_vars[k]).upper
+    lines = idx.shape[0] // pieces
+    slacks = []
+    for v in cores(*jets, s_jet):
+        jet = IntervalJet._lift(v, s_jet)
+        dlo = np.broadcast_to(jet.dlo[k], s_lo_c.shape)
+        dhi = np.broadcast_to(jet.dhi[k], s_lo_c.shape)
+        # moving p_k to its upper end loses at most the negative mass, to its lower end the positive
+        # each mass: ``pieces`` products and ``pieces - 1`` sums
+        neg_mass = (piece_width * np.maximum(-dlo, 0.0)).reshape(lines, pieces).sum(axis=1)
+        pos_mass = (piece_width * np.maximum(dhi, 0.0)).reshape(lines, pieces).sum(axis=1)
+        neg_mass = _round_up_nonnegative(neg_mass, 2 * pieces)
+        pos_mass = _round_up_nonnegative(pos_mass, 2 * pieces)
+        slacks.append(np.minimum(neg_mass, pos_mass))
+    return idx[::pieces, 0], slacks
 
 
 # --------------------------------------------------------------------------------------------------

@@ -319,109 +319,52 @@ def design_lpv_observer(
         raise DimensionError(f"decay: expected a positive λ, got {decay!r}")
     coarse = scheduling_grid(system.theta_box, grid)
     fine = scheduling_grid(system.theta_box, fine_grid)
-    h_mat: FloatArray | None = None
-    gamma: FloatArray | None = None
-    if uio:
-        if system.B_un is None:
-            raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
-        r, h_mat = _uio_coordinates(system, np.vstack([coarse, fine]))
-        gamma = -decay * np.ones(system.q)
-        if np.linalg.cond(r) > 1e12:
-            raise DesignError("R: R B_un = H (26) gave a singular R")
-    else:
-        r = np.eye(n) if R is None else as_matrix("R", R, (n, n))
-        _check_r(r, p)
+    r, h_mat, gamma = _design_coordinates(system, uio, R, decay, np.vstack([coarse, fine]))
     t_mat = np.vstack([(np.eye(p) - r[:p, :p]) @ ct_inv, -r[p:, :p] @ ct_inv])
     a_r, dl, du = _rotated(system, r, coarse)
     _structure_check(a_r, coarse, p)
     switch = list(range(p)) if uio else []
     masks = _subset_masks(n, _active_switchable(switch, dl, du))
-    s1 = masks[:, None, None, :]
-    s2 = masks[None, :, None, :]
-    _, eta = eta_and_generator(np.zeros((n, n)), np.zeros((n, n)), dl[None, None], du[None, None], s1, s2)
-    l1 = np.maximum(dl[None, None] * s1[..., None, :], 0.0) * np.ones((1, len(masks), 1, 1, 1))
-    u2 = np.maximum(du[None, None] * s2[..., None, :], 0.0) * np.ones((len(masks), 1, 1, 1, 1))
-    # one constraint per (S1, S2, point); drop duplicates
-    l1, u2, eta = l1.reshape(-1, n, n), u2.reshape(-1, n, n), eta.reshape(-1)
-    pts = np.tile(np.arange(coarse.shape[0]), len(masks) ** 2)
-    key = np.round(
-        np.concatenate([l1.reshape(len(l1), -1), u2.reshape(len(u2), -1), eta[:, None], pts[:, None]], 1), 12
-    )
-    _, keep = np.unique(key, axis=0, return_index=True)
-    keep = np.sort(keep)
-    l1, u2, eta, pts = l1[keep], u2[keep], eta[keep], pts[keep]
+    terms = _switching_terms(dl, du, masks, coarse.shape[0])
     kappa = 10.0 * (1.0 + float(np.abs(a_r).max())) if gain_bound is None else float(gain_bound)
-    eta_max = float(eta.max())
+    eta_max = float(terms.eta.max())
     eps1_candidates = sorted({max(eta_max, 0.05) * f for f in (0.5, 1.0, 2.0)})
-    off = ~np.eye(n, p, dtype=bool)
-    best: tuple[float, Any] | None = None
+    best: _Candidate | None = None
     failures = []
     lmi_name = "(109)" if uio else "(63)"
     relax = f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
     for eps1 in eps1_candidates:
-        pl, pu = cp.Variable(n), cp.Variable(n)
-        wl, wu = cp.Variable((n, p)), cp.Variable((n, p))
-        gam, t = cp.Variable(nonneg=True), cp.Variable()
-        cons = [pl >= 1e-3, pu >= 1e-3, cp.sum(pl) + cp.sum(pu) == 2 * n]
-        cons += [pl <= eps1 * gam, pu <= eps1 * gam]  # (2,2) block: P ≤ ε1 γ I
-        for w, pv in ((wl, pl), (wu, pu)):
-            cons += [w[off] >= 0]  # (64): F Metzler (P diagonal)
-            cons += [cp.abs(w) <= kappa * cp.reshape(pv, (n, 1), order="F") @ np.ones((1, p))]
-            if gamma is not None:
-                for j in range(system.q):
-                    col = np.zeros(n)
-                    col[j] = 1.0
-                    cons += [w[:, j] == gamma[j] * cp.multiply(pv, col)]  # (105)-(106)
-        for k in range(len(eta)):
-            right = a_r[pts[k]][:, p:]
-            for w, pv, extra in ((wl, pl, l1[k]), (wu, pu, u2[k])):
-                pg = cp.hstack([w, cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n - p)), right)])
-                pg = pg + cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n)), extra)
-                blk = pg + pg.T + (eps1 + eps2) * cp.diag(pv) + (q_scale + 0.0) * np.eye(n)
-                blk = blk + gam * float(eta[k]) ** 2 * np.eye(n)
-                cons.append(0.5 * (blk + blk.T) << t * np.eye(n))
-        prob = cp.Problem(cp.Minimize(t), cons)
+        problem = _LMIProblem(a_r, p, terms, gamma, kappa, eps1, eps2, q_scale)
         try:
-            solution = solve_lmi(prob, f"{lmi_name} with eps1 = {eps1:g}", relax)
+            candidate = problem.solve(f"{lmi_name} with eps1 = {eps1:g}", relax)
         except DesignError as exc:
             failures.append(str(exc))
             continue
-        pld, pud = np.maximum(np.asarray(pl.value), 1e-3), np.maximum(np.asarray(pu.value), 1e-3)
-        fl_left = np.asarray(wl.value) / pld[:, None]
-        fu_left = np.asarray(wu.value) / pud[:, None]
-        if gamma is not None:  # impose (105)-(106) exactly (the solver meets them to its tolerance)
-            for fleft in (fl_left, fu_left):
-                fleft[:, : system.q] = 0.0
-                fleft[np.arange(system.q), np.arange(system.q)] = gamma
-        for fleft in (fl_left, fu_left):
-            fleft[off & (fleft < 0)] = 0.0
-        pmat = np.diag(np.concatenate([pld, pud]))
-        gv = max(float(np.asarray(gam.value)), float(inflate(0.0, float(pmat.max()) / eps1, floor=0.0)[1]))
-        margin = _lmi_margin(pmat, q_scale, gv, eps1 + eps2, fl_left, fu_left, a_r, dl, du, masks)
-        if best is None or margin < best[0]:
-            best = (margin, (pmat, gv, eps1, solution.status, fl_left, fu_left))
-    if best is None or best[0] >= 0:
-        detail = f"best (1,1)-block eigenvalue {best[0]:+.3g}" if best is not None else " | ".join(failures)
+        fl, fu = candidate.f_left_lower, candidate.f_left_upper
+        candidate.margin = _lmi_margin(candidate.P, q_scale, candidate.gamma, eps1 + eps2, fl, fu, a_r, dl, du, masks)
+        if best is None or candidate.margin < best.margin:
+            best = candidate
+    if best is None or best.margin >= 0:
+        detail = f"best (1,1)-block eigenvalue {best.margin:+.3g}" if best is not None else " | ".join(failures)
         raise DesignError(f"LMI {lmi_name}: no certificate on the {coarse.shape[0]}-point grid ({detail}); {relax}")
-    margin, (pmat, gv, eps1, status, fl_left, fu_left) = best
     n2 = 2 * n
     cert = BoundednessCertificate(
-        P=pmat,
+        P=best.P,
         Q=q_scale * np.eye(n2),
-        gamma=gv,
-        eps1=eps1,
+        gamma=best.gamma,
+        eps1=best.eps1,
         eps2=eps2,
-        solver_status=status,
-        coarse_margin=margin,
-        second_block_margin=float(np.max(np.linalg.eigvalsh(pmat / eps1 - gv * np.eye(n2)))),
+        solver_status=best.status,
+        coarse_margin=best.margin,
+        second_block_margin=float(np.max(np.linalg.eigvalsh(best.P / best.eps1 - best.gamma * np.eye(n2)))),
         subsets=len(masks) ** 2,
     )
     design = LPVObserverDesign(
         R=r,
         T=t_mat,
         C_tilde_inv=ct_inv,
-        f_left_lower=fl_left,
-        f_left_upper=fu_left,
+        f_left_lower=best.f_left_lower,
+        f_left_upper=best.f_left_upper,
         H=h_mat,
         gamma_lower=gamma,
         gamma_upper=gamma,
@@ -431,6 +374,133 @@ def design_lpv_observer(
         fine_points=int(fine.shape[0]),
     )
     return _verify(system, design, fine, switch)
+
+
+def _design_coordinates(
+    system: LPVSystem, uio: bool, R: ArrayLike | None, decay: float, points: FloatArray
+) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
+    """The coordinates R, and for the UIO H = R B_un (26) and the diagonal of Γ = -λ I; returns (R, H, Γ)."""
+    n, p = system.n, system.p
+    if not uio:
+        r = np.eye(n) if R is None else as_matrix("R", R, (n, n))
+        _check_r(r, p)
+        return r, None, None
+    if system.B_un is None:
+        raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
+    r, h_mat = _uio_coordinates(system, points)
+    if np.linalg.cond(r) > 1e12:
+        raise DesignError("R: R B_un = H (26) gave a singular R")
+    return r, h_mat, -decay * np.ones(system.q)
+
+
+@dataclass
+class _SwitchingTerms:
+    r"""The ΔA terms of (74) for every pair of subsets (S1, S2) and grid point, duplicates dropped.
+
+    ``lower``/``upper`` are the positive parts of ΔA's lower bound on S1 and upper bound on S2,
+    ``eta`` the matching :math:`\eta` of (95)-(100), ``point`` the index of the grid point.
+    """
+
+    lower: FloatArray
+    upper: FloatArray
+    eta: FloatArray
+    point: NDArray[np.intp]
+
+
+def _switching_terms(dl: FloatArray, du: FloatArray, masks: FloatArray, points: int) -> _SwitchingTerms:
+    """One constraint's ΔA terms per (S1, S2, grid point), with the duplicates dropped."""
+    n = dl.shape[-1]
+    s1 = masks[:, None, None, :]
+    s2 = masks[None, :, None, :]
+    _, eta = eta_and_generator(np.zeros((n, n)), np.zeros((n, n)), dl[None, None], du[None, None], s1, s2)
+    l1 = np.maximum(dl[None, None] * s1[..., None, :], 0.0) * np.ones((1, len(masks), 1, 1, 1))
+    u2 = np.maximum(du[None, None] * s2[..., None, :], 0.0) * np.ones((len(masks), 1, 1, 1, 1))
+    l1, u2, eta = l1.reshape(-1, n, n), u2.reshape(-1, n, n), eta.reshape(-1)
+    pts = np.tile(np.arange(points), len(masks) ** 2)
+    key = np.round(
+        np.concatenate([l1.reshape(len(l1), -1), u2.reshape(len(u2), -1), eta[:, None], pts[:, None]], 1), 12
+    )
+    _, keep = np.unique(key, axis=0, return_index=True)
+    keep = np.sort(keep)
+    return _SwitchingTerms(l1[keep], u2[keep], eta[keep], pts[keep])
+
+
+@dataclass
+class _Candidate:
+    r"""The solution of the LMI for one :math:`\varepsilon_1`, with its (1,1)-block margin once measured."""
+
+    P: FloatArray
+    gamma: float
+    eps1: float
+    status: str
+    f_left_lower: FloatArray
+    f_left_upper: FloatArray
+    margin: float = np.inf
+
+
+class _LMIProblem:
+    r"""The LMI (63) (observer) or (109) (UIO) in :math:`P, W, \gamma, t` for a fixed :math:`\varepsilon_1`."""
+
+    def __init__(
+        self,
+        a_r: FloatArray,
+        p: int,
+        terms: _SwitchingTerms,
+        gamma: FloatArray | None,
+        kappa: float,
+        eps1: float,
+        eps2: float,
+        q_scale: float,
+    ) -> None:
+        n = a_r.shape[-1]
+        self.off = ~np.eye(n, p, dtype=bool)
+        self.eps1, self.gamma_diag = eps1, gamma
+        self.pl, self.pu = cp.Variable(n), cp.Variable(n)
+        self.wl, self.wu = cp.Variable((n, p)), cp.Variable((n, p))
+        self.gam, self.t = cp.Variable(nonneg=True), cp.Variable()
+        cons = [self.pl >= 1e-3, self.pu >= 1e-3, cp.sum(self.pl) + cp.sum(self.pu) == 2 * n]
+        cons += [self.pl <= eps1 * self.gam, self.pu <= eps1 * self.gam]  # (2,2) block: P ≤ ε1 γ I
+        for w, pv in ((self.wl, self.pl), (self.wu, self.pu)):
+            cons += self._gain_constraints(w, pv, kappa)
+        for k in range(len(terms.eta)):
+            right = a_r[terms.point[k]][:, p:]
+            for w, pv, extra in ((self.wl, self.pl, terms.lower[k]), (self.wu, self.pu, terms.upper[k])):
+                pg = cp.hstack([w, cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n - p)), right)])
+                pg = pg + cp.multiply(cp.reshape(pv, (n, 1), order="F") @ np.ones((1, n)), extra)
+                blk = pg + pg.T + (eps1 + eps2) * cp.diag(pv) + (q_scale + 0.0) * np.eye(n)
+                blk = blk + self.gam * float(terms.eta[k]) ** 2 * np.eye(n)
+                cons.append(0.5 * (blk + blk.T) << self.t * np.eye(n))
+        self.problem = cp.Problem(cp.Minimize(self.t), cons)
+
+    def _gain_constraints(self, w: Any, pv: Any, kappa: float) -> list[Any]:
+        """(64) F Metzler, the bound of the designed entries, and for the UIO (105)-(106)."""
+        n, p = w.shape
+        cons = [w[self.off] >= 0]  # (64): F Metzler (P diagonal)
+        cons += [cp.abs(w) <= kappa * cp.reshape(pv, (n, 1), order="F") @ np.ones((1, p))]
+        if self.gamma_diag is not None:
+            for j in range(len(self.gamma_diag)):
+                col = np.zeros(n)
+                col[j] = 1.0
+                cons += [w[:, j] == self.gamma_diag[j] * cp.multiply(pv, col)]  # (105)-(106)
+        return cons
+
+    def solve(self, name: str, relax: str) -> _Candidate:
+        """Solve; the designed columns of F from W = P F with (105)-(106) and the Metzler signs imposed exactly."""
+        solution = solve_lmi(self.problem, name, relax)
+        pld, pud = np.maximum(np.asarray(self.pl.value), 1e-3), np.maximum(np.asarray(self.pu.value), 1e-3)
+        fl_left = np.asarray(self.wl.value) / pld[:, None]
+        fu_left = np.asarray(self.wu.value) / pud[:, None]
+        if self.gamma_diag is not None:  # impose (105)-(106) exactly (the solver meets them to its tolerance)
+            q = len(self.gamma_diag)
+            for fleft in (fl_left, fu_left):
+                fleft[:, :q] = 0.0
+                fleft[np.arange(q), np.arange(q)] = self.gamma_diag
+        for fleft in (fl_left, fu_left):
+            fleft[self.off & (fleft < 0)] = 0.0
+        pmat = np.diag(np.concatenate([pld, pud]))
+        eps1 = self.eps1
+        gv = max(float(np.asarray(self.gam.value)), float(inflate(0.0, float(pmat.max()) / eps1, floor=0.0)[1]))
+        return _Candidate(pmat, gv, eps1, solution.status, fl_left, fu_left)
 
 
 def _lmi_margin(

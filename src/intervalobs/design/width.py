@@ -267,40 +267,90 @@ def design_for_width(
     pr = as_vector("phi_radius", phi_radius, n)
     yr = as_vector("output_radius", output_radius, p)
     wts = np.ones(n) if weights is None else as_vector("weights", weights, n)
-    constraint = tuple(regions)
+    objective = _WidthObjective(a, c, h, pr + dr, yr, wts, tuple(regions), max_condition, min_separation)
+    optimum = _nelder_mead_search(objective, _starts(a, c), max_iterations)
+    optimum_modal = objective.modal_of(optimum)
+    assert optimum_modal is not None
+    disks = _disks(optimum_modal.eigenvalues, objective.regions, _SHRINKS)
+    assert disks is not None
+    placement = place_in_disks(a, c, disks, objective="center")
+    final = objective.modal_of(placement.L)
+    if final is None:
+        raise DesignError(
+            "design_for_width: the gain of Algorithm 1 in the derived disks violates the constraints "
+            "(conditioning, separation or regions); verification failed"
+        )
+    bound = objective.bound_of(placement.L, final, h)
+    return WidthDesign(
+        L=placement.L,
+        bound=bound,
+        placement=placement,
+        disks=disks,
+        regions=objective.regions,
+        optimum_L=optimum,
+        objective=float(wts @ bound.mean),
+        weights=wts,
+        output_radius=yr,
+    )
 
-    def modal_of(gain: FloatArray) -> ModalDecomposition | None:
+
+class _WidthObjective:
+    """The weighted mean steady width bound of a gain, infinite where the gain breaks a constraint."""
+
+    def __init__(
+        self,
+        a: FloatArray,
+        c: FloatArray,
+        h: float,
+        model_radius: FloatArray,
+        output_radius: FloatArray,
+        weights: FloatArray,
+        regions: tuple[Region, ...],
+        max_condition: float,
+        min_separation: float,
+    ) -> None:
+        self.a, self.c, self.h = a, c, h
+        self.model_radius, self.output_radius, self.weights = model_radius, output_radius, weights
+        self.regions, self.max_condition, self.min_separation = regions, max_condition, min_separation
+
+    def modal_of(self, gain: FloatArray) -> ModalDecomposition | None:
+        """The modal decomposition of ``A - L C``, or None if conditioning, separation or regions fail."""
         try:
-            modal = modal_decomposition(a, c, gain)
+            modal = modal_decomposition(self.a, self.c, gain)
         except DesignError:
             return None
-        if modal.condition > max_condition or modal.separation < min_separation:
+        if modal.condition > self.max_condition or modal.separation < self.min_separation:
             return None
-        if constraint and _disks(modal.eigenvalues, constraint, _SHRINKS) is None:
+        if self.regions and _disks(modal.eigenvalues, self.regions, _SHRINKS) is None:
             return None  # every eigenvalue keeps room for its own disk inside the regions
         return modal
 
-    def bound_of(gain: FloatArray, modal: ModalDecomposition, step: float) -> WidthBound:
-        return modal_width_bound(modal, pr + dr + np.abs(gain) @ yr, step)
+    def bound_of(self, gain: FloatArray, modal: ModalDecomposition, step: float) -> WidthBound:
+        """The width bound of ``gain`` on a grid of ``step``."""
+        return modal_width_bound(modal, self.model_radius + np.abs(gain) @ self.output_radius, step)
 
-    def cost(flat: FloatArray) -> float:
-        gain = flat.reshape(n, p)
-        modal = modal_of(gain)
+    def __call__(self, flat: FloatArray) -> float:
+        gain = flat.reshape(self.c.shape[1], self.c.shape[0])
+        modal = self.modal_of(gain)
         if modal is None:
             return np.inf
         # the search runs the recursion on a coarser grid (a few hundred points per time constant or
         # rotation period); the reported bound uses the observer's step
         fastest = float(np.max(np.abs(modal.eigenvalues)))
-        return float(wts @ bound_of(gain, modal, max(h, _SEARCH_POINTS_INV / fastest)).mean)
+        return float(self.weights @ self.bound_of(gain, modal, max(self.h, _SEARCH_POINTS_INV / fastest)).mean)
 
-    scored = sorted(((cost(s.ravel()), k, s) for k, s in enumerate(_starts(a, c))), key=lambda item: item[:2])
+
+def _nelder_mead_search(objective: _WidthObjective, starts: Sequence[FloatArray], max_iterations: int) -> FloatArray:
+    """The best gain of Nelder–Mead runs from the ``_SEARCHED_STARTS`` best feasible starts."""
+    n, p = objective.c.shape[1], objective.c.shape[0]
+    scored = sorted(((objective(s.ravel()), k, s) for k, s in enumerate(starts)), key=lambda item: item[:2])
     best: tuple[float, FloatArray] | None = None
     for value, _, start in scored[:_SEARCHED_STARTS]:
         if not np.isfinite(value):
             continue
         simplex = start.ravel()[None, :] + np.vstack([np.zeros(n * p), np.diag(0.2 * (1.0 + np.abs(start.ravel())))])
         result = minimize(
-            cost,
+            objective,
             start.ravel(),
             method="Nelder-Mead",
             options={"initial_simplex": simplex, "maxiter": max_iterations, "xatol": 1e-4, "fatol": 1e-5},
@@ -312,27 +362,4 @@ def design_for_width(
             "design_for_width: no pole-placed start satisfies the constraints (regions, max_condition, "
             "min_separation); relax them"
         )
-    optimum = best[1]
-    optimum_modal = modal_of(optimum)
-    assert optimum_modal is not None
-    disks = _disks(optimum_modal.eigenvalues, constraint, _SHRINKS)
-    assert disks is not None
-    placement = place_in_disks(a, c, disks, objective="center")
-    final = modal_of(placement.L)
-    if final is None:
-        raise DesignError(
-            "design_for_width: the gain of Algorithm 1 in the derived disks violates the constraints "
-            "(conditioning, separation or regions); verification failed"
-        )
-    bound = bound_of(placement.L, final, h)
-    return WidthDesign(
-        L=placement.L,
-        bound=bound,
-        placement=placement,
-        disks=disks,
-        regions=constraint,
-        optimum_L=optimum,
-        objective=float(wts @ bound.mean),
-        weights=wts,
-        output_radius=yr,
-    )
+    return best[1]

@@ -85,12 +85,10 @@ measurement of the *next* sample and the input held from it on, and returns the 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import expm
 from scipy.signal import lfilter
 
 from ..design.differentiator import (
@@ -105,6 +103,7 @@ from ..design.uio import (
     design_uio_coordinates,
     uio_decoupling,
 )
+from ..design.uio_step import UNIT_ROUNDOFF, uio_step_constants
 from ..errors import BoundsError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
@@ -120,53 +119,13 @@ FloatArray = NDArray[np.float64]
 KnownInput = ArrayLike | tuple[ArrayLike, ArrayLike] | None
 """A point-known input (held between samples) or a pair ``(lower, upper)`` of an interval-known one."""
 
-_U = np.finfo(float).eps / 2
+_U = UNIT_ROUNDOFF
 _STEP_TOLERANCE = SPACING_TOLERANCE  # the deviation run() accepts; the bounds account for it
 
 
 def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
     """``x @ m.T`` over leading axes, by einsum: no BLAS call, so no thread oversubscription on (T, n) records."""
     return np.asarray(np.einsum("...j,ij->...i", x, m))
-
-
-@dataclass(frozen=True)
-class _Precomputed:
-    """Design-time constants of the recursion (all arrays are read-only by convention)."""
-
-    Phi: FloatArray  # e^{M h} (nonnegative)
-    Gam: FloatArray  # ∫_0^h e^{M σ} dσ
-    G0: FloatArray  # weight of ψ_k
-    G1: FloatArray  # weight of ψ_{k+1}
-    G_mag: FloatArray  # |Γ| + expm error / margin, for the magnitude of the forcing
-    dPhi: FloatArray  # entrywise bound of |Φ_computed - Φ|
-    v: FloatArray  # majorant direction of the rounding recursion
-    rho: float  # Φ v <= rho v
-    TL: FloatArray
-    TPB: FloatArray
-    TE: FloatArray
-    CB: FloatArray
-    noise_lo: FloatArray  # bounds of T P E_ω w
-    noise_hi: FloatArray
-    noise_mag: FloatArray
-    const_pad: FloatArray  # per step: remainder + ξ leak
-    input_remainder: FloatArray  # per step and unit input radius: Γ_r |TL| 4|CB|/h
-    offdiag: FloatArray  # |J_exact - M| bound
-    grid: FloatArray  # 2|M| τ: departure of e^{M h_k} from Φ per unit |w|
-    dS: float  # entrywise bound of |T⁻¹ - S|
-    delta_lo: FloatArray  # bounds of δ = F v
-    delta_hi: FloatArray
-    Mw: FloatArray
-    Mpsi: FloatArray
-    xi_noise_lo: FloatArray
-    xi_noise_hi: FloatArray
-    xi_noise_mag: FloatArray
-    xi_pad: FloatArray
-    M0CA_abs: FloatArray
-    TL_mag: FloatArray  # magnitude matrices for the rounding pads (|M| + rounding bound / margin)
-    TE_mag: FloatArray
-    Mw_mag: FloatArray
-    Mpsi_mag: FloatArray
-    TPB_mag: FloatArray
 
 
 class UnknownInputIntervalObserver(Observer):
@@ -278,7 +237,17 @@ class UnknownInputIntervalObserver(Observer):
         off = coords.M[~np.eye(n, dtype=bool)]
         if off.size and off.min() < 0:
             raise DesignError(f"coords: expected a Metzler M, got an off-diagonal entry {off.min():.3g}")
-        self._c = self._precompute()
+        self._c = uio_step_constants(
+            system,
+            self.bounds,
+            self.D,
+            self.h,
+            decoupling,
+            coords,
+            self.output_accel,
+            self.input_magnitude,
+            self.step_tolerance,
+        )
         self.rate_radius = np.abs(system.F) @ self.noise_rate
         self.beta = hosm_error_bound(
             0.5 * (self._c.delta_hi - self._c.delta_lo) + np.abs(0.5 * (self._c.delta_hi + self._c.delta_lo)),
@@ -379,108 +348,6 @@ class UnknownInputIntervalObserver(Observer):
             hosm_transient=hosm_transient,
             input_magnitude=input_magnitude,
         )
-
-    def _precompute(self) -> _Precomputed:
-        sys, dec, co = self.system, self.decoupling, self.coords
-        h, n = self.h, self.n
-        mm = co.M
-        # top block row of expm([[Mh, I, 0, 0], [0, 0, I, 0], [0, 0, 0, I], 0]) = (e^{Mh}, φ1, φ2, φ3)(Mh)
-        big = np.zeros((4 * n, 4 * n))
-        big[:n, :n] = mm * h
-        for i in range(3):
-            big[i * n : (i + 1) * n, (i + 1) * n : (i + 2) * n] = np.eye(n)
-        top = expm(big)[:n]
-        phi, phi1, phi2, phi3 = (top[:, i * n : (i + 1) * n] for i in range(4))
-        # exact values are nonnegative (M Metzler); clipping a rounding-level negative entry only moves it
-        # towards the exact value, whose distance stays bounded by the expm error below
-        Phi = np.maximum(phi, 0.0)
-        Gam = np.maximum(h * phi1, 0.0)
-        G1 = np.maximum(h * phi2, 0.0)
-        G0 = np.maximum(Gam - G1, 0.0)
-        Grem = np.maximum(h**3 * (phi2 - 2 * phi3) / 2, 0.0)
-        # expm (scaling and squaring, Padé) of a small well-scaled matrix: error a few ulps of its norm;
-        # we allow 64 n u of the largest entry of each matrix
-        expm_err = 64 * n * _U
-        dPhi = np.full((n, n), expm_err * float(Phi.max()))
-        G_mag = np.maximum(np.abs(G0), np.abs(G1)) + expm_err * float(Gam.max()) / ROUNDING_MARGIN
-        T, S = co.T, co.S
-        absT, absS = np.abs(T), np.abs(S)
-        # Rounding budget. The exact model is defined by the float matrices T, E, K, C, A, D, B, (CD)†;
-        # every other matrix is computed, and |computed - exact| is bounded entrywise by g·(sum of
-        # |products|) (g generously above n·u), propagated below. Terms named d* are such bounds;
-        # "*_mag" matrices carry them into the magnitude that the output margin multiplies.
-        g_ = 8 * (n + sys.p + self.q + sys.m) * _U
-        absE, absC, absA, absK, absN = np.abs(dec.E), np.abs(sys.C), np.abs(sys.A), np.abs(co.K), np.abs(co.N)
-        absP = np.abs(dec.P)
-        dP = g_ * (1 + absE @ absC)
-        dN = g_ * (absP @ absA + absK @ absC) + dP @ absA
-        TL = T @ co.L
-        TP = T @ dec.P
-        TPB = TP @ sys.B
-        TPE = TP @ sys.E
-        resid = np.abs(np.eye(n) - S @ T) + g_ * absS @ absT
-        r_norm = float(resid.sum(axis=1).max())
-        if r_norm >= 0.5:
-            raise DesignError(f"T: expected a well-conditioned coordinate change, got ||I - T⁻¹T|| = {r_norm:.3g}")
-        dS = r_norm / (1 - r_norm) * float(absS.sum(axis=1).max())  # entrywise bound of |T⁻¹ - S|
-        dTL = g_ * (absT @ absK + absT @ absN @ absE) + absT @ dN @ absE
-        dTPE = g_ * absT @ absP @ np.abs(sys.E) + absT @ dP @ np.abs(sys.E)
-        dTPB = g_ * absT @ absP @ np.abs(sys.B) + absT @ dP @ np.abs(sys.B)
-        w_lo, w_hi = self.bounds.w
-        v_lo, v_hi = self.bounds.v
-        noise_lo, noise_hi = matvec_bounds(TPE, w_lo, w_hi)
-        w_mag = np.maximum(np.abs(w_lo), np.abs(w_hi))
-        noise_mag = (np.abs(TPE) + dTPE / ROUNDING_MARGIN) @ w_mag
-        delta_lo, delta_hi = matvec_bounds(sys.F, v_lo, v_hi)
-        # deviation of ψ from its chord: |r| <= (L + 4|CB| u_r / h) s(h - s)/2 (module docstring)
-        TL_abs = np.abs(TL) + dTL
-        remainder = Grem @ TL_abs @ self.output_accel
-        CB = sys.C @ sys.B
-        input_remainder = Grem @ TL_abs @ (np.abs(CB) + g_ * absC @ np.abs(sys.B)) * (4 / h)
-        # PD is 0 only to rounding: the leak T P D ξ, with |ξ| <= input_magnitude
-        pd = np.abs(dec.P @ self.D) + g_ * absP @ np.abs(self.D) + dP @ np.abs(self.D)
-        leak = Gam @ absT @ pd @ np.full(self.q, self.input_magnitude)
-        const_pad = (remainder + leak) * (1 + 1e-9) + expm_err * float(Grem.max()) * TL_abs.sum(axis=1) * (
-            self.output_accel.max(initial=0.0)
-        )
-        # J = T N T⁻¹ - M (rounding-level departures), exact T⁻¹ = S + ΔS, |ΔS| <= dS
-        offdiag = (
-            np.abs(co.J - mm)
-            + g_ * absT @ absN @ absS
-            + absT @ dN @ absS
-            + (absT @ absN).sum(axis=1, keepdims=True) * dS
-        )
-        # majorant of the nonnegative rounding recursion e_{k+1} = Φ e_k + pad_k: e_k <= s_k v
-        v = np.linalg.solve(-mm, np.ones(n))
-        if np.any(v <= 0):
-            raise DesignError(f"coords: expected -M⁻¹1 > 0 for a Metzler Hurwitz M, got {v}")
-        v = v / v.max()
-        rho = float(np.max((Phi @ v + dPhi @ v) / v)) * (1 + 4 * (n + 2) * _U)
-        if not rho < 1:
-            raise DesignError(f"h: expected e^(Mh) v <= ρ v with ρ < 1, got ρ = {rho!r}")
-        m0 = dec.M0
-        m0ca = m0 @ sys.C @ sys.A
-        d_m0ca = g_ * np.abs(m0) @ absC @ absA
-        Mw = -m0ca @ S
-        Mpsi = m0ca @ dec.E
-        Mv = -m0 @ sys.C @ sys.E
-        Mw_mag = np.abs(Mw) + (d_m0ca @ absS + g_ * np.abs(m0ca) @ absS) / ROUNDING_MARGIN
-        Mpsi_mag = np.abs(Mpsi) + (d_m0ca @ absE + g_ * np.abs(m0ca) @ absE) / ROUNDING_MARGIN
-        xi_noise_lo, xi_noise_hi = matvec_bounds(Mv, w_lo, w_hi)
-        xi_noise_mag = (np.abs(Mv) + g_ * np.abs(m0) @ absC @ np.abs(sys.E) / ROUNDING_MARGIN) @ w_mag
-        leak_xi = np.abs(np.eye(self.q) - m0 @ sys.C @ self.D) + g_ * np.abs(m0) @ absC @ np.abs(self.D)
-        xi_pad = leak_xi @ np.full(self.q, self.input_magnitude)
-        return _Precomputed(
-            Phi=Phi, Gam=Gam, G0=G0, G1=G1, G_mag=G_mag, dPhi=dPhi, v=v, rho=rho,
-            TL=TL, TPB=TPB, TE=T @ dec.E, CB=CB,
-            noise_lo=noise_lo, noise_hi=noise_hi, noise_mag=noise_mag, const_pad=const_pad,
-            input_remainder=input_remainder, offdiag=offdiag, grid=2 * np.abs(mm) * self.step_tolerance,
-            dS=dS, delta_lo=delta_lo, delta_hi=delta_hi,
-            Mw=Mw, Mpsi=Mpsi, xi_noise_lo=xi_noise_lo, xi_noise_hi=xi_noise_hi,
-            xi_noise_mag=xi_noise_mag, xi_pad=xi_pad, M0CA_abs=np.abs(m0ca),
-            TL_mag=np.abs(TL) + dTL / ROUNDING_MARGIN, TE_mag=absT @ absE, Mw_mag=Mw_mag, Mpsi_mag=Mpsi_mag,
-            TPB_mag=np.abs(TPB) + dTPB / ROUNDING_MARGIN,
-        )  # fmt: skip
 
     def _asymptotic_widths(self) -> tuple[FloatArray, FloatArray]:
         """Limits of the widths (eqs. (30), (34), (48) for this observer) for held point inputs, pads excluded."""
