@@ -1,15 +1,19 @@
 """Campaign scaling: the manipulator-lpv campaign on 1, 2 and all cores, and the cut modelled up to 64 workers.
 
 (a) The cost of one task of the manipulator campaign against its size (CPU seconds of ``campaign_task`` for
-    1 and ``--probe`` runs, one process): a fixed part (the 26 s time loop at 2 ms, whatever the batch) and a
-    part per run. Their ratio is the campaign's ``task_overhead`` in runs.
+    1 and ``--probe`` runs, one process, after a warm-up): a fixed part (the time loop of the truth and of the
+    observer's recursion, whatever the batch) and a part per run; their ratio is the campaign's
+    ``task_overhead`` in runs. Also the design of a level's observer (``design_s``), which a worker process
+    pays the first time it meets that level.
 (b) ``run_campaign`` on a small grid (``--magnitudes`` cells of ``--runs`` runs, one level) with 1, 2 and
-    all cores of this machine (``os.cpu_count()``): wall seconds, tasks, parallel efficiency
-    ``T1 / (W T_W)``.
-(c) No machine with more cores is at hand: the paper's grid (5 levels x 5 magnitudes x 100 runs) is
-    modelled for W = 1 ... 64 workers from the task sizes alone, each task costing
-    ``fixed + per_run * runs`` (from (a)) and handed out largest first: the efficiency of the cut that
-    ``campaign_tasks`` chooses, and of the former fixed cut (50 runs a task).
+    all cores of this machine (``os.cpu_count()``): wall seconds (the local cluster's start included), tasks,
+    parallel efficiency ``T1 / (W T_W)``.
+(c) No machine with more cores is at hand: the paper's grid (5 levels x 5 magnitudes x 100 runs) and one
+    ten times larger (1000 runs a cell) are modelled for W = 1 ... 64 workers from the task sizes alone,
+    each task costing ``fixed + per_run * runs`` (from (a)), plus ``design_s`` for a worker's first task of
+    each level, handed out in the order ``campaign_tasks`` returns them to the first free worker: the
+    efficiency ``T1 / (W T_W)`` against one worker running the one-worker cut, and that of the former fixed
+    cut (50 runs a task).
 
 Writes benchmarks/campaign_scaling.json and prints a table. Measured on a shared machine, (b) is only
 as good as the machine's other load; (c) is a model, not a measurement.
@@ -35,8 +39,10 @@ OLD_BATCH = 50
 
 
 def task_cost(probe: int) -> dict[str, float]:
-    """CPU seconds of one task of 1 run and of ``probe`` runs (after one warm-up task)."""
+    """CPU seconds of a level's design, and of one task of 1 run and of ``probe`` runs (after a warm-up task)."""
+    start = time.process_time()
     campaign_task(0.05, 1.0, [0], 0)
+    design = time.process_time() - start
     seconds = {}
     for size in (1, probe):
         start = time.process_time()
@@ -44,7 +50,13 @@ def task_cost(probe: int) -> dict[str, float]:
         seconds[size] = time.process_time() - start
     per_run = max((seconds[probe] - seconds[1]) / (probe - 1), 1e-9)
     fixed = seconds[1] - per_run
-    return {"one_run_s": seconds[1], f"{probe}_runs_s": seconds[probe], "fixed_s": fixed, "per_run_s": per_run}
+    return {
+        "design_s": design - seconds[1],
+        "one_run_s": seconds[1],
+        f"{probe}_runs_s": seconds[probe],
+        "fixed_s": fixed,
+        "per_run_s": per_run,
+    }
 
 
 def measured(workers: int, runs: int, magnitudes: list[float]) -> dict[str, float]:
@@ -58,32 +70,33 @@ def measured(workers: int, runs: int, magnitudes: list[float]) -> dict[str, floa
         return {"workers": workers, "wall_s": time.perf_counter() - start, "tasks": result.tasks}
 
 
-def makespan(sizes: list[int], workers: int, fixed: float, per_run: float) -> float:
-    """Seconds until ``workers`` workers finish tasks of ``sizes`` runs, handed out largest first."""
+def makespan(tasks: list[tuple[float, float, list[int]]], workers: int, cost: dict[str, float]) -> float:
+    """Seconds until ``workers`` workers finish ``tasks``, each handed in order to the first free worker."""
     finish = np.zeros(workers)
-    for size in sorted(sizes, reverse=True):
-        finish[np.argmin(finish)] += fixed + per_run * size
+    levels: list[set[float]] = [set() for _ in range(workers)]
+    for level, _, ids in tasks:
+        w = int(np.argmin(finish))
+        finish[w] += cost["fixed_s"] + cost["per_run_s"] * len(ids) + (0.0 if level in levels[w] else cost["design_s"])
+        levels[w].add(level)
     return float(finish.max())
 
 
-def modelled(cost: dict[str, float]) -> list[dict[str, float]]:
-    """The paper's grid on W workers: the chosen cut and the former one, from task sizes alone."""
-    fixed, per_run = cost["fixed_s"], cost["per_run_s"]
-    grid = [(lv, mg) for lv in CAMPAIGN.levels for mg in CAMPAIGN.magnitudes]
-    cells = [(lv, mg, list(range(CAMPAIGN.runs))) for lv, mg in grid]
-    old = [len(ids) for _, _, ids in campaign_tasks(cells, 1, batch=OLD_BATCH)]
-    overhead = fixed / per_run
-    serial = makespan([len(ids) for _, _, ids in campaign_tasks(cells, 1, overhead=overhead)], 1, fixed, per_run)
-    serial_old = makespan(old, 1, fixed, per_run)
+def modelled(cost: dict[str, float], runs: int) -> list[dict[str, float]]:
+    """The paper's grid with ``runs`` runs a cell on W workers: the chosen cut and the former one."""
+    overhead = cost["fixed_s"] / cost["per_run_s"]
+    cells = [(lv, mg, list(range(runs))) for lv in CAMPAIGN.levels for mg in CAMPAIGN.magnitudes]
+    old = campaign_tasks(cells, 1, batch=OLD_BATCH)
+    serial = makespan(campaign_tasks(cells, 1, overhead=overhead), 1, cost)
+    serial_old = makespan(old, 1, cost)
     rows = []
     for w in MODEL_WORKERS:
-        sizes = [len(ids) for _, _, ids in campaign_tasks(cells, w, overhead=overhead)]
-        span, span_old = makespan(sizes, w, fixed, per_run), makespan(old, w, fixed, per_run)
+        tasks = campaign_tasks(cells, w, overhead=overhead)
+        span, span_old = makespan(tasks, w, cost), makespan(old, w, cost)
         rows.append(
             {
                 "workers": w,
-                "tasks": len(sizes),
-                "largest_task": max(sizes),
+                "tasks": len(tasks),
+                "largest_task": max(len(ids) for _, _, ids in tasks),
                 "makespan_s": span,
                 "efficiency": serial / (w * span),
                 "old_tasks": len(old),
@@ -96,24 +109,28 @@ def modelled(cost: dict[str, float]) -> list[dict[str, float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=4, help="runs per cell of the measured campaign (default 4)")
+    parser.add_argument("--runs", type=int, default=30, help="runs per cell of the measured campaign (default 30)")
     parser.add_argument("--magnitudes", type=float, nargs="+", default=[1.0, 5.0], help="cells of the measured one")
-    parser.add_argument("--probe", type=int, default=16, help="runs of the larger task in (a) (default 16)")
+    parser.add_argument("--probe", type=int, default=50, help="runs of the larger task in (a) (default 50)")
     parser.add_argument("--out", type=Path, default=Path(__file__).with_name("campaign_scaling.json"))
     args = parser.parse_args()
     cost = task_cost(args.probe)
-    print(f"(a) one task: {cost['fixed_s']:.2f} s fixed + {cost['per_run_s']:.3f} s a run (CPU, one process)")
+    print(f"(a) one task: {cost['fixed_s']:.2f} s fixed + {cost['per_run_s']:.3f} s a run, a level's design "
+          f"{cost['design_s']:.2f} s (CPU, one process)")  # fmt: skip
     cores = os.cpu_count() or 1
     runs = [measured(w, args.runs, args.magnitudes) for w in sorted({1, 2, cores})]
     for row in runs:
         row["efficiency"] = runs[0]["wall_s"] / (row["workers"] * row["wall_s"])
         print(f"(b) {row['workers']:3d} workers: {row['wall_s']:7.1f} s, {row['tasks']} tasks, efficiency "
               f"{row['efficiency']:.2f}")  # fmt: skip
-    model = modelled(cost)
-    for row in model:
-        print(f"(c) {row['workers']:3d} workers: {row['tasks']:3d} tasks (largest {row['largest_task']:3d}), "
-              f"efficiency {row['efficiency']:.2f}; fixed 50-run cut: {row['old_tasks']} tasks, "
-              f"{row['old_efficiency']:.2f}")  # fmt: skip
+    grids = {}
+    for runs_a_cell in (CAMPAIGN.runs, 10 * CAMPAIGN.runs):
+        model = modelled(cost, runs_a_cell)
+        for row in model:
+            print(f"(c) {runs_a_cell} runs a cell, {row['workers']:3d} workers: {row['tasks']:3d} tasks (largest "
+                  f"{row['largest_task']:3d}), efficiency {row['efficiency']:.2f}; fixed 50-run cut: "
+                  f"{row['old_tasks']} tasks, {row['old_efficiency']:.2f}")  # fmt: skip
+        grids[str(runs_a_cell)] = model
     facts = {
         "cores": cores,
         "task_cost": cost,
@@ -121,8 +138,7 @@ def main() -> None:
         "modelled_paper_grid": {
             "levels": CAMPAIGN.levels,
             "magnitudes": CAMPAIGN.magnitudes,
-            "runs": CAMPAIGN.runs,
-            "rows": model,
+            "rows_by_runs_a_cell": grids,
         },
         "note": "measured rows on a shared machine; modelled rows from task sizes and the task cost of (a)",
     }

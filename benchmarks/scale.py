@@ -5,7 +5,8 @@ For n = 3, 6, 12, 30, 60 tanks (``p = round(0.7 n)`` level sensors, ``n // 2`` p
 noise (seed 0), and on it:
 
 - ``HullEstimator(horizon=H)``: the exact window hull (the reference of the other columns), its cost per
-  step;
+  step; the same with ``filtered=True`` (rows that also use ``y_k``), its cost per step against the
+  predicted rows' (issue 36: at most 1.3) and its width against theirs;
 - for n ≤ ``EXACT_MAX_N``, the exact hull of the record's first ``EXACT_STEPS`` steps (the condensed LP
   anchored at ``x_0``, ``HullEstimator(horizon=EXACT_STEPS)``): its CPU seconds for those steps and the window
   hull's width against it over the steps ``H … EXACT_STEPS - 1``. Both are certified outer bounds, so a ratio
@@ -59,9 +60,9 @@ def cpu(fn: Any) -> tuple[Any, float]:
     return out, time.process_time() - start
 
 
-def hull_record(case: Any, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, float]:
+def hull_record(case: Any, y: np.ndarray, filtered: bool = False) -> tuple[np.ndarray, np.ndarray, int, float]:
     """The hull step by step until the record ends or the projected cost exceeds the budget."""
-    hull = HullEstimator.design(case.system, case.bounds, horizon=H)
+    hull = HullEstimator.design(case.system, case.bounds, horizon=H, filtered=filtered)
     state = hull.init()
     lower, upper = np.empty((STEPS, case.system.n)), np.empty((STEPS, case.system.n))
     spent, done = 0.0, 0
@@ -85,6 +86,12 @@ def size_row(n: int) -> dict[str, Any]:
     row["hull ms/step"] = hull_ms
     row["hull steps"] = done if done == STEPS else f"{done} of {STEPS} (> {HULL_BUDGET_S:g} s projected)"
     row["hull mean width"] = reference
+    f_lower, f_upper, f_done, f_spent = hull_record(case, sim.y, filtered=True)
+    row["filtered hull ms/step"] = 1e3 * f_spent / f_done
+    row["filtered / predicted cost"] = row["filtered hull ms/step"] / hull_ms
+    row["filtered / predicted width"] = mean_width(f_lower, f_upper, min(done, f_done)) / mean_width(
+        lower, upper, min(done, f_done)
+    )
     if n <= EXACT_MAX_N:
         exact_hull = HullEstimator.design(case.system, case.bounds, horizon=EXACT_STEPS)
         exact, exact_s = cpu(lambda: exact_hull.run(case.t[:EXACT_STEPS], sim.y[:EXACT_STEPS], case.u[:EXACT_STEPS]))

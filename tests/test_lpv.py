@@ -227,6 +227,56 @@ def test_run_equals_repeated_step(model):
         np.testing.assert_allclose(state.upper, est.upper[k], rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("box_free", [True, False], ids=["enclosures-at-once", "sample-after-sample"])
+def test_advance_many_gives_the_numbers_of_advance(model, box_free):
+    """advance_many over a block of samples (issue 36) is advance sample after sample, to the last bit, whether
+    the model's enclosures are evaluated at once (the manipulator's ignore the box) or one sample at a time."""
+    t = np.arange(0, 0.2 + H / 2, H)
+    params = model.bounds.vertices[:3]
+    x, u = simulate_closed_loop(t, params, np.array([FAULT_BOUND, -FAULT_BOUND]), onset=0.1)
+    obs = _uio(model)
+    xs, us = x.transpose(1, 0, 2), u.transpose(1, 0, 2)  # (samples, runs, ·)
+    z0 = np.tile(obs.init().internal["z_lower"], (3, 1)), np.tile(obs.init().internal["z_upper"], (3, 1))
+    model.box_free = box_free
+    try:
+        *block, zl_many, zu_many = obs.advance_many(*z0, xs, us)
+    finally:
+        del model.box_free
+    zl, zu = z0
+    for k in range(t.size):
+        *step, zl, zu = obs.advance(zl, zu, xs[k], us[k])
+        for got, want in zip(block, step):
+            np.testing.assert_array_equal(got[k], want)
+    np.testing.assert_array_equal(zl_many, zl)
+    np.testing.assert_array_equal(zu_many, zu)
+
+
+CAMPAIGN_OUTCOMES = {
+    (0.02, 0.25): [
+        [0, 0, True, False, [None, None]], [1, 0, True, False, [None, None]],
+        [0, 1, False, False, [None, None]], [1, 1, False, False, [None, None]],
+        [0, 2, True, False, [None, 24.338]], [1, 2, True, False, [None, 24.23]],
+        [0, 3, False, False, [None, 24.2]], [1, 3, False, False, [None, 24.096]],
+    ],
+    (0.2, 5.0): [
+        [0, 0, True, False, [None, None]], [1, 0, True, False, [None, None]],
+        [0, 1, True, False, [24.588, None]], [1, 1, True, False, [24.526, None]],
+        [0, 2, True, False, [None, 21.568]], [1, 2, True, False, [None, 21.64]],
+        [0, 3, False, False, [None, None]], [1, 3, False, False, [None, None]],
+    ],
+}  # fmt: skip
+"""campaign_task's rows for runs 0 and 1 of two cells (seed 0), computed sample after sample before issue 36."""
+
+
+@pytest.mark.parametrize("cell", list(CAMPAIGN_OUTCOMES), ids=["level-0.02-fault-0.25", "level-0.2-fault-5"])
+def test_campaign_outcomes_are_those_of_the_sample_by_sample_loop(cell):
+    """The campaign's blocks of samples (issue 36) keep every outcome and detection time of the former loop."""
+    from intervalobs.reproduce.manipulator_lpv import campaign_task
+
+    rows = campaign_task(*cell, [0, 1], 0)
+    assert [[r, s, ok, fa, fn] for r, s, ok, fa, fn in rows] == CAMPAIGN_OUTCOMES[cell]
+
+
 def test_enclosure_and_no_false_alarm_at_parameter_vertices(model):
     """Fault-free runs at the 8 vertices of the parameter box (extreme uncertainty): violation exactly 0,
     isolation signals never negative."""

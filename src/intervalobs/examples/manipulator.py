@@ -328,6 +328,7 @@ class ManipulatorModel(SampledLPVModel):
     """
 
     n = 4
+    box_free = True  # the state is measured: the enclosures depend on y and u only
 
     def __init__(
         self,

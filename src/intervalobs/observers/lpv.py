@@ -59,7 +59,7 @@ whose ``internal`` holds :math:`\underline z_{k+1}, \overline z_{k+1}` and the i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -71,7 +71,7 @@ from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError,
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
-from ..systems.lpv import LPVSystem, SampledLPVModel
+from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_array, as_box, as_matrix, as_positive
 from .base import Observer, ObserverState
 
@@ -281,6 +281,33 @@ class IsolationRecord:
     signal_upper: FloatArray
 
 
+@dataclass(frozen=True)
+class _KnownTerms:
+    r"""The parts of a step of :class:`LPVIntervalObserver` that do not depend on :math:`z` (one sample or several).
+
+    ``rate_*``: the known rate plus :math:`-F` times the bounds of :math:`Rx`; ``input_*``: :math:`\Delta B_R u`;
+    ``unknown_*``: :math:`\Delta B_{un,R}` times the unknown input's box (when ``unknown_input``). Their sum with
+    :math:`\Delta A_R` times the box of the step is :math:`\psi`, added in that order.
+    """
+
+    flow_lower: FloatArray
+    flow_upper: FloatArray
+    da_lower: FloatArray
+    da_upper: FloatArray
+    rate_lower: FloatArray
+    rate_upper: FloatArray
+    input_lower: FloatArray
+    input_upper: FloatArray
+    unknown_lower: FloatArray
+    unknown_upper: FloatArray
+    unknown_input: bool
+
+    def sample(self, k: int) -> _KnownTerms:
+        """The terms of sample ``k`` of several (a leading sample axis)."""
+        arrays = {f.name: getattr(self, f.name) for f in fields(self)}
+        return replace(self, **{name: value[k] for name, value in arrays.items() if np.ndim(value)})
+
+
 class LPVIntervalObserver(Observer):
     r"""LPV interval observer (31)–(34), sampled soundly (module docstring).
 
@@ -447,22 +474,84 @@ class LPVIntervalObserver(Observer):
         model = self.model
         assert model is not None
         x_lo, x_hi, eps_lo, eps_hi = self._state_box(model.r_matrix(y), z_lower, z_upper, y)
-        enc = model.step_enclosure(x_lo, x_hi, y, u, self.h)
-        b_lo, b_hi = np.minimum(x_lo, enc.flow_lower), np.maximum(x_hi, enc.flow_upper)
-        a_lo, a_hi = interval_matvec_bounds(enc.da_lower, enc.da_upper, b_lo, b_hi)
+        known = self._known_terms(model.step_enclosure(x_lo, x_hi, y, u, self.h), u)
+        return (x_lo, x_hi, eps_lo, eps_hi, *self._next_z(known, x_lo, x_hi, z_lower, z_upper))
+
+    def advance_many(
+        self, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        r""":meth:`advance` over ``S`` consecutive samples: the same numbers, the enclosures of all samples at once.
+
+        When the model's enclosures do not read the observer's box
+        (:attr:`~intervalobs.systems.lpv.SampledLPVModel.box_free`), everything but the recursion of
+        :math:`z` is evaluated for the ``S`` samples in one vectorised call, so a long record of few runs no
+        longer costs a few hundred small array operations a sample (issue 36: the manipulator campaign's
+        fixed cost per task). Otherwise it is :meth:`advance` sample after sample.
+
+        Parameters
+        ----------
+        z_lower, z_upper : numpy.ndarray, shape (M, n)
+            Observer states at the first sample.
+        y, u : numpy.ndarray, shape (S, M, p) and (S, M, m)
+            Outputs and known inputs of the ``S`` samples.
+
+        Returns
+        -------
+        x_lower, x_upper, eps_lower, eps_upper : numpy.ndarray, shape (S, M, n)
+            Boxes and isolation signals at the ``S`` samples.
+        z_lower_next, z_upper_next : numpy.ndarray, shape (M, n)
+            Observer states after the last sample.
+        """
+        model = self.model
+        out = np.empty((4, *np.shape(y)[:2], self.n))
+        known = None
+        if model is not None and self.generic is None and model.box_free:
+            known = self._known_terms(model.step_enclosure(y, y, y, u, self.h), u)
+            r = model.r_matrix(y)
+        for k in range(out.shape[1]):
+            if known is None:
+                x_lo, x_hi, eps_lo, eps_hi, z_lower, z_upper = self.advance(z_lower, z_upper, y[k], u[k])
+            else:
+                x_lo, x_hi, eps_lo, eps_hi = self._state_box(r[k], z_lower, z_upper, y[k])
+                z_lower, z_upper = self._next_z(known.sample(k), x_lo, x_hi, z_lower, z_upper)
+            out[:, k] = x_lo, x_hi, eps_lo, eps_hi
+        return out[0], out[1], out[2], out[3], z_lower, z_upper
+
+    def _known_terms(self, enc: StepEnclosure, u: FloatArray) -> _KnownTerms:
+        r"""The terms of :math:`\psi` (33) that do not depend on :math:`z`: all but :math:`\Delta A_R` times the box."""
         ub_lo, ub_hi = interval_matvec_bounds(enc.db_lower, enc.db_upper, u, u)
         fl_lo = matvec_bounds(-self.f_lower, enc.rx_lower, enc.rx_upper)[0]
         fu_hi = matvec_bounds(-self.f_upper, enc.rx_lower, enc.rx_upper)[1]
-        psi_lo = enc.rate_lower + fl_lo + a_lo + ub_lo
-        psi_hi = enc.rate_upper + fu_hi + a_hi + ub_hi
         extra = self._unknown_input_term(enc.dbun_lower, enc.dbun_upper)
-        if extra is not None:
-            psi_lo = psi_lo + extra[0]
-            psi_hi = psi_hi + extra[1]
+        zero = np.zeros(())
+        return _KnownTerms(
+            enc.flow_lower,
+            enc.flow_upper,
+            enc.da_lower,
+            enc.da_upper,
+            enc.rate_lower + fl_lo,
+            enc.rate_upper + fu_hi,
+            ub_lo,
+            ub_hi,
+            zero if extra is None else extra[0],
+            zero if extra is None else extra[1],
+            extra is not None,
+        )
+
+    def _next_z(
+        self, known: _KnownTerms, x_lo: FloatArray, x_hi: FloatArray, z_lower: FloatArray, z_upper: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        r""":math:`z_{k+1}` (33)–(34) from the known terms and the box of :math:`x(t_k)`."""
+        b_lo, b_hi = np.minimum(x_lo, known.flow_lower), np.maximum(x_hi, known.flow_upper)
+        a_lo, a_hi = interval_matvec_bounds(known.da_lower, known.da_upper, b_lo, b_hi)
+        psi_lo = known.rate_lower + a_lo + known.input_lower
+        psi_hi = known.rate_upper + a_hi + known.input_upper
+        if known.unknown_input:
+            psi_lo = psi_lo + known.unknown_lower
+            psi_hi = psi_hi + known.unknown_upper
         zl = z_lower @ self.e_lower.T + psi_lo @ self.phi_lower.T
         zu = z_upper @ self.e_upper.T + psi_hi @ self.phi_upper.T
-        zl, zu = inflate(zl, zu)
-        return x_lo, x_hi, eps_lo, eps_hi, zl, zu
+        return inflate(zl, zu)
 
     def _state_box(
         self, r: FloatArray, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray

@@ -445,6 +445,9 @@ EXAMPLE = Example(
 CAMPAIGN_H = 2e-3
 CAMPAIGN_SUBSTEPS = 2
 CAMPAIGN_T_FINAL = 26.0
+CAMPAIGN_BLOCK_ROWS = 8192
+"""Samples times runs whose enclosures a task evaluates at once (LPVIntervalObserver.advance_many): long enough
+blocks that the per-sample overhead of the array calls vanishes, short enough to stay in cache."""
 CAMPAIGN_TASK_OVERHEAD = 60.0
 """Fixed cost of a campaign task in runs: its 13 000-step time loop costs the same whatever the batch (issue 36).
 benchmarks/campaign_scaling.py measures it (``task_cost`` in benchmarks/campaign_scaling.json); on the loaded
@@ -467,6 +470,13 @@ def _campaign_observer(level: float) -> LPVIntervalUIO:
         bounds=Bounds(x0=(x0 - X0_RADIUS, x0 + X0_RADIUS)),
         unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)),
     )
+
+
+def _truth_step(x: FloatArray, tau: FloatArray, par: FloatArray) -> FloatArray:
+    """The true state one observer sample later: ``CAMPAIGN_SUBSTEPS`` RK4 steps, torque held."""
+    for _ in range(CAMPAIGN_SUBSTEPS):
+        x = rk4_step(x, tau, par, CAMPAIGN_H / CAMPAIGN_SUBSTEPS)
+    return x
 
 
 def campaign_task(
@@ -515,15 +525,17 @@ def campaign_task(
     zu = np.tile(st.internal["z_upper"], (4 * m, 1))
     first = np.full((4 * m, 2), np.nan)
     t = np.arange(0.0, CAMPAIGN_T_FINAL + CAMPAIGN_H / 2, CAMPAIGN_H)
-    h_sub = CAMPAIGN_H / CAMPAIGN_SUBSTEPS
-    for tk in t:
-        u = controller(x, float(tk))
-        _, _, el, eh, zl, zu = obs.advance(zl, zu, x, u)
-        neg = (obs.fault_signals(el) < 0) | (obs.fault_signals(eh) < 0)
-        first[neg & np.isnan(first)] = tk
-        tau = u + faults if tk >= FAULT_ONSET else u
-        for _ in range(CAMPAIGN_SUBSTEPS):
-            x = rk4_step(x, tau, par, h_sub)
+    samples = max(CAMPAIGN_BLOCK_ROWS // (4 * m), 1)
+    for start in range(0, t.size, samples):
+        tb = t[start : start + samples]
+        xs, us = np.empty((tb.size, 4 * m, 4)), np.empty((tb.size, 4 * m, 2))
+        for k, tk in enumerate(tb):  # the truth of the block, then the observer on it
+            xs[k], us[k] = x, controller(x, float(tk))
+            x = _truth_step(x, us[k] + faults if tk >= FAULT_ONSET else us[k], par)
+        *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)
+        neg = (obs.fault_signals(el) < 0) | (obs.fault_signals(eh) < 0)  # (samples, runs, faults)
+        new = np.any(neg, axis=0) & np.isnan(first)
+        first[new] = tb[np.argmax(neg, axis=0)][new]
     rows: list[tuple[int, int, bool, bool, list[float | None]]] = []
     for s in range(4):
         active = [j + 1 for j in range(2) if SCENARIO_FAULTS[s, j] > 0]

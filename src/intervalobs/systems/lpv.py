@@ -379,6 +379,10 @@ class SampledLPVModel(ABC):
     """
 
     system: LPVSystem
+    box_free: bool = False
+    """Whether :meth:`step_enclosure` ignores the observer's box (e.g. the whole state is measured): the
+    enclosures of many samples can then be evaluated at once
+    (:meth:`~intervalobs.observers.lpv.LPVIntervalObserver.advance_many`)."""
 
     @abstractmethod
     def r_matrix(self, y: FloatArray) -> FloatArray:
