@@ -19,9 +19,7 @@ the sum is accumulated with the exact rounding errors of ``TwoSum``. For :math:`
 then rounded. :meth:`RowProducts.enclose` returns :math:`s` and twice that bound (with
 :math:`|a^\top z| \le |s| + \text{bound}`, and a term for underflow in the splitting).
 
-References
-----------
-T. Ogita, S. M. Rump and S. Oishi, "Accurate sum and dot product", SIAM J. Sci. Comput. 26(6),
+**Reference.** T. Ogita, S. M. Rump and S. Oishi, "Accurate sum and dot product", SIAM J. Sci. Comput. 26(6),
 1955–1988, 2005. https://doi.org/10.1137/030601818
 """
 

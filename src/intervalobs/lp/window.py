@@ -209,8 +209,9 @@ class SparseWindowLP(RecordsPath):
         """
         states = slice(0, self.slots * self.n)  # only the states: the points prior's coefficients vary
         centre = np.zeros(self.ncol)
-        box = np.isfinite(col_lo[states]) & np.isfinite(col_hi[states])
-        centre[states] = np.where(box, 0.5 * col_lo[states] + 0.5 * col_hi[states], 0.0)
+        lo, hi = col_lo[states], col_hi[states]
+        box = np.isfinite(lo) & np.isfinite(hi)
+        centre[states][box] = 0.5 * lo[box] + 0.5 * hi[box]
         if self._products is None:
             self._products = RowProducts(self.matrix_t)
         self.centre = centre
