@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from intervalobs import Bounds, ContinuousNonlinearObserver, ContinuousNonlinearSystem
-from intervalobs.errors import BoundsError
+from intervalobs.errors import BoundsError, DivergenceWarning
 from intervalobs.estimate import enclosure_report
 from nonlinear_cases import Case, chemostat, compartments, cstr, measure, pendulum, simulate_truth
 
@@ -96,6 +96,21 @@ def test_contradicting_data_are_reported_not_raised() -> None:
     assert estimate.meta["consistent"] is False
     assert estimate.meta["inconsistent_from"] == pytest.approx(t[5])
     assert np.all(np.isfinite(estimate.lower[:5])) and np.all(np.isinf(estimate.lower[5:]))
+
+
+def test_a_batch_with_one_contradicting_run_reports_its_time() -> None:
+    """Two runs, the second's record shifted from t_5 on: the batch's estimate says so through the same
+    properties as a single run's (the earliest time over the runs), and warns of no divergence."""
+    case = cstr()
+    t, _, _, y = _record(case, 1.0)
+    batch = y[:2].copy()
+    batch[1, 5:] += 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DivergenceWarning)
+        estimate = ContinuousNonlinearObserver(case.system, case.bounds, case.h).run(t, batch)
+    assert not estimate.consistent and estimate.inconsistent_from == pytest.approx(t[5])
+    assert estimate.meta["consistent"] == [True, False]
+    assert estimate.meta["inconsistent_from_runs"][0] is None
 
 
 def test_unobserved_unstable_state_warns() -> None:

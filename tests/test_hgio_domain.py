@@ -124,8 +124,9 @@ def _estimate(width: np.ndarray) -> Estimate:
         (np.full((100, 2), np.inf), False),  # never bounded (no claim to lose)
         (np.r_[np.ones(50), np.full(50, np.nan)][:, None], False),  # no bound after a sample that contradicts
         (np.array([[1.0], [1e9], [1e9], [1e9], [1e9]]), False),  # too short to judge
+        (np.r_[np.full(4, 1e-11), np.full(16, 0.2), np.full(16, 0.05), np.full(4, 0.2)][:, None], False),  # steady
     ],
-    ids=["geometric", "linear", "settling", "lost", "unbounded", "ended", "short"],
+    ids=["geometric", "linear", "settling", "lost", "unbounded", "ended", "short", "fluctuating"],
 )
 def test_growth_check(width: np.ndarray, diverging: bool) -> None:
     est = _estimate(width)
@@ -136,3 +137,13 @@ def test_growth_check(width: np.ndarray, diverging: bool) -> None:
     assert est.meta.get("diverging", False) == diverging
     if diverging and np.all(np.isfinite(width)):
         assert est.meta["width_growth"] > GROWTH_LIMIT
+
+
+def test_growth_check_stops_where_the_data_contradict_the_model() -> None:
+    """Rows without bound after an inconsistent sample (inf or NaN, as estimators write them) are no divergence."""
+    est = _estimate(np.r_[np.ones(50), np.full(50, np.inf)][:, None])
+    est.meta["inconsistent_from"] = 50.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DivergenceWarning)
+        check_growth(est)
+    assert not est.meta["diverging"]

@@ -98,7 +98,8 @@ def _checked_step(step: Callable[..., ObserverState]) -> Callable[..., ObserverS
 
 GROWTH_LIMIT = 100.0
 """Growth of a state's width, from the first tenth of a record to the last, beyond which a run that is still
-growing (last tenth at least 1.5 times the sixth) is reported as diverging (:func:`check_growth`)."""
+growing (last tenth at least 1.5 times the largest width of the first half) is reported as diverging
+(:func:`check_growth`)."""
 
 
 def check_growth(estimate: Estimate) -> None:
@@ -107,16 +108,23 @@ def check_growth(estimate: Estimate) -> None:
     For every run and state: the largest width over the last tenth of the record over the largest over its
     first tenth (``meta["width_growth"]``, the worst; NaN rows, where a run has no bound, are left out). A run
     is diverging (``meta["diverging"]``) when a finite width becomes infinite, or when that ratio exceeds
-    :data:`GROWTH_LIMIT` while the widths still grow (the last tenth at least 1.5 times the sixth): bounded
-    growth that has settled, e.g. from an exactly known initial state to the steady width, is not. Records of
-    fewer than 10 rows are not judged.
+    :data:`GROWTH_LIMIT` while the widths still grow (the last tenth at least 1.5 times the largest width of
+    the first half): bounded growth that has settled, e.g. from an exactly known initial state to the steady
+    width, is not, however the steady widths fluctuate. Only the rows before the data contradict the model
+    (:attr:`Estimate.inconsistent_from`) are judged; records of fewer than 10 such rows are not, and records
+    of fewer than 30 only for bounds that become infinite (a tenth of one or two samples, which the data may
+    pin exactly, is no scale to measure growth against).
 
     Parameters
     ----------
     estimate : Estimate
         The result of a run; its ``meta`` is updated in place.
     """
-    width = np.asarray(estimate.upper, dtype=float) - np.asarray(estimate.lower, dtype=float)
+    bounded = estimate.bounded_rows()
+    width = (
+        np.asarray(estimate.upper, dtype=float)[..., bounded, :]
+        - np.asarray(estimate.lower, dtype=float)[..., bounded, :]
+    )
     steps = width.shape[-2]
     if steps < 10:
         return
@@ -124,12 +132,12 @@ def check_growth(estimate: Estimate) -> None:
     with warnings.catch_warnings(), np.errstate(invalid="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows: rows a run has no bound for
         early = np.nanmax(width[..., :tenth, :], axis=-2)
-        middle = np.nanmax(width[..., 5 * tenth : 6 * tenth, :], axis=-2)
+        first_half = np.nanmax(width[..., : steps // 2, :], axis=-2)
         late = np.nanmax(width[..., -tenth:, :], axis=-2)
         lost = np.isfinite(early) & np.isposinf(late)
-        floor = 1e-9 * (1.0 + np.nanmax(np.abs(estimate.lower[..., :tenth, :]), axis=-2))
+        floor = 1e-9 * (1.0 + np.nanmax(np.abs(estimate.lower[..., bounded, :][..., :tenth, :]), axis=-2))
         ratio = np.where(np.isfinite(early) & np.isfinite(late), late / np.maximum(early, floor), 0.0)
-    growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * middle)
+    growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * first_half) & (steps >= 30)
     worst = float(np.max(ratio)) if ratio.size else 0.0
     diverging = bool(np.any(lost) or np.any(growing))
     reported = bool(estimate.meta.get("diverging", False))  # an estimator's own verdict (it warned already)
@@ -483,6 +491,10 @@ def _short(value: Any) -> str:
 def record_consistency(estimate: Estimate, flags: NDArray[np.bool_]) -> list[float | None]:
     """Write ``consistent`` and ``inconsistent_from`` into ``estimate.meta`` from per-row consistency flags.
 
+    ``inconsistent_from`` is the earliest time over the runs (None when every run fits the model), as
+    :attr:`Estimate.inconsistent_from` reads it; for a batch, ``consistent`` is a list per run and
+    ``inconsistent_from_runs`` the time of each run.
+
     Parameters
     ----------
     estimate : Estimate
@@ -498,5 +510,8 @@ def record_consistency(estimate: Estimate, flags: NDArray[np.bool_]) -> list[flo
     first = np.where(flags.all(-1), -1, np.argmin(flags, axis=-1))
     starts = [None if k < 0 else float(estimate.t[k]) for k in np.atleast_1d(first)]
     estimate.meta["consistent"] = bool(flags.all()) if flags.ndim == 1 else flags.all(-1).tolist()
-    estimate.meta["inconsistent_from"] = starts[0] if flags.ndim == 1 else starts
+    times = [start for start in starts if start is not None]
+    estimate.meta["inconsistent_from"] = min(times) if times else None
+    if flags.ndim > 1:
+        estimate.meta["inconsistent_from_runs"] = starts
     return starts

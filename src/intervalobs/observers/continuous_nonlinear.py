@@ -330,7 +330,8 @@ class ContinuousNonlinearObserver(Observer):
         -------
         Estimate
             ``meta`` holds ``consistent`` (bool, or a list per run), ``inconsistent_from`` (the first
-            time the record contradicts the model, None when it never does) and ``diverging``.
+            time the record contradicts the model, the earliest over the runs, None when it never does;
+            per run in ``inconsistent_from_runs``) and ``diverging``.
         """
         times, ys, us = self._signals(t, y, u)
         estimate, extras = self._loop(times, ys, us, collect=("consistent", "lost_flag"))
