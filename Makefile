@@ -10,7 +10,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: demo test test-slow test-latest lint bench docs lock clean
+.PHONY: demo test test-slow test-latest lint bench docs notebooks lock clean
 
 $(BIN)/python:
 	$(PY) -m venv $(VENV)
@@ -63,6 +63,10 @@ bench: $(STAMP)
 docs: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/sphinx-build -E -W --keep-going -q -b html docs docs/_build/html
 	@echo "docs: docs/_build/html/index.html"
+
+# Execute docs/notebooks in place, outputs stored (a reader on the web sees them; the docs run them afresh).
+notebooks: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python docs/notebooks/execute.py
 
 clean:
 	rm -rf $(VENV) $(LATEST) .venv-lock results build *.egg-info docs/_build docs/api

@@ -222,3 +222,23 @@ def test_when_the_cheapest_estimator_refuses_the_model_the_last_one_designed_run
     assert estimate.meta["estimator"] != "IntervalObserver"
     assert any("IntervalObserver: cannot be designed" in line for line in estimate.meta["considered"])
     assert estimate.enclosure(truth.x).max_violation == 0.0
+
+
+def test_a_labelled_record_is_read_by_the_model_names() -> None:
+    """A pandas record with the states beside the outputs and inputs (what ``Simulation.to_pandas`` gives): the
+    front door reads the channels by name, as every estimator does, and the result is that of the bare arrays."""
+    pytest.importorskip("pandas")
+    motor = LTISystem(
+        [[0.0, 1.0], [0.0, -8.0]], C=[[1.0, 0.0]], B=[[0.0], [40.0]],
+        state_names=["angle", "speed"], output_names=["encoder"], input_names=["voltage"],
+    )  # fmt: skip
+    bounds = Bounds(x0=([-0.1, -1.0], [0.1, 1.0]), w=([0.0, -0.5], [0.0, 0.5]), v=([-0.002], [0.002]))
+    t = np.arange(0.0, 0.5, 0.01)
+    voltage = np.where(np.sin(8 * np.pi * t) >= 0, 1.0, -1.0)[:, None]
+    truth = simulate(motor, bounds, t, u=voltage, noise="extreme", seed=7)
+    record = truth.to_pandas()
+    assert record.shape[1] > 2  # states, outputs and inputs side by side
+    labelled = observe(motor, bounds, record.index, record, record, estimator="IntervalObserver")
+    bare = observe(motor, bounds, t, truth.y, voltage, estimator="IntervalObserver")
+    np.testing.assert_array_equal(labelled.lower, bare.lower)
+    assert labelled.enclosure(truth).max_violation == 0.0

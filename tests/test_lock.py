@@ -29,7 +29,7 @@ def _pins() -> dict[str, str]:
 def _declared() -> list[Requirement]:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     lines = list(project["dependencies"])
-    for extra in ("dev", "docs"):
+    for extra in ("dev", "docs", "notebooks"):
         lines += project["optional-dependencies"][extra]
     return [Requirement(line) for line in lines]
 

@@ -44,7 +44,7 @@ from .systems.lpv import LPVSystem
 from .systems.lti import LTISystem
 from .systems.nonlinear import NonlinearSystem
 from .systems.reaction import ReactionSystem
-from .validation import as_time
+from .validation import as_signal, as_time, labelled_parts
 
 __all__ = ["ESTIMATORS", "Problem", "Suitable", "filtered_rows", "memory_horizon", "observe", "suggest"]
 
@@ -366,6 +366,7 @@ def observe(
             names = [s.name for s in ESTIMATORS if s.fits(problem)]
             raise ArgumentError(f"estimator: expected 'auto' or one of {names} for this model, got {estimator!r}")
     extra = {} if theta is None else {"theta": theta}
+    y, u = _unlabelled(system, times, y, u)
     row, observer, cost, considered = _choose(fitting, problem, times, y, u, extra, budget)
     estimate = observer.run(times, y, u, **extra)
     why = f"the tightest estimator for this model ({problem.kind}) within {budget:g} ms a sample: {row.width}"
@@ -376,6 +377,19 @@ def observe(
     if filtered and estimate.meta.get("rows") == "predicted" and isinstance(system, LTISystem):
         return filtered_rows(estimate, system, bounds, y)
     return estimate
+
+
+def _unlabelled(system: Any, times: FloatArray, y: ArrayLike, u: ArrayLike | None) -> tuple[Any, Any]:
+    """``y`` and ``u`` with a labelled record (pandas, xarray) read into arrays by the model's channel names,
+    once, as every estimator would read it (the pilot runs take the first samples of plain arrays)."""
+
+    def read(kind: str, name: str, signal: Any, width: int | None) -> Any:
+        if signal is None or width is None or labelled_parts(signal) is None:
+            return signal  # a model without channel counts: its estimator reads the labels itself
+        names = getattr(system, f"{kind}_names", None)
+        return as_signal(name, signal, times.size, width, t=times, names=names, missing=True)
+
+    return read("output", "y", y, getattr(system, "p", None)), read("input", "u", u, getattr(system, "m", None))
 
 
 def _choose(
