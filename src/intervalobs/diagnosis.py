@@ -431,31 +431,16 @@ def run_campaign(
         On Ctrl-C (a ``KeyboardInterrupt``), after the finished batches are saved.
     """
     start = time.perf_counter()
-    m = as_count("runs", campaign.runs if runs is None else runs)
+    m, lv, mg = _campaign_grid(campaign, runs, levels, magnitudes)
     as_count("workers", workers)
     if batch is not None:
         as_count("batch", batch)
     as_count("seed", seed, minimum=0)
-    lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
-    mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
-    if not lv or not mg:
-        raise ArgumentError(f"levels, magnitudes: expected at least one of each, got {len(lv)} and {len(mg)}")
-    if not all(0.0 <= v <= campaign.magnitude_bound for v in mg):
-        got = ", ".join(f"{v:g}" for v in mg)
-        raise ArgumentError(f"magnitudes: expected fault sizes in [0, {campaign.magnitude_bound:g}], got {got}")
     out = as_output_folder("out_dir", out_dir)
     out.mkdir(parents=True, exist_ok=True)
     con = _open_store(out / "campaign.sqlite")
     n_s = len(campaign.scenarios)
-    cells: list[tuple[float, float, list[int]]] = []
-    reused = 0
-    for level in lv:
-        for magnitude in mg:
-            done = _done_runs(con, level, magnitude, seed, n_s)
-            todo = [i for i in range(m) if i not in done]
-            reused += m - len(todo)
-            if todo:
-                cells.append((level, magnitude, todo))
+    cells, reused = _runs_to_compute(con, lv, mg, seed, n_s, m)
     total = len(lv) * len(mg) * m
     report: dict[str, Any] = {"computed": 0, "failed": [], "tasks": 0, "workers": 0}
     if cells:
@@ -485,7 +470,53 @@ def run_campaign(
         report["tasks"],
         report["workers"],
     )
-    facts = {"runs": m, "levels": lv, "magnitudes": mg, "psi": psi, **campaign.describe}
+    _write_psi(out, campaign, result)
+    if plots:
+        _heatmaps(result, out, campaign)
+    return result
+
+
+def _campaign_grid(
+    campaign: Campaign, runs: int | None, levels: Sequence[float] | None, magnitudes: Sequence[float] | None
+) -> tuple[int, list[float], list[float]]:
+    """The runs per cell and the grid of :func:`run_campaign`, checked (the campaign's defaults for None)."""
+    m = as_count("runs", campaign.runs if runs is None else runs)
+    lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
+    mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
+    if not lv or not mg:
+        raise ArgumentError(f"levels, magnitudes: expected at least one of each, got {len(lv)} and {len(mg)}")
+    if not all(0.0 <= v <= campaign.magnitude_bound for v in mg):
+        got = ", ".join(f"{v:g}" for v in mg)
+        raise ArgumentError(f"magnitudes: expected fault sizes in [0, {campaign.magnitude_bound:g}], got {got}")
+    return m, lv, mg
+
+
+def _runs_to_compute(
+    con: sqlite3.Connection, levels: list[float], magnitudes: list[float], seed: int, scenarios: int, runs: int
+) -> tuple[list[tuple[float, float, list[int]]], int]:
+    """The cells with runs missing from the store (level, magnitude, run indices) and the count of runs reused."""
+    cells: list[tuple[float, float, list[int]]] = []
+    reused = 0
+    for level in levels:
+        for magnitude in magnitudes:
+            done = _done_runs(con, level, magnitude, seed, scenarios)
+            todo = [i for i in range(runs) if i not in done]
+            reused += runs - len(todo)
+            if todo:
+                cells.append((level, magnitude, todo))
+    return cells, reused
+
+
+def _write_psi(out: Path, campaign: Campaign, result: CampaignResult) -> None:
+    """``psi.json`` of a campaign, with a ``RuntimeWarning`` naming the cells whose task raised."""
+    failed = result.failed
+    facts = {
+        "runs": result.runs,
+        "levels": result.levels,
+        "magnitudes": result.magnitudes,
+        "psi": result.psi,
+        **campaign.describe,
+    }
     (out / "psi.json").write_text(json.dumps({**facts, "failed": failed} if failed else facts, indent=2) + "\n")
     if failed:
         cells_failed = ", ".join(f"({f['level']:g}, {f['magnitude']:g})" for f in failed)
@@ -493,11 +524,8 @@ def run_campaign(
             f"{len(failed)} task(s) of {campaign.name} raised (first: {failed[0]['error']}); cells (level, magnitude) "
             f"{cells_failed} have Ψ̂ = NaN; run the same campaign again to retry them",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
-    if plots:
-        _heatmaps(result, out, campaign)
-    return result
 
 
 def _psi(
