@@ -1,5 +1,8 @@
 r"""Fault isolation from interval-observer signals and Monte Carlo performance campaigns (seed 001).
 
+* :func:`isolate`, :func:`fault_signals`, :class:`IsolationRecord`: an LPV interval UIO run on a record,
+  with its isolation signals :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30) projected on
+  the columns of :math:`H` (27)–(28).
 * :func:`first_negative_time`, :func:`isolation_outcome`: a fault :math:`j` is flagged when its
   isolation signal :math:`\underline\varepsilon^{(j)}` or :math:`\overline\varepsilon^{(j)}` becomes
   negative (seed 001, (27)–(28)); before the onset of any fault that is a false alarm.
@@ -35,14 +38,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import ArgumentError, BoundsError, DataError, DimensionError, SchedulerError
+from .estimate import Estimate
+from .observers.lpv import LPVIntervalUIO
 from .validation import as_count, as_fraction, as_output_folder, as_vector
 
 __all__ = [
     "Campaign",
     "CampaignInterrupted",
     "CampaignResult",
+    "IsolationRecord",
     "campaign_tasks",
+    "fault_signals",
     "first_negative_time",
+    "isolate",
     "isolation_outcome",
     "psi_hat",
     "run_campaign",
@@ -51,6 +59,77 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class IsolationRecord:
+    r"""Isolation signals of a run of the interval UIO.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+    eps_lower, eps_upper : numpy.ndarray, shape (..., T, n)
+        :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30).
+    signal_lower, signal_upper : numpy.ndarray, shape (..., T, q)
+        Their coordinates along the columns of H, :math:`H_j^T\varepsilon/\|H_j\|^2` (the scalar of
+        the projection :math:`\Pi(H^{(j)})\varepsilon` of (27)–(28)).
+    """
+
+    t: FloatArray
+    eps_lower: FloatArray
+    eps_upper: FloatArray
+    signal_lower: FloatArray
+    signal_upper: FloatArray
+
+
+def fault_signals(h_matrix: ArrayLike, eps: ArrayLike) -> FloatArray:
+    r"""Coordinates :math:`H_j^T\varepsilon / \|H_j\|^2` of isolation signals along the columns of H.
+
+    Parameters
+    ----------
+    h_matrix : array_like, shape (n, q)
+        The unknown-input directions :math:`H = RB_{un}` (26) of an :class:`~intervalobs.observers.lpv.LPVIntervalUIO`.
+    eps : array_like, shape (..., n)
+        Isolation signals :math:`\underline\varepsilon` or :math:`\overline\varepsilon` (29)–(30).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., q)
+    """
+    h = np.asarray(h_matrix, dtype=float)
+    projector = (h / np.sum(h**2, axis=0)).T  # rows: H_j^T / |H_j|^2
+    return np.asarray(np.asarray(eps, dtype=float) @ projector.T)
+
+
+def isolate(
+    observer: LPVIntervalUIO,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    theta: ArrayLike | None = None,
+) -> tuple[Estimate, IsolationRecord]:
+    """Run an LPV interval UIO on a record and return the state bounds and the isolation signals.
+
+    Parameters
+    ----------
+    observer : LPVIntervalUIO
+        The unknown-input observer whose signals (29)–(30) are projected on its H's columns.
+    t : array_like, shape (T,)
+        Uniform sample times.
+    y : array_like, shape (T, p) or (M, T, p)
+        Outputs.
+    u : array_like, shape (T, m) or (M, T, m), optional
+        Known inputs.
+    theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
+        Measured scheduling vector (required by designed observers).
+
+    Returns
+    -------
+    estimate : Estimate
+    record : IsolationRecord
+    """
+    est, el, eh = observer.run_with_signals(t, y, u, theta=theta)
+    return est, IsolationRecord(est.t, el, eh, fault_signals(observer.H, el), fault_signals(observer.H, eh))
 
 
 def first_negative_time(t: ArrayLike, signal: ArrayLike, tol: float = 0.0) -> FloatArray:
