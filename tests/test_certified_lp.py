@@ -53,17 +53,13 @@ def test_duality_bound_refuses_free_columns_it_cannot_bound() -> None:
     assert dual_bounds(lp(np.inf), costs, duals)[0] == -np.inf
 
 
-@pytest.mark.parametrize("old, new", [("certified_lp", "certified"), ("dense_simplex", "dense_simplex")])
-def test_the_old_design_paths_warn_and_give_the_lp_layers_objects(old: str, new: str) -> None:
+@pytest.mark.parametrize("old", ["certified_lp", "dense_simplex"])
+def test_the_old_design_paths_are_gone(old: str) -> None:
+    """The LP layer's modules have one home, ``intervalobs.lp``; the former ``design`` paths were removed."""
     import importlib
 
-    module = importlib.import_module(f"intervalobs.design.{old}")
-    target = importlib.import_module(f"intervalobs.lp.{new}")
-    for name in target.__all__:
-        with pytest.warns(FutureWarning, match=f"intervalobs.lp.{new}"):
-            assert getattr(module, name) is getattr(target, name)
-    with pytest.raises(AttributeError):
-        module.no_such_name  # noqa: B018
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(f"intervalobs.design.{old}")
 
 
 def test_the_time_limit_holds_for_each_run_not_for_the_instance_s_life(monkeypatch: pytest.MonkeyPatch) -> None:

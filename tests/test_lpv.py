@@ -7,6 +7,7 @@ import pytest
 
 from intervalobs import Bounds, DesignError
 from intervalobs.design.lpv import IntervalJet, boundedness_lmi, uio_observer_matrix, verify_boundedness
+from intervalobs.diagnosis import isolate
 from intervalobs.errors import AssumptionError, BoundsError, DimensionError
 from intervalobs.examples.manipulator import (
     FAULT_BOUND,
@@ -283,7 +284,7 @@ def test_enclosure_and_no_false_alarm_at_parameter_vertices(model):
     t = np.arange(0, 2.5 + H / 2, H)
     params = model.bounds.vertices
     x, u = simulate_closed_loop(t, params, np.zeros(2))
-    est, rec = _uio(model).isolate(t, x, u)
+    est, rec = isolate(_uio(model), t, x, u)
     report = est.enclosure(x)
     assert report.fraction == 1.0 and report.max_violation == 0.0
     assert rec.signal_lower.min() >= 0.0 and rec.signal_upper.min() >= 0.0
@@ -308,7 +309,7 @@ def test_bang_bang_fault_in_channel_1_never_flags_channel_2(model):
             if rng.random() < 0.3:
                 fault[:, 0] = -fault[:, 0]
             x = rk4_step(x, us[:, k] + fault, params, h_true)
-    _, rec = _uio(model).isolate(t, xs, us)
+    _, rec = isolate(_uio(model), t, xs, us)
     assert rec.signal_lower[..., 1].min() >= 0.0 and rec.signal_upper[..., 1].min() >= 0.0
 
 

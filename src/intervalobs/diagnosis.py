@@ -1,5 +1,8 @@
 r"""Fault isolation from interval-observer signals and Monte Carlo performance campaigns (seed 001).
 
+* :func:`isolate`, :func:`fault_signals`, :class:`IsolationRecord`: an LPV interval UIO run on a record,
+  with its isolation signals :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30) projected on
+  the columns of :math:`H` (27)–(28).
 * :func:`first_negative_time`, :func:`isolation_outcome`: a fault :math:`j` is flagged when its
   isolation signal :math:`\underline\varepsilon^{(j)}` or :math:`\overline\varepsilon^{(j)}` becomes
   negative (seed 001, (27)–(28)); before the onset of any fault that is a false alarm.
@@ -35,14 +38,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import ArgumentError, BoundsError, DataError, DimensionError, SchedulerError
+from .estimate import Estimate
+from .observers.lpv import LPVIntervalUIO
 from .validation import as_count, as_fraction, as_output_folder, as_vector
 
 __all__ = [
     "Campaign",
     "CampaignInterrupted",
     "CampaignResult",
+    "IsolationRecord",
     "campaign_tasks",
+    "fault_signals",
     "first_negative_time",
+    "isolate",
     "isolation_outcome",
     "psi_hat",
     "run_campaign",
@@ -51,6 +59,77 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class IsolationRecord:
+    r"""Isolation signals of a run of the interval UIO.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (T,)
+    eps_lower, eps_upper : numpy.ndarray, shape (..., T, n)
+        :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30).
+    signal_lower, signal_upper : numpy.ndarray, shape (..., T, q)
+        Their coordinates along the columns of H, :math:`H_j^T\varepsilon/\|H_j\|^2` (the scalar of
+        the projection :math:`\Pi(H^{(j)})\varepsilon` of (27)–(28)).
+    """
+
+    t: FloatArray
+    eps_lower: FloatArray
+    eps_upper: FloatArray
+    signal_lower: FloatArray
+    signal_upper: FloatArray
+
+
+def fault_signals(h_matrix: ArrayLike, eps: ArrayLike) -> FloatArray:
+    r"""Coordinates :math:`H_j^T\varepsilon / \|H_j\|^2` of isolation signals along the columns of H.
+
+    Parameters
+    ----------
+    h_matrix : array_like, shape (n, q)
+        The unknown-input directions :math:`H = RB_{un}` (26) of an :class:`~intervalobs.observers.lpv.LPVIntervalUIO`.
+    eps : array_like, shape (..., n)
+        Isolation signals :math:`\underline\varepsilon` or :math:`\overline\varepsilon` (29)–(30).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., q)
+    """
+    h = np.asarray(h_matrix, dtype=float)
+    projector = (h / np.sum(h**2, axis=0)).T  # rows: H_j^T / |H_j|^2
+    return np.asarray(np.asarray(eps, dtype=float) @ projector.T)
+
+
+def isolate(
+    observer: LPVIntervalUIO,
+    t: ArrayLike,
+    y: ArrayLike,
+    u: ArrayLike | None = None,
+    theta: ArrayLike | None = None,
+) -> tuple[Estimate, IsolationRecord]:
+    """Run an LPV interval UIO on a record and return the state bounds and the isolation signals.
+
+    Parameters
+    ----------
+    observer : LPVIntervalUIO
+        The unknown-input observer whose signals (29)–(30) are projected on its H's columns.
+    t : array_like, shape (T,)
+        Uniform sample times.
+    y : array_like, shape (T, p) or (M, T, p)
+        Outputs.
+    u : array_like, shape (T, m) or (M, T, m), optional
+        Known inputs.
+    theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
+        Measured scheduling vector (required by designed observers).
+
+    Returns
+    -------
+    estimate : Estimate
+    record : IsolationRecord
+    """
+    est, el, eh = observer.run_with_signals(t, y, u, theta=theta)
+    return est, IsolationRecord(est.t, el, eh, fault_signals(observer.H, el), fault_signals(observer.H, eh))
 
 
 def first_negative_time(t: ArrayLike, signal: ArrayLike, tol: float = 0.0) -> FloatArray:
@@ -431,31 +510,16 @@ def run_campaign(
         On Ctrl-C (a ``KeyboardInterrupt``), after the finished batches are saved.
     """
     start = time.perf_counter()
-    m = as_count("runs", campaign.runs if runs is None else runs)
+    m, lv, mg = _campaign_grid(campaign, runs, levels, magnitudes)
     as_count("workers", workers)
     if batch is not None:
         as_count("batch", batch)
     as_count("seed", seed, minimum=0)
-    lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
-    mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
-    if not lv or not mg:
-        raise ArgumentError(f"levels, magnitudes: expected at least one of each, got {len(lv)} and {len(mg)}")
-    if not all(0.0 <= v <= campaign.magnitude_bound for v in mg):
-        got = ", ".join(f"{v:g}" for v in mg)
-        raise ArgumentError(f"magnitudes: expected fault sizes in [0, {campaign.magnitude_bound:g}], got {got}")
     out = as_output_folder("out_dir", out_dir)
     out.mkdir(parents=True, exist_ok=True)
     con = _open_store(out / "campaign.sqlite")
     n_s = len(campaign.scenarios)
-    cells: list[tuple[float, float, list[int]]] = []
-    reused = 0
-    for level in lv:
-        for magnitude in mg:
-            done = _done_runs(con, level, magnitude, seed, n_s)
-            todo = [i for i in range(m) if i not in done]
-            reused += m - len(todo)
-            if todo:
-                cells.append((level, magnitude, todo))
+    cells, reused = _runs_to_compute(con, lv, mg, seed, n_s, m)
     total = len(lv) * len(mg) * m
     report: dict[str, Any] = {"computed": 0, "failed": [], "tasks": 0, "workers": 0}
     if cells:
@@ -485,7 +549,53 @@ def run_campaign(
         report["tasks"],
         report["workers"],
     )
-    facts = {"runs": m, "levels": lv, "magnitudes": mg, "psi": psi, **campaign.describe}
+    _write_psi(out, campaign, result)
+    if plots:
+        _heatmaps(result, out, campaign)
+    return result
+
+
+def _campaign_grid(
+    campaign: Campaign, runs: int | None, levels: Sequence[float] | None, magnitudes: Sequence[float] | None
+) -> tuple[int, list[float], list[float]]:
+    """The runs per cell and the grid of :func:`run_campaign`, checked (the campaign's defaults for None)."""
+    m = as_count("runs", campaign.runs if runs is None else runs)
+    lv = [as_fraction(f"levels[{i}]", v) for i, v in enumerate(campaign.levels if levels is None else levels)]
+    mg = [float(v) for v in as_vector("magnitudes", campaign.magnitudes if magnitudes is None else magnitudes)]
+    if not lv or not mg:
+        raise ArgumentError(f"levels, magnitudes: expected at least one of each, got {len(lv)} and {len(mg)}")
+    if not all(0.0 <= v <= campaign.magnitude_bound for v in mg):
+        got = ", ".join(f"{v:g}" for v in mg)
+        raise ArgumentError(f"magnitudes: expected fault sizes in [0, {campaign.magnitude_bound:g}], got {got}")
+    return m, lv, mg
+
+
+def _runs_to_compute(
+    con: sqlite3.Connection, levels: list[float], magnitudes: list[float], seed: int, scenarios: int, runs: int
+) -> tuple[list[tuple[float, float, list[int]]], int]:
+    """The cells with runs missing from the store (level, magnitude, run indices) and the count of runs reused."""
+    cells: list[tuple[float, float, list[int]]] = []
+    reused = 0
+    for level in levels:
+        for magnitude in magnitudes:
+            done = _done_runs(con, level, magnitude, seed, scenarios)
+            todo = [i for i in range(runs) if i not in done]
+            reused += runs - len(todo)
+            if todo:
+                cells.append((level, magnitude, todo))
+    return cells, reused
+
+
+def _write_psi(out: Path, campaign: Campaign, result: CampaignResult) -> None:
+    """``psi.json`` of a campaign, with a ``RuntimeWarning`` naming the cells whose task raised."""
+    failed = result.failed
+    facts = {
+        "runs": result.runs,
+        "levels": result.levels,
+        "magnitudes": result.magnitudes,
+        "psi": result.psi,
+        **campaign.describe,
+    }
     (out / "psi.json").write_text(json.dumps({**facts, "failed": failed} if failed else facts, indent=2) + "\n")
     if failed:
         cells_failed = ", ".join(f"({f['level']:g}, {f['magnitude']:g})" for f in failed)
@@ -493,11 +603,8 @@ def run_campaign(
             f"{len(failed)} task(s) of {campaign.name} raised (first: {failed[0]['error']}); cells (level, magnitude) "
             f"{cells_failed} have Ψ̂ = NaN; run the same campaign again to retry them",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
-    if plots:
-        _heatmaps(result, out, campaign)
-    return result
 
 
 def _psi(

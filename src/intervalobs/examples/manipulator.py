@@ -826,6 +826,53 @@ def angles_only_bounds(
     AssumptionError
         If :math:`h\max|\ddot q| > 1` on some step.
     """
+    tt, qs, us, (f_lo, f_hi) = _angles_only_record(model, t, q, u, fault_box, lam)
+    h, runs = float(tt[1] - tt[0]), qs.shape[0]
+    v_lo, v_hi = as_box("velocity_box", velocity_box, 2)
+    decay, gain = float(np.exp(-lam * h)), float(-np.expm1(-lam * h) / lam)
+    kap_all, mass, inv, (meas_all, meas_scale), (shift_all, shift_scale) = _angle_terms(model.nominal, qs, h, lam)
+    lower, upper = np.empty((runs, tt.size, 4)), np.empty((runs, tt.size, 4))
+    lower[..., :2] = upper[..., :2] = qs
+    sig_lo, sig_hi = np.full((runs, tt.size, 2), np.inf), np.full((runs, tt.size, 2), np.inf)
+    p_lo, p_hi = inflate(*matvec_bounds(mass[:, 0], np.broadcast_to(v_lo, (runs, 2)), np.broadcast_to(v_hi, (runs, 2))))
+    for k in range(tt.size):
+        w_lo, w_hi = inflate(*matvec_bounds(inv[:, k], p_lo, p_hi))
+        lower[:, k, 2:], upper[:, k, 2:] = w_lo, w_hi
+        if k + 1 == tt.size:
+            break
+        (psi_lo, psi_hi), (m_lo, m_hi) = _angles_only_step_bounds(
+            model,
+            qs[:, k],
+            us[:, k],
+            (w_lo, w_hi),
+            (f_lo, f_hi),
+            lam,
+            h,
+            kap_all[:, k, None],
+            meas_all[:, k],
+            meas_scale[:, k],
+        )
+        sig_lo[:, k + 1], sig_hi[:, k + 1] = m_hi - p_lo, p_hi - m_lo
+        ok = np.all((m_hi >= p_lo) & (m_lo <= p_hi), axis=-1)[:, None]
+        p_lo, p_hi = np.where(ok, np.maximum(p_lo, m_lo), m_lo), np.where(ok, np.minimum(p_hi, m_hi), m_hi)
+        # propagate ζ over the step and shift to p_{k+1}
+        shift = shift_all[:, k]
+        size = decay * np.maximum(np.abs(p_lo), np.abs(p_hi)) + gain * np.maximum(np.abs(psi_lo), np.abs(psi_hi))
+        p_lo, p_hi = inflate(
+            decay * p_lo + gain * psi_lo + shift, decay * p_hi + gain * psi_hi + shift, scale=size + shift_scale[:, k]
+        )
+    return AnglesOnlyBounds(lower, upper, sig_lo, sig_hi)
+
+
+def _angles_only_record(
+    model: ManipulatorModel,
+    t: ArrayLike,
+    q: ArrayLike,
+    u: ArrayLike,
+    fault_box: tuple[ArrayLike, ArrayLike],
+    lam: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray]]:
+    """The checked record of :func:`angles_only_bounds`: times, angles, torques and each run's fault box."""
     tt = as_time("t", t)
     qs = np.asarray(q, dtype=float)
     us = np.asarray(u, dtype=float)
@@ -837,7 +884,6 @@ def angles_only_bounds(
     if qs.ndim != 3 or qs.shape[1:] != (tt.size, 2) or us.shape != qs.shape or not np.all(np.isfinite(qs + us)):
         raise DataError(f"q, u: expected finite arrays of shape (M, {tt.size}, 2), got {qs.shape}, {us.shape}")
     runs = qs.shape[0]
-    v_lo, v_hi = as_box("velocity_box", velocity_box, 2)
     f_lo = np.broadcast_to(np.asarray(fault_box[0], dtype=float), (runs, 2))
     f_hi = np.broadcast_to(np.asarray(fault_box[1], dtype=float), (runs, 2))
     if np.any(f_lo > 0) or np.any(f_hi < 0) or np.any(np.maximum(-f_lo, f_hi) > model.fault_bound):
@@ -847,13 +893,64 @@ def angles_only_bounds(
         )
     if not (np.isfinite(lam) and lam > 0):
         raise DataError(f"lam: expected a positive finite λ, got {lam!r}")
-    a, b, c = model.nominal
-    decay, gain = float(np.exp(-lam * h)), float(-np.expm1(-lam * h) / lam)
+    return tt, qs, us, (f_lo, f_hi)
+
+
+def _angles_only_step_bounds(
+    model: ManipulatorModel,
+    qk: FloatArray,
+    uk: FloatArray,
+    velocity: tuple[FloatArray, FloatArray],
+    fault: tuple[FloatArray, FloatArray],
+    lam: float,
+    h: float,
+    kap: FloatArray,
+    meas: FloatArray,
+    meas_scale: FloatArray,
+) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
+    r"""Bounds of ψ over the step from ``t_k`` and the box ``C_k`` of ``p_k`` from the angle increment.
+
+    ``kap`` is :math:`\kappa_k` (shape (M, 1)), ``meas`` is :math:`M(\phi_k)(q_{k+1} - q_k)/h` and
+    ``meas_scale`` the size of its terms (for the outward margin); see :func:`angles_only_bounds`.
+    """
+    b = model.nominal[1]
+    diag = lam * lam * np.array([model.nominal[0], model.nominal[2]])
     eye = np.eye(2)
-    diag = lam * lam * np.array([a, c])
-    # everything that depends on the measured angles only, for all samples at once
+    flo, fhi = model._flow(qk, velocity[0], velocity[1], uk, h)
+    phase = model._phase(flo, fhi)
+    kappa, sigma = np.cos(phase), np.sin(phase)
+    enc = model._box_enclosure(flo, fhi, uk, kappa, sigma)
+    # ṗ over the step; ΔA_R has nonzero entries only in rows 1-2, columns 3-4
+    da = interval_matvec_bounds(enc.da_lower[:, :2, 2:], enc.da_upper[:, :2, 2:], flo[:, 2:], fhi[:, 2:])
+    db = interval_matvec_bounds(enc.db_lower[:, :2], enc.db_upper[:, :2], uk, uk)
+    fb = interval_matvec_bounds(eye + enc.dbun_lower[:, :2], eye + enc.dbun_upper[:, :2], fault[0], fault[1])
+    pd_lo = enc.rate_lower[:, :2] + da[0] + db[0] + fb[0]
+    pd_hi = enc.rate_upper[:, :2] + da[1] + db[1] + fb[1]
+    # ψ = ṗ − λ(Ṁ + λM)(q − q_k): diagonal λ²(a, c), off-diagonal λb(λκ − σφ̇); q − q_k ∈ [dl, dh] ∋ 0
+    s_lo, s_hi = product_bounds(sigma.lower, sigma.upper, flo[:, 3] - fhi[:, 2], fhi[:, 3] - flo[:, 2])
+    off_lo, off_hi = lam * b * (lam * kappa.lower - s_hi), lam * b * (lam * kappa.upper - s_lo)
+    dl, dh = flo[:, :2] - qk, fhi[:, :2] - qk
+    o_lo, o_hi = product_bounds(off_lo[:, None], off_hi[:, None], dl[:, ::-1], dh[:, ::-1])
+    psi = (pd_lo - diag * dh - o_hi, pd_hi - diag * dl - o_lo)
+    # the angle increment bounds p_k (box C_k): M(φ_k)Δq/h − (h/2)[ṗ] − b(κ_k − cos Φ)J[q̇]
+    e_lo, e_hi = product_bounds(
+        b * (kap - kappa.upper[:, None]), b * (kap - kappa.lower[:, None]), flo[:, [3, 2]], fhi[:, [3, 2]]
+    )
+    return psi, inflate(meas - 0.5 * h * pd_hi - e_hi, meas - 0.5 * h * pd_lo - e_lo, scale=meas_scale)
+
+
+def _angle_terms(
+    nominal: tuple[float, float, float], qs: FloatArray, h: float, lam: float
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
+    r"""Everything of :func:`angles_only_bounds` that depends on the measured angles only, for all samples at once.
+
+    Returns :math:`\kappa` (M, T), :math:`M(\phi)` and its inverse (M, T, 2, 2), then
+    :math:`M(\phi_k)(q_{k+1} - q_k)/h` and :math:`\lambda M(\phi_{k+1})(q_{k+1} - q_k)` (M, T - 1, 2), each with
+    the size of its terms (for the outward margin).
+    """
+    a, b, c = nominal
     kap_all = np.cos(qs[..., 1] - qs[..., 0])  # (M, T)
-    mass = _mass(model.nominal, kap_all)  # (M, T, 2, 2)
+    mass = _mass(nominal, kap_all)  # (M, T, 2, 2)
     det = a * c - (b * kap_all) ** 2
     inv = np.stack([np.full_like(kap_all, c), -b * kap_all, -b * kap_all, np.full_like(kap_all, a)], axis=-1)
     inv = inv.reshape(mass.shape)
@@ -864,46 +961,4 @@ def angles_only_bounds(
     meas_scale = np.abs(meas_all) + np.einsum("mkij,mkj->mki", np.abs(mass[:, :-1]), q_abs) / h
     shift_all = lam * np.einsum("mkij,mkj->mki", mass[:, 1:], dq_all)  # λM(φ_{k+1})(q_{k+1} − q_k)
     shift_scale = np.abs(shift_all) + lam * np.einsum("mkij,mkj->mki", np.abs(mass[:, 1:]), q_abs)
-    lower, upper = np.empty((runs, tt.size, 4)), np.empty((runs, tt.size, 4))
-    lower[..., :2] = upper[..., :2] = qs
-    sig_lo, sig_hi = np.full((runs, tt.size, 2), np.inf), np.full((runs, tt.size, 2), np.inf)
-    p_lo, p_hi = inflate(*matvec_bounds(mass[:, 0], np.broadcast_to(v_lo, (runs, 2)), np.broadcast_to(v_hi, (runs, 2))))
-    for k in range(tt.size):
-        w_lo, w_hi = inflate(*matvec_bounds(inv[:, k], p_lo, p_hi))
-        lower[:, k, 2:], upper[:, k, 2:] = w_lo, w_hi
-        if k + 1 == tt.size:
-            break
-        qk, uk = qs[:, k], us[:, k]
-        flo, fhi = model._flow(qk, w_lo, w_hi, uk, h)
-        phase = model._phase(flo, fhi)
-        kappa, sigma = np.cos(phase), np.sin(phase)
-        enc = model._box_enclosure(flo, fhi, uk, kappa, sigma)
-        # ṗ over the step; ΔA_R has nonzero entries only in rows 1-2, columns 3-4
-        da = interval_matvec_bounds(enc.da_lower[:, :2, 2:], enc.da_upper[:, :2, 2:], flo[:, 2:], fhi[:, 2:])
-        db = interval_matvec_bounds(enc.db_lower[:, :2], enc.db_upper[:, :2], uk, uk)
-        fb = interval_matvec_bounds(eye + enc.dbun_lower[:, :2], eye + enc.dbun_upper[:, :2], f_lo, f_hi)
-        pd_lo = enc.rate_lower[:, :2] + da[0] + db[0] + fb[0]
-        pd_hi = enc.rate_upper[:, :2] + da[1] + db[1] + fb[1]
-        # ψ = ṗ − λ(Ṁ + λM)(q − q_k): diagonal λ²(a, c), off-diagonal λb(λκ − σφ̇); q − q_k ∈ [dl, dh] ∋ 0
-        s_lo, s_hi = product_bounds(sigma.lower, sigma.upper, flo[:, 3] - fhi[:, 2], fhi[:, 3] - flo[:, 2])
-        off_lo, off_hi = lam * b * (lam * kappa.lower - s_hi), lam * b * (lam * kappa.upper - s_lo)
-        dl, dh = flo[:, :2] - qk, fhi[:, :2] - qk
-        o_lo, o_hi = product_bounds(off_lo[:, None], off_hi[:, None], dl[:, ::-1], dh[:, ::-1])
-        psi_lo, psi_hi = pd_lo - diag * dh - o_hi, pd_hi - diag * dl - o_lo
-        # the angle increment bounds p_k (box C_k): M(φ_k)Δq/h − (h/2)[ṗ] − b(κ_k − cos Φ)J[q̇]
-        kap = kap_all[:, k, None]
-        e_lo, e_hi = product_bounds(
-            b * (kap - kappa.upper[:, None]), b * (kap - kappa.lower[:, None]), flo[:, [3, 2]], fhi[:, [3, 2]]
-        )
-        meas = meas_all[:, k]
-        m_lo, m_hi = inflate(meas - 0.5 * h * pd_hi - e_hi, meas - 0.5 * h * pd_lo - e_lo, scale=meas_scale[:, k])
-        sig_lo[:, k + 1], sig_hi[:, k + 1] = m_hi - p_lo, p_hi - m_lo
-        ok = np.all((m_hi >= p_lo) & (m_lo <= p_hi), axis=-1)[:, None]
-        p_lo, p_hi = np.where(ok, np.maximum(p_lo, m_lo), m_lo), np.where(ok, np.minimum(p_hi, m_hi), m_hi)
-        # propagate ζ over the step and shift to p_{k+1}
-        shift = shift_all[:, k]
-        size = decay * np.maximum(np.abs(p_lo), np.abs(p_hi)) + gain * np.maximum(np.abs(psi_lo), np.abs(psi_hi))
-        p_lo, p_hi = inflate(
-            decay * p_lo + gain * psi_lo + shift, decay * p_hi + gain * psi_hi + shift, scale=size + shift_scale[:, k]
-        )
-    return AnglesOnlyBounds(lower, upper, sig_lo, sig_hi)
+    return kap_all, mass, inv, (meas_all, meas_scale), (shift_all, shift_scale)

@@ -64,18 +64,18 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import expm
 
-from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer, rotate_bounds
+from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer
 from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_array, as_box, as_matrix, as_positive
+from ._lpv_step import GenericStepEnclosure, metzler_step_matrices
 from .base import Observer, ObserverState
 
-__all__ = ["IsolationRecord", "LPVIntervalObserver", "LPVIntervalUIO"]
+__all__ = ["LPVIntervalObserver", "LPVIntervalUIO"]
 
 FloatArray = NDArray[np.float64]
 
@@ -99,186 +99,6 @@ def _measured_inverse(system: LPVSystem) -> FloatArray:
             f"C: expected the form (C̃ 0) of (9), measured states first, got nonzero columns beyond the first {p}"
         )
     return np.asarray(np.linalg.inv(system.C[:, :p]))
-
-
-def _sampled(f: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
-    """``expm(F h)`` and ``∫_0^h expm(F s) ds`` (both ≥ 0 for Metzler F; rounding noise clipped)."""
-    n = f.shape[0]
-    block = np.zeros((2 * n, 2 * n))
-    block[:n, :n] = f
-    block[:n, n:] = np.eye(n)
-    ex = expm(block * h)
-    e, phi = ex[:n, :n], ex[:n, n:]
-    for name, m in (("expm(F h)", e), ("integral of expm(F s)", phi)):
-        if np.any(m < -1e-14 * max(1.0, float(np.abs(m).max()))):
-            raise DesignError(f"{name}: expected a nonnegative matrix for Metzler F, got min {m.min():g}")
-    return np.maximum(e, 0.0), np.maximum(phi, 0.0)
-
-
-def _sampled_batch(f: FloatArray, h: float) -> tuple[FloatArray, FloatArray]:
-    """:func:`_sampled` for a stack of Metzler matrices (M, n, n)."""
-    m, n = f.shape[0], f.shape[-1]
-    block = np.zeros((m, 2 * n, 2 * n))
-    block[:, :n, :n] = f
-    block[:, :n, n:] = np.eye(n)
-    ex = expm(block * h)
-    e, phi = ex[:, :n, :n], ex[:, :n, n:]
-    scale = max(1.0, float(np.abs(ex).max()))
-    if np.any(e < -1e-14 * scale) or np.any(phi < -1e-14 * scale):
-        raise DesignError(
-            f"expm(F h): expected a nonnegative matrix for Metzler F, got min {min(e.min(), phi.min()):g}"
-        )
-    return np.maximum(e, 0.0), np.maximum(phi, 0.0)
-
-
-class _IntervalEnclosure:
-    """The generic between-sample enclosure of an :class:`LPVSystem` (module docstring, "Generic models")."""
-
-    def __init__(
-        self,
-        system: LPVSystem,
-        design: LPVObserverDesign,
-        theta_rate: ArrayLike,
-        h: float,
-        unknown_input: tuple[FloatArray, FloatArray] | None,
-        disturbance: tuple[FloatArray, FloatArray],
-    ) -> None:
-        self.system, self.design, self.h = system, design, h
-        rate = np.asarray(theta_rate, dtype=float).reshape(-1)
-        rate = np.broadcast_to(rate, (system.n_theta,)) if rate.size == 1 else rate
-        if rate.shape != (system.n_theta,) or np.any(np.isnan(rate)) or np.any(rate < 0):
-            raise DataError(
-                f"theta_rate: expected {system.n_theta} nonnegative bounds of |dθ/dt| (inf allowed), got {theta_rate!r}"
-            )
-        self.theta_rate = rate
-        self.u_un = unknown_input
-        self.R = design.R
-        pts = system.test_points()
-        right = (self.R @ system.matrix_at("A", pts))[..., design.p :]
-        self.constant_f = bool(np.allclose(right, right[0], rtol=0.0, atol=0.0))
-        self._cache: tuple[FloatArray, ...] | None = None
-        d = disturbance
-        rd_lo, rd_hi = matvec_bounds(self.R, *d)
-        self.rc_lo, self.rc_hi = rd_lo + self.R @ system.c, rd_hi + self.R @ system.c
-        self.d = d
-
-    def theta_box(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
-        lo, hi = self.system.theta_box
-        with np.errstate(invalid="ignore"):
-            pad = np.where(np.isinf(self.theta_rate), np.inf, self.theta_rate * self.h)
-        return np.maximum(theta - pad, lo), np.minimum(theta + pad, hi)
-
-    def _sum(self, name: str, bound: str, th_lo: FloatArray, th_hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-        lo, hi = self.system.matrix_box(name, th_lo, th_hi)
-        extra = self.system.bounds_box(bound, th_lo, th_hi)
-        if extra is not None:
-            lo, hi = lo + extra[0], hi + extra[1]
-        return lo, hi
-
-    def flow_box(
-        self,
-        s_lo: FloatArray,
-        s_hi: FloatArray,
-        a: tuple[FloatArray, FloatArray],
-        bu: tuple[FloatArray, FloatArray],
-        fault: tuple[FloatArray, FloatArray] | None,
-    ) -> tuple[FloatArray, FloatArray]:
-        """A box containing x(t) on the step (Picard–Lindelöf a-priori enclosure, outward inflated)."""
-        const_lo, const_hi = bu[0] + self.d[0] + self.system.c, bu[1] + self.d[1] + self.system.c
-        if fault is not None:
-            const_lo, const_hi = const_lo + fault[0], const_hi + fault[1]
-        h = self.h
-
-        def image(x_lo: FloatArray, x_hi: FloatArray) -> tuple[FloatArray, FloatArray]:
-            r_lo, r_hi = interval_matvec_bounds(a[0], a[1], x_lo, x_hi)
-            return inflate(s_lo + h * np.minimum(r_lo + const_lo, 0.0), s_hi + h * np.maximum(r_hi + const_hi, 0.0))
-
-        x_lo, x_hi = image(s_lo, s_hi)
-        for _ in range(30):
-            grow = 0.1 * (x_hi - x_lo) + 1e-9 * (1.0 + np.abs(x_lo) + np.abs(x_hi))
-            x_lo, x_hi = x_lo - grow, x_hi + grow
-            n_lo, n_hi = image(x_lo, x_hi)
-            if np.all(n_lo >= x_lo) and np.all(n_hi <= x_hi):
-                return n_lo, n_hi
-            x_lo, x_hi = np.minimum(x_lo, n_lo), np.maximum(x_hi, n_hi)
-        raise DataError(f"h: the a-priori enclosure over a step of h = {h:g} s did not converge; use a smaller h")
-
-    def step(
-        self, x_lo: FloatArray, x_hi: FloatArray, x_meas: FloatArray, u: FloatArray, theta: FloatArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-        """ψ bounds and the step matrices: returns psi_lo, psi_hi, E_lower, Phi_lower, E_upper, Phi_upper."""
-        sysm, r, p = self.system, self.R, self.design.p
-        th_lo, th_hi = self.theta_box(theta)
-        a = self._sum("A", "dA", th_lo, th_hi)
-        b = self._sum("B", "dB", th_lo, th_hi)
-        bu = interval_matvec_bounds(b[0], b[1], u, u)
-        fault = None
-        dbun = None
-        if self.u_un is not None:
-            bun = self._sum("B_un", "dB_un", th_lo, th_hi)
-            fault = interval_matvec_bounds(bun[0], bun[1], *self.u_un)
-            extra = sysm.bounds_box("dB_un", th_lo, th_hi)
-            if extra is not None:
-                dbun = interval_matvec_bounds(*rotate_bounds(r, *extra), *self.u_un)
-        s_lo, s_hi = x_lo.copy(), x_hi.copy()
-        s_lo[:, :p] = s_hi[:, :p] = x_meas
-        f_lo, f_hi = self.flow_box(s_lo, s_hi, a, bu, fault)
-        ra = rotate_bounds(r, *a)
-        fl, fu = self._f_matrices(theta)
-        k_lo = ra[0] - fl @ r
-        k_hi = ra[1] - fu @ r
-        psi_lo = interval_matvec_bounds(k_lo, ra[1] - fl @ r, f_lo, f_hi)[0]
-        psi_hi = interval_matvec_bounds(ra[0] - fu @ r, k_hi, f_lo, f_hi)[1]
-        rb = interval_matvec_bounds(*rotate_bounds(r, *b), u, u)
-        psi_lo, psi_hi = psi_lo + rb[0] + self.rc_lo, psi_hi + rb[1] + self.rc_hi
-        if dbun is not None:
-            psi_lo, psi_hi = psi_lo + dbun[0], psi_hi + dbun[1]
-        return (psi_lo, psi_hi, *self._matrices(fl, fu))
-
-    def _f_matrices(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
-        fl, fu = self.design.f_matrices(self.R @ self.system.matrix_at("A", theta))
-        n = fl.shape[-1]
-        off = ~np.eye(n, dtype=bool)
-        for f in (fl, fu):
-            f[:, off] = np.maximum(f[:, off], 0.0)
-        return fl, fu
-
-    def _matrices(self, fl: FloatArray, fu: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        if self.constant_f:
-            if self._cache is None:
-                el, pl = _sampled_batch(fl[:1], self.h)
-                eu, pu = _sampled_batch(fu[:1], self.h)
-                self._cache = (el, pl, eu, pu)
-            el, pl, eu, pu = self._cache
-            m = fl.shape[0]
-            return (
-                np.broadcast_to(el, (m, *el.shape[1:])),
-                np.broadcast_to(pl, (m, *pl.shape[1:])),
-                np.broadcast_to(eu, (m, *eu.shape[1:])),
-                np.broadcast_to(pu, (m, *pu.shape[1:])),
-            )
-        return (*_sampled_batch(fl, self.h), *_sampled_batch(fu, self.h))
-
-
-@dataclass(frozen=True)
-class IsolationRecord:
-    r"""Isolation signals of a run of the interval UIO.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (T,)
-    eps_lower, eps_upper : numpy.ndarray, shape (..., T, n)
-        :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30).
-    signal_lower, signal_upper : numpy.ndarray, shape (..., T, q)
-        Their coordinates along the columns of H, :math:`H_j^T\varepsilon/\|H_j\|^2` (the scalar of
-        the projection :math:`\Pi(H^{(j)})\varepsilon` of (27)–(28)).
-    """
-
-    t: FloatArray
-    eps_lower: FloatArray
-    eps_upper: FloatArray
-    signal_lower: FloatArray
-    signal_upper: FloatArray
 
 
 @dataclass(frozen=True)
@@ -355,7 +175,7 @@ class LPVIntervalObserver(Observer):
             raise DimensionError(f"model: expected a SampledLPVModel, got {type(model).__name__}")
         system = model.system
         self.model: SampledLPVModel | None = model
-        self.generic: _IntervalEnclosure | None = None
+        self.generic: GenericStepEnclosure | None = None
         self.design_result: LPVObserverDesign | None = None
         self.system = system
         self.n, self.p, self.m = system.n, system.p, system.m
@@ -376,8 +196,8 @@ class LPVIntervalObserver(Observer):
         self.f_upper = self.f_lower.copy() if f_upper is None else as_matrix("f_upper", f_upper, (self.n, self.n))
         _check_metzler_hurwitz("f_lower", self.f_lower)
         _check_metzler_hurwitz("f_upper", self.f_upper)
-        self.e_lower, self.phi_lower = _sampled(self.f_lower, self.h)
-        self.e_upper, self.phi_upper = _sampled(self.f_upper, self.h)
+        self.e_lower, self.phi_lower = metzler_step_matrices(self.f_lower, self.h)
+        self.e_upper, self.phi_upper = metzler_step_matrices(self.f_upper, self.h)
 
     @staticmethod
     def _check_h(h: float) -> float:
@@ -444,7 +264,7 @@ class LPVIntervalObserver(Observer):
         obs.design_result = design
         obs.c_inv = design.C_tilde_inv
         obs.bounds = bounds.resolve(system)
-        obs.generic = _IntervalEnclosure(system, design, theta_rate, obs.h, unknown_input, obs.bounds.w)
+        obs.generic = GenericStepEnclosure(system, design, theta_rate, obs.h, unknown_input, obs.bounds.w)
         return obs
 
     # --- the recursion ----------------------------------------------------------------------------
@@ -831,7 +651,6 @@ class LPVIntervalUIO(LPVIntervalObserver):
             gam = np.linalg.pinv(self.H) @ f @ self.H
             if not np.allclose(f @ self.H, self.H @ np.diag(np.diag(gam)), atol=1e-9):
                 raise AssumptionError(f"{name}: expected F H = H Γ with Γ diagonal ((103)–(104))")
-        self._projector = self._make_projector(self.H)
 
     @staticmethod
     def _unknown_input_box(
@@ -841,11 +660,6 @@ class LPVIntervalUIO(LPVIntervalObserver):
         if np.any(box[0] > 0) or np.any(box[1] < 0):
             raise AssumptionError("unknown_input: expected lower <= 0 <= upper (Assumption 2.2)")
         return box
-
-    @staticmethod
-    def _make_projector(h: FloatArray) -> FloatArray:
-        col_norm2 = np.sum(h**2, axis=0)
-        return np.asarray((h / col_norm2).T)  # rows: H_j^T / |H_j|^2
 
     @classmethod
     def design(
@@ -902,48 +716,10 @@ class LPVIntervalUIO(LPVIntervalObserver):
         obs.u_un = box
         assert design.H is not None
         obs.H = design.H
-        obs._projector = cls._make_projector(design.H)
         return obs
 
     def _unknown_input_term(self, bul: FloatArray, buh: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         return interval_matvec_bounds(bul, buh, self.u_un[0], self.u_un[1])
-
-    def fault_signals(self, eps: ArrayLike) -> FloatArray:
-        """Coordinates :math:`H_j^T\\varepsilon / \\|H_j\\|^2` of isolation signals along H's columns.
-
-        Parameters
-        ----------
-        eps : array_like, shape (..., n)
-
-        Returns
-        -------
-        numpy.ndarray, shape (..., q)
-        """
-        return np.asarray(np.asarray(eps, dtype=float) @ self._projector.T)
-
-    def isolate(
-        self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None, theta: ArrayLike | None = None
-    ) -> tuple[Estimate, IsolationRecord]:
-        """Run on a record and return the state bounds and the isolation signals.
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Uniform sample times.
-        y : array_like, shape (T, p) or (M, T, p)
-            Outputs.
-        u : array_like, shape (T, m) or (M, T, m), optional
-            Known inputs.
-        theta : array_like, shape (T, n_theta) or (M, T, n_theta), optional
-            Measured scheduling vector (required by designed observers).
-
-        Returns
-        -------
-        estimate : Estimate
-        record : IsolationRecord
-        """
-        est, el, eh = self.run_with_signals(t, y, u, theta=theta)
-        return est, IsolationRecord(est.t, el, eh, self.fault_signals(el), self.fault_signals(eh))
 
 
 def _check_assumption_3(system: LPVSystem) -> None:

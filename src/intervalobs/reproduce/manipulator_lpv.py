@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..design.lpv import boundedness_lmi, uio_observer_matrix, verify_boundedness
-from ..diagnosis import Campaign, isolation_outcome, scenario_success
+from ..diagnosis import Campaign, fault_signals, isolate, isolation_outcome, scenario_success
 from ..errors import BoundsError, DesignError
 from ..estimate import enclosure_report
 from ..examples.manipulator import (
@@ -332,7 +332,7 @@ def run(out_dir: Path, seed: int = 0, plots: bool = True, full: bool = True) -> 
         bounds=Bounds(x0=(x0 - X0_RADIUS, x0 + X0_RADIUS)),
         unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)),
     )
-    est, rec = obs.isolate(t, x, u)
+    est, rec = isolate(obs, t, x, u)
     t_run = time.perf_counter() - t0
     angles_only, angles_arrays = angles_only_analysis(model, t, x, u) if full else ({}, {})
 
@@ -533,7 +533,7 @@ def campaign_task(
             xs[k], us[k] = x, controller(x, float(tk))
             x = _truth_step(x, us[k] + faults if tk >= FAULT_ONSET else us[k], par)
         *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)
-        neg = (obs.fault_signals(el) < 0) | (obs.fault_signals(eh) < 0)  # (samples, runs, faults)
+        neg = (fault_signals(obs.H, el) < 0) | (fault_signals(obs.H, eh) < 0)  # (samples, runs, faults)
         new = np.any(neg, axis=0) & np.isnan(first)
         first[new] = tb[np.argmax(neg, axis=0)][new]
     rows: list[tuple[int, int, bool, bool, list[float | None]]] = []
