@@ -1,4 +1,5 @@
-r"""High-gain interval observer with sampled outputs (seed 004, Theorems 4.2 and 4.5), made sound.
+r"""High-gain interval observer with sampled outputs (the sampled-output high-gain paper, Theorems 4.2 and 4.5), made
+sound.
 
 Model (eq. (8)): :math:`\dot x = Ax + \varphi(t, u, x) + d`, :math:`y(t_k) = Cx(t_k) + V(t_k)`.
 With :math:`A - L_1C = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1` (eq. (13)) the truth obeys
@@ -209,7 +210,7 @@ class _Modal:
 
 
 class HighGainIntervalObserver(Observer):
-    """Continuous–discrete high-gain interval observer (seed 004, Theorems 4.2 and 4.5).
+    """Continuous–discrete high-gain interval observer (the sampled-output high-gain paper, Theorems 4.2 and 4.5).
 
     Parameters
     ----------
@@ -333,7 +334,8 @@ class HighGainIntervalObserver(Observer):
         predictor: str = "modal",
         rewrap: bool = True,
     ) -> HighGainIntervalObserver:
-        """The constructive design of seed 004: Algorithm 1 for ``L1``, then (optionally) Theorem 4.4.
+        """The constructive design of the sampled-output high-gain paper: Algorithm 1 for ``L1``, then (optionally)
+        Theorem 4.4.
 
         Parameters
         ----------
@@ -600,7 +602,7 @@ class HighGainIntervalObserver(Observer):
             ``method``, ``L``, ``output_gain``, ``theta``, ``eigenvalues`` and ``refined``.
         """
         return {
-            "method": "HGIO (seed 004, Theorems 4.2 and 4.5), "
+            "method": "high-gain interval observer with sampled outputs (the sampled-output high-gain paper), "
             + ("sound exact discretisation" if self.scheme == "exact" else "paper's Euler step (not sound)"),
             "L": self.L,
             "output_gain": self.output_gain,

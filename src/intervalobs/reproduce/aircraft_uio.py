@@ -1,4 +1,4 @@
-"""Reproduction ``aircraft-uio`` (seed 000, §5): state and unknown-input bounds on the aircraft model.
+"""Reproduction ``aircraft-uio`` (the aircraft UIO paper, §5): state and unknown-input bounds on the aircraft model.
 
 What it does:
 
