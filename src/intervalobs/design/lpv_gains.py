@@ -336,7 +336,7 @@ def design_lpv_observer(
     eps1_candidates = sorted({max(eta_max, 0.05) * f for f in (0.5, 1.0, 2.0)})
     best: _Candidate | None = None
     failures = []
-    lmi_name = "(109)" if uio else "(63)"
+    lmi_name = "bounded-width LMI of the interval UIO" if uio else "bounded-width LMI of the interval observer"
     relax = f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
     for eps1 in eps1_candidates:
         problem = _LMIProblem(a_r, p, terms, gamma, kappa, eps1, eps2, q_scale)
@@ -351,7 +351,9 @@ def design_lpv_observer(
             best = candidate
     if best is None or best.margin >= 0:
         detail = f"best (1,1)-block eigenvalue {best.margin:+.3g}" if best is not None else " | ".join(failures)
-        raise DesignError(f"LMI {lmi_name}: no certificate on the {coarse.shape[0]}-point grid ({detail}); {relax}")
+        raise DesignError(
+            f"{lmi_name}: no gain keeps the widths bounded on the {coarse.shape[0]}-point grid ({detail}); {relax}"
+        )
     n2 = 2 * n
     cert = BoundednessCertificate(
         P=best.P,
