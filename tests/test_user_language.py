@@ -221,3 +221,28 @@ def test_the_scan_finds_a_builtin_error() -> None:
         (1, "ValueError"),
         (3, "TypeError"),
     ]
+
+
+def _fenced_blocks(markdown: str) -> list[str]:
+    """The fenced code blocks of a markdown text, in order (MyST directives included)."""
+    return re.findall(r"^```[^\n]*\n(.*?)^```", markdown, flags=re.MULTILINE | re.DOTALL)
+
+
+def test_the_readme_cites_all_five_papers_by_their_short_names() -> None:
+    from intervalobs.references import PAPERS
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    references = readme[readme.index("## References") :]
+    assert len(PAPERS) == 5
+    for paper in PAPERS.values():
+        assert f"**{paper.short}**" in references, f"README's References lacks {paper.short!r}"
+    for author in ("Gucik-Derigny", "Rotondo", "Khajenejad", "arXiv:2004.01861"):
+        assert author in references
+
+
+def test_the_docs_index_opens_with_pip_install_and_observe() -> None:
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    assert index.startswith("```{include} ../README.md"), "the index starts by including the README"
+    readme_blocks = _fenced_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
+    assert readme_blocks[0].strip().startswith("pip install")
+    assert "observe(" in readme_blocks[1] and "make" not in readme_blocks[1]
