@@ -49,7 +49,7 @@ from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_array, as_box, check_no_kwargs
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["GSISIO"]
 
@@ -143,10 +143,12 @@ class GSISIO(Observer):
         self._diff_inv = np.linalg.pinv(eye - d.K1 - d.L1)
 
     @classmethod
+    @options_after_bounds("jacobian_domain", "abstraction_domain")
     def design(
         cls,
         system: NonlinearSystem,
         bounds: Bounds,
+        *,
         jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None,
         abstraction_domain: tuple[ArrayLike, ArrayLike] | None = None,
         **options: Any,

@@ -55,7 +55,7 @@ from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
 from ..validation import as_box, as_choice, as_matrix, as_positive
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 if TYPE_CHECKING:
     from ..design.high_gain import ThetaDesign
@@ -318,13 +318,14 @@ class HighGainIntervalObserver(Observer):
         self.width_design: WidthDesign | None = None
 
     @classmethod
+    @options_after_bounds("disks", "h")
     def design(
         cls,
         system: SampledSystem,
         bounds: Bounds,
+        *,
         disks: Sequence[Disk | tuple[complex, float]],
         h: float,
-        *,
         objective: str = "min_gain",
         alpha_d: float | None = None,
         alpha_n: float | None = None,
@@ -400,12 +401,13 @@ class HighGainIntervalObserver(Observer):
         return observer
 
     @classmethod
+    @options_after_bounds("h")
     def design_for_width(
         cls,
         system: SampledSystem,
         bounds: Bounds,
-        h: float,
         *,
+        h: float,
         phi_radius: ArrayLike,
         input_rate: float,
         weights: ArrayLike | None = None,

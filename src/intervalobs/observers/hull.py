@@ -58,7 +58,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_positive
-from .base import Observer, ObserverState, _one_blas_thread
+from .base import Observer, ObserverState, _one_blas_thread, options_after_bounds
 
 __all__ = ["HullEstimator"]
 
@@ -238,12 +238,13 @@ class HullEstimator(Observer):
         """The route of every step's LP solves since :meth:`init` (``meta["solver_path"]``)."""
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
-        h: float | None = None,
         *,
+        h: float | None = None,
         horizon: int | None = 50,
         filtered: bool = False,
         window_boxes: bool = False,

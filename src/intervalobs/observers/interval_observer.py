@@ -25,7 +25,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_array, as_choice, as_matrix, check_no_kwargs
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["METHODS", "IntervalObserver"]
 
@@ -202,7 +202,8 @@ class IntervalObserver(Observer):
         self.design_result: FramerDesign | TubeDesign | None = None
 
     @classmethod
-    def design(cls, system: LTISystem, bounds: Bounds, h: float | None = None, **options: Any) -> IntervalObserver:
+    @options_after_bounds("h")
+    def design(cls, system: LTISystem, bounds: Bounds, *, h: float | None = None, **options: Any) -> IntervalObserver:
         """Find a gain (and, for the framer, coordinates) automatically and build the observer.
 
         The tube (default) compares steady-state Kalman gains of the sampled model and the framer's

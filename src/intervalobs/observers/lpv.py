@@ -73,7 +73,7 @@ from ..interval import inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_array, as_box, as_matrix, as_positive
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["IsolationRecord", "LPVIntervalObserver", "LPVIntervalUIO"]
 
@@ -384,10 +384,12 @@ class LPVIntervalObserver(Observer):
         return as_positive("h", h, "a positive sampling interval")
 
     @classmethod
+    @options_after_bounds("h", "theta_rate")
     def design(
         cls,
         system: LPVSystem,
         bounds: Bounds,
+        *,
         h: float,
         theta_rate: ArrayLike,
         **design_options: Any,
@@ -852,10 +854,12 @@ class LPVIntervalUIO(LPVIntervalObserver):
         return np.asarray((h / col_norm2).T)  # rows: H_j^T / |H_j|^2
 
     @classmethod
+    @options_after_bounds("h", "theta_rate", "unknown_input", "decay")
     def design(
         cls,
         system: LPVSystem,
         bounds: Bounds,
+        *,
         h: float,
         theta_rate: ArrayLike,
         unknown_input: tuple[ArrayLike, ArrayLike] = ((), ()),

@@ -85,7 +85,7 @@ from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation, sampled_model
 from ..validation import as_positive
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .interval_observer import IntervalObserver
 
 __all__ = ["RobustHullEstimator"]
@@ -178,12 +178,13 @@ class RobustHullEstimator(Observer):
         self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
-        h: float | None = None,
         *,
+        h: float | None = None,
         horizon: int = 40,
         identify: bool = True,
         fallback: Observer | Literal[False] | None = None,

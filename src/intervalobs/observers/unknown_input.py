@@ -111,7 +111,7 @@ from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..validation import as_array, as_box, as_matrix, as_positive, as_signal, as_vector
-from .base import SPACING_TOLERANCE, Observer, ObserverState
+from .base import SPACING_TOLERANCE, Observer, ObserverState, options_after_bounds
 
 __all__ = ["UnknownInputIntervalObserver"]
 
@@ -258,13 +258,14 @@ class UnknownInputIntervalObserver(Observer):
 
     # ------------------------------------------------------------------ design
     @classmethod
+    @options_after_bounds("D", "h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         D: ArrayLike,
         h: float,
-        *,
         noise_rate: ArrayLike,
         output_accel: ArrayLike,
         W: ArrayLike | None = None,

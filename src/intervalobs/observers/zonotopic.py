@@ -43,7 +43,7 @@ from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .interval_observer import IntervalObserver
 
 __all__ = ["IntegratedObserver", "ZonotopicObserver"]
@@ -291,10 +291,12 @@ class IntegratedObserver(IntervalObserver):
         self.fallback: str | None = None
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         h: float | None = None,
         **options: Any,
     ) -> IntegratedObserver:

@@ -153,8 +153,8 @@ def paper_designs() -> tuple[HighGainIntervalObserver, ModalDecomposition, Theta
     constructive = HighGainIntervalObserver.design(
         system,
         bounds,
-        example.DISKS,
-        example.STEP,
+        disks=example.DISKS,
+        h=example.STEP,
         alpha_d=example.ALPHA_D,
         alpha_n=example.ALPHA_N,
         input_rate=example.INPUT_RATE,
@@ -261,7 +261,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     widthwise = HighGainIntervalObserver.design_for_width(
         system,
         bounds,
-        example.STEP,
+        h=example.STEP,
         phi_radius=example.PHI_RADIUS,
         input_rate=example.INPUT_RATE,
         weights=WIDTH_WEIGHTS,
