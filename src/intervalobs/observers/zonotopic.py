@@ -335,7 +335,7 @@ class IntegratedObserver(IntervalObserver):
         except AssumptionError as exc:
             if fallback == "raise":
                 raise
-            reason = f"(65) dropped, gain from (19) alone: {exc}"
+            reason = f"monotonicity dropped, the H∞ gain alone: {exc}"
             result = hinf_gain(*args, monotone=False)
         observer = cls(system, bounds, result.gain)
         observer.gain_design = result
