@@ -81,14 +81,14 @@ def model(case: Case) -> tuple[io.LTISystem, io.Bounds, float | None]:
 
 
 BUILDERS: dict[str, Callable[[io.LTISystem, io.Bounds, float | None], Any]] = {
-    "observer-tube": lambda s, b, h: io.IntervalObserver.design(s, b, h),
-    "observer-framer": lambda s, b, h: io.IntervalObserver.design(s, b, h, method="framer"),
-    "hull-window": lambda s, b, h: io.HullEstimator.design(s, b, h, horizon=5),
-    "hull-full": lambda s, b, h: io.HullEstimator.design(s, b, h, horizon=None),
-    "hull-filtered": lambda s, b, h: io.HullEstimator.design(s, b, h, horizon=5, filtered=True),
+    "observer-tube": lambda s, b, h: io.IntervalObserver.design(s, b, h=h),
+    "observer-framer": lambda s, b, h: io.IntervalObserver.design(s, b, h=h, method="framer"),
+    "hull-window": lambda s, b, h: io.HullEstimator.design(s, b, h=h, horizon=5),
+    "hull-full": lambda s, b, h: io.HullEstimator.design(s, b, h=h, horizon=None),
+    "hull-filtered": lambda s, b, h: io.HullEstimator.design(s, b, h=h, horizon=5, filtered=True),
     "fir": lambda s, b, h: io.FiniteMemoryObserver.design(s, b, window=5, h=h),
-    "intersection": lambda s, b, h: io.IntersectionObserver.design(s, b, h),
-    "robust-hull": lambda s, b, h: io.RobustHullEstimator.design(s, b, h, horizon=5),
+    "intersection": lambda s, b, h: io.IntersectionObserver.design(s, b, h=h),
+    "robust-hull": lambda s, b, h: io.RobustHullEstimator.design(s, b, h=h, horizon=5),
     "robust-fir": lambda s, b, h: io.RobustFiniteMemoryObserver.design(s, b, window=5, h=h),
 }
 """Every linear estimator's default design, with short windows (the cases are short records)."""

@@ -165,13 +165,21 @@ def test_batched_init_and_step_match_run(gains: dict[str, np.ndarray]) -> None:
 
 def test_design_runs_algorithm_1_and_theorem_44() -> None:
     observer = HighGainIntervalObserver.design(
-        example.system(), example.bounds(), example.DISKS, example.STEP, alpha_d=0.08, alpha_n=0.03, input_rate=9.0
+        example.system(),
+        example.bounds(),
+        disks=example.DISKS,
+        h=example.STEP,
+        alpha_d=0.08,
+        alpha_n=0.03,
+        input_rate=9.0,
     )
     assert observer.placement is not None and observer.theta_design is not None
     np.testing.assert_allclose(observer.L, 0.0, atol=1e-12)
     assert observer.theta == pytest.approx(np.log(1.6 / 0.08), abs=1e-3)  # sound reading, recorded only
     with pytest.raises(TypeError):
-        HighGainIntervalObserver.design(example.system(), example.bounds(), example.DISKS, example.STEP, gain=1.0)  # type: ignore[call-arg]
+        HighGainIntervalObserver.design(
+            example.system(), example.bounds(), disks=example.DISKS, h=example.STEP, gain=1.0
+        )  # type: ignore[call-arg]
 
 
 def test_modal_predictor_and_rewrap_only_tighten(gains: dict[str, np.ndarray]) -> None:

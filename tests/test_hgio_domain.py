@@ -83,7 +83,7 @@ def test_a_box_outside_the_domain_is_reported_as_contradicting_data() -> None:
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_bounds_inside_the_domain_enclose_the_truth(seed: int) -> None:
     t, y, x = _record(6.0, seed)
-    observer = HighGainIntervalObserver.design(_chemostat(), BOUNDS, DISKS, STEP, output_gain=np.zeros((2, 1)))
+    observer = HighGainIntervalObserver.design(_chemostat(), BOUNDS, disks=DISKS, h=STEP, output_gain=np.zeros((2, 1)))
     est = observer.run(t, y)
     assert est.enclosure(x).max_violation == 0.0
     assert np.all(est.lower >= 0.0)  # intersected with the domain: no negative concentration
@@ -93,7 +93,7 @@ def test_bounds_inside_the_domain_enclose_the_truth(seed: int) -> None:
 def test_a_diverging_run_warns_and_says_so_in_meta() -> None:
     """The issue's case: output gain zero, 60 h; the widths of X grow ~10^6 times, enclosure still 1.0."""
     t, y, x = _record(60.0, 3, runs=1)
-    observer = HighGainIntervalObserver.design(_chemostat(), BOUNDS, DISKS, STEP, output_gain=np.zeros((2, 1)))
+    observer = HighGainIntervalObserver.design(_chemostat(), BOUNDS, disks=DISKS, h=STEP, output_gain=np.zeros((2, 1)))
     with pytest.warns(DivergenceWarning, match="grow without bound"):
         est = observer.run(t, y)
     assert est.enclosure(x).max_violation == 0.0
@@ -102,7 +102,7 @@ def test_a_diverging_run_warns_and_says_so_in_meta() -> None:
 
 def test_a_placed_gain_that_makes_the_output_observer_diverge_is_refused() -> None:
     with pytest.raises(DesignError, match="grow without bound on this system"):
-        HighGainIntervalObserver.design(_chemostat(), BOUNDS, DISKS, STEP)
+        HighGainIntervalObserver.design(_chemostat(), BOUNDS, disks=DISKS, h=STEP)
 
 
 def _estimate(width: np.ndarray) -> Estimate:

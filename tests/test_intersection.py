@@ -21,8 +21,8 @@ def test_intersection_is_sound_and_never_wider_than_members(seed: int, continuou
     h = 0.05 if continuous else None
     t = np.arange(60) * (h or 1.0)
     members = [
-        IntervalObserver.design(system, bounds, h, method="framer"),
-        IntervalObserver.design(system, bounds, h),
+        IntervalObserver.design(system, bounds, h=h, method="framer"),
+        IntervalObserver.design(system, bounds, h=h),
     ]
     obs = IntersectionObserver(members, system, bounds)
     sim = simulate(system, bounds, t, noise="extreme", seed=seed, runs=4)

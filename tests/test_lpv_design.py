@@ -138,17 +138,17 @@ def test_design_lmis_give_metzler_hurwitz_f_and_verified_certificates(system, ob
 
 def test_design_errors_name_the_failed_condition():
     bad_a12 = make_system(A=lambda th: [[-1.0, 0, -0.5, 0], [0, -2.0, 0, 0.4], [0, 0, -1.5, 0.3], [0, 0.5, 0.2, -1.0]])
-    with pytest.raises(DesignError, match=r"\(17\)"):
+    with pytest.raises(DesignError, match="push the measured ones up"):
         design_lpv_observer(bad_a12)
     bad_a22 = make_system(A=lambda th: [[-1.0, 0, 0.5, 0], [0, -2.0, 0, 0.4], [0, 0, -1.5, -0.3], [0, 0.5, 0.2, -1.0]])
-    with pytest.raises(DesignError, match=r"\(18\)"):
+    with pytest.raises(DesignError, match="must stay ordered"):
         design_lpv_observer(bad_a22)
     wide = make_system(dA=(-20 * DA, 20 * DA))
-    with pytest.raises(DesignError, match=r"LMI \(63\)"):
+    with pytest.raises(DesignError, match="no gain keeps the widths bounded"):
         design_lpv_observer(wide)
-    with pytest.raises(AssumptionError, match=r"\(9\)"):
+    with pytest.raises(AssumptionError, match="measured states first"):
         design_lpv_observer(make_system(C=[[0, 0, 1.0, 0], [0, 0, 0, 1.0]], B_un=None))
-    with pytest.raises(AssumptionError, match=r"Assumption 2\.3"):
+    with pytest.raises(AssumptionError, match="exactly known terms"):
         LPVIntervalUIO.design(
             make_system(dA=(-np.ones((4, 4)) * 0.01, np.ones((4, 4)) * 0.01)),
             bounds=BOUNDS,

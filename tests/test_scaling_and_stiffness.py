@@ -85,9 +85,9 @@ def test_stiff_interval_model_gives_finite_sound_boxes(h: float) -> None:
     bounds = io.Bounds(x0=([-1, -1], [1, 1]), w=(-0.1, 0.1), v=(-0.01, 0.01))
     t = np.arange(12) * h
     truth = io.simulate(system, bounds, t, seed=2)
-    reference = io.IntervalObserver.design(system, bounds, h).run(t, truth.y)
+    reference = io.IntervalObserver.design(system, bounds, h=h).run(t, truth.y)
     for estimator in (
-        io.RobustHullEstimator.design(system, bounds, h, horizon=5),
+        io.RobustHullEstimator.design(system, bounds, h=h, horizon=5),
         io.RobustFiniteMemoryObserver.design(system, bounds, window=5, h=h),
     ):
         estimate = estimator.run(t, truth.y)
@@ -108,8 +108,8 @@ def test_robust_hull_is_never_wider_than_the_default_observer(seed: int) -> None
     h = 2.0
     t = np.arange(15) * h
     truth = io.simulate(system, bounds, t, seed=seed)
-    reference = io.IntervalObserver.design(system, bounds, h).run(t, truth.y)
-    estimate = io.RobustHullEstimator.design(system, bounds, h, horizon=5).run(t, truth.y)
+    reference = io.IntervalObserver.design(system, bounds, h=h).run(t, truth.y)
+    estimate = io.RobustHullEstimator.design(system, bounds, h=h, horizon=5).run(t, truth.y)
     assert np.all((estimate.lower <= truth.x) & (truth.x <= estimate.upper))
     assert np.all(estimate.lower >= reference.lower) and np.all(estimate.upper <= reference.upper)
 

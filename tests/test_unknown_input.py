@@ -17,7 +17,7 @@ H = ac.TE
 def _design(**kwargs) -> UnknownInputIntervalObserver:
     options = {"noise_rate": np.full(4, ac.DELTA_DOT_BAR), "output_accel": np.full(4, ac.OUTPUT_ACCEL)}
     options.update(kwargs)
-    return UnknownInputIntervalObserver.design(ac.aircraft_system(), ac.aircraft_bounds(), ac.D, H, **options)
+    return UnknownInputIntervalObserver.design(ac.aircraft_system(), ac.aircraft_bounds(), D=ac.D, h=H, **options)
 
 
 @pytest.fixture(scope="module")
@@ -151,7 +151,7 @@ def test_complex_poles_on_the_aircraft_enclose() -> None:
 def test_aircraft_known_commands_enclose_with_no_input_widths(control) -> None:
     system = ac.aircraft_system(known_inputs=True)
     options = {"noise_rate": np.full(4, ac.DELTA_DOT_BAR), "output_accel": np.full(4, ac.OUTPUT_ACCEL)}
-    obs = UnknownInputIntervalObserver.design(system, ac.aircraft_bounds(), ac.D, H, **options)
+    obs = UnknownInputIntervalObserver.design(system, ac.aircraft_bounds(), D=ac.D, h=H, **options)
     t = np.arange(25001) * H  # spans the rudder step at 2.00005 s (inside a sampling step)
     rec = ac.simulate_aircraft(t, seed=8, delta_kind="plateau", omega_kind="vertex", control=control)
     assert np.abs(rec.psi_ddot).max() <= ac.OUTPUT_ACCEL

@@ -63,7 +63,7 @@ def _observer(known: bool = True) -> UnknownInputIntervalObserver:
         v=(-0.01 * np.ones(2), 0.01 * np.ones(2)),
     )
     return UnknownInputIntervalObserver.design(
-        system, bounds, D, H, noise_rate=np.full(2, 0.01), output_accel=np.full(2, L_BOUND), poles=POLES
+        system, bounds, D=D, h=H, noise_rate=np.full(2, 0.01), output_accel=np.full(2, L_BOUND), poles=POLES
     )
 
 

@@ -1,57 +1,196 @@
-"""The user's language: no paper-internal references in error messages or in the user pages.
+"""The user's language: no paper-internal references in error messages, warnings or the user pages.
 
-Error messages (the strings of every ``raise`` in the package) and the user pages (README.md and
-docs/*.md, except docs/paper-notes.md, which maps the papers to the code, and docs/design.md, which
-records decisions with their sources) say what a condition means for the user's system; the paper
-and equation belong in a docstring's References section.
+Error messages and warnings (the strings of every ``raise`` and ``warnings.warn`` in the package) and
+the user pages (README.md, docs/*.md except docs/paper-notes.md, which maps the papers to the code, and
+the markdown cells of the notebooks) say what a condition means for the user's system; the paper and
+its theorem, hypothesis and equation numbers belong in a docstring or in the References block of
+:mod:`intervalobs.references`. The papers' file numbers ("seed 00N") appear nowhere in the package, not
+even in a docstring: only docs/paper-notes.md names them.
+
+Allow-list (the only exceptions):
+
+- ``seed`` as a random-number seed: the argument (``seed=``, ``seed:``, ``--seed``, in a code span),
+  seeds numbered 0, 1, 2 … (never 00N), and "per seed", "the seeds", "three seeds" and the like;
+- ``MESSAGE_ALLOWED``: the option values of ``ZonotopicObserver.design(lmi=...)``, which are the
+  paper's equation labels by design.
 """
 
 from __future__ import annotations
 
 import ast
+import json
+import re
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "src" / "intervalobs"
-PAPER_TERMS = ("seed 00", "Seed 00", "Theorem", "Hypothesis", "H-matrix", "U2'g")
-"""Paper-internal names: the papers' file numbers, their theorem and hypothesis numbers, their symbols."""
+PAPER_TERMS = re.compile(
+    r"(?i:\bseeds?\b)|\bTheorems?\b|\bHypothes[ie]s\b|\bH-matrix\b|U2'g|\bLemmas?\b|\bCorollar(?:y|ies)\b"
+    r"|\bPropositions?\b|\bAssumptions? \d|\bAlgorithm \d|\beqs?\. ?\("
+)
+"""Paper-internal names: "seed" (the papers' file numbers), theorem, hypothesis, lemma, corollary,
+proposition, numbered assumption and algorithm references, equation references and the papers' symbols.
+Capitalised words only, except "seed": "a hypothesis bank" or "Smolyak's theorem" is plain English."""
+RANDOM_SEED = re.compile(
+    r"--seed\b|\bseed\s*[=:]|\bseeds?\s+(?!00)\d|\"seeds?\""
+    r"|\b(?:per|each|worst|random|held-out|over the|the|of the|three|two|\d+) seeds\b"
+    r"|\b(?:per|each|worst|random) seed\b",
+    re.IGNORECASE,
+)
+"""A "seed" that is a random-number seed, not a paper (see the module's allow-list)."""
+CODE_SPAN = re.compile(r"`[^`\n]+`")
+"""An inline code span of a page: it names an argument (``Example.run(out, seed, ...)``), never a paper."""
+PAPER_FILE = re.compile(r"\b[Ss]eeds? 00\d")
+"""A paper's file number, allowed only in docs/paper-notes.md."""
+MESSAGE_ALLOWED = {("observers/zonotopic.py", "lmi: expected '(26)' or '(19)', got ")}
+"""(module, message) pairs allowed to keep an equation label: the values of an option."""
 PAGES = [
     ROOT / "README.md",
-    *(p for p in sorted((ROOT / "docs").glob("*.md")) if p.name not in ("paper-notes.md", "design.md")),
+    *(p for p in sorted((ROOT / "docs").glob("*.md")) if p.name != "paper-notes.md"),
 ]
+NOTEBOOKS = sorted((ROOT / "docs" / "notebooks").glob("*.ipynb"))
+MODULES = sorted(PACKAGE.rglob("*.py"))
 
 
-def _messages(path: Path) -> list[tuple[int, str]]:
-    """(line, text) of the string parts of every ``raise`` of a module."""
+def paper_terms(text: str, code_spans: bool = False) -> list[str]:
+    """The paper-internal names in a text, random-number seeds (and, on a page, code spans) excepted.
+
+    Parameters
+    ----------
+    text : str
+        An error message, a warning or a page.
+    code_spans : bool
+        Whether the text is markdown whose inline code spans may name a ``seed`` argument.
+
+    Returns
+    -------
+    list of str
+        Each offending word, in order.
+    """
+    allowed = [m.span() for m in RANDOM_SEED.finditer(text)]
+    if code_spans:
+        allowed += [m.span() for m in CODE_SPAN.finditer(text)]
     found = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Raise) and node.exc is not None:
-            parts = [n.value for n in ast.walk(node.exc) if isinstance(n, ast.Constant) and isinstance(n.value, str)]
-            found.append((node.lineno, " ".join(parts)))
+    for match in PAPER_TERMS.finditer(text):
+        is_seed = match.group(0).lower().startswith("seed")
+        if is_seed and any(start <= match.start() < end for start, end in allowed):
+            continue
+        found.append(match.group(0))
     return found
 
 
-@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(PACKAGE)))
+def _is_warning(node: ast.AST) -> bool:
+    """Whether a node is a call of ``warnings.warn`` (or a bare ``warn``)."""
+    if not isinstance(node, ast.Call):
+        return False
+    func = node.func
+    return (isinstance(func, ast.Attribute) and func.attr == "warn") or (
+        isinstance(func, ast.Name) and func.id == "warn"
+    )
+
+
+def messages(source: str) -> list[tuple[int, str]]:
+    """(line, text) of the string parts of every ``raise`` and ``warnings.warn`` of a module's source."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Raise) and node.exc is not None:
+            target: ast.AST = node.exc
+        elif _is_warning(node):
+            target = node
+        else:
+            continue
+        parts = [n.value for n in ast.walk(target) if isinstance(n, ast.Constant) and isinstance(n.value, str)]
+        found.append((node.lineno, " ".join(parts)))
+    return found
+
+
+def _markdown_of(notebook: Path) -> str:
+    """The markdown cells of a notebook, one text."""
+    cells = json.loads(notebook.read_text(encoding="utf-8"))["cells"]
+    return "\n\n".join("".join(cell["source"]) for cell in cells if cell["cell_type"] == "markdown")
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_error_messages_speak_of_the_system_not_the_paper(path: Path) -> None:
-    for line, text in _messages(path):
-        terms = [term for term in PAPER_TERMS if term in text]
-        assert not terms, f"{path.relative_to(ROOT)}:{line}: error message names {terms}: say what it means instead"
+    module = path.relative_to(PACKAGE).as_posix()
+    for line, text in messages(path.read_text(encoding="utf-8")):
+        if (module, text) in MESSAGE_ALLOWED:
+            continue
+        terms = paper_terms(text)
+        assert not terms, f"{path.relative_to(ROOT)}:{line}: message names {terms}: say what it means instead"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_the_package_never_names_a_paper_by_its_file_number(path: Path) -> None:
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        assert not PAPER_FILE.search(line), f"{path.relative_to(ROOT)}:{number}: use the paper's short name"
 
 
 @pytest.mark.parametrize("path", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_user_pages_speak_of_the_system_not_the_paper(path: Path) -> None:
     for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
-        terms = [term for term in PAPER_TERMS if term in line]
+        terms = paper_terms(line, code_spans=True)
         assert not terms, f"{path.relative_to(ROOT)}:{number} names {terms}: {line.strip()[:80]}"
 
 
-def test_the_scan_finds_a_paper_reference() -> None:
-    assert [term for term in PAPER_TERMS if term in 'raise AssumptionError("Hypothesis 6 (seed 000)")'] == [
-        "seed 00",
-        "Hypothesis",
-    ]
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_notebook_text_speaks_of_the_system_not_the_paper(path: Path) -> None:
+    terms = paper_terms(_markdown_of(path), code_spans=True)
+    assert not terms, f"{path.relative_to(ROOT)}: markdown names {terms}"
+
+
+def test_the_pages_and_notebooks_are_found() -> None:
+    names = {p.name for p in PAGES}
+    assert {"README.md", "index.md", "guide.md", "design.md"} <= names and "paper-notes.md" not in names
+    assert len(NOTEBOOKS) >= 3
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ('raise AssumptionError("Hypothesis 6 (seed 000)")', ["Hypothesis", "seed"]),
+        ("Seed 003's Theorem 1 gains", ["Seed", "Theorem"]),
+        ("the seed's Lemma 2 constant", ["seed", "Lemma"]),
+        ("the H-matrix of Corollary 3.1, U2'g", ["H-matrix", "Corollary", "U2'g"]),
+        (
+            "under Assumption 2.2, Algorithm 1, eq. (13) and Proposition 3",
+            ["Assumption 2", "Algorithm 1", "eq. (", "Proposition"],
+        ),
+        ("seeds 000 and 004", ["seeds"]),
+        ("seed: expected a nonnegative integer; simulate(..., seed=3); --seed N", []),
+        ("ranges over seeds 0, 1, 2; per seed; the worst seed; over the seeds; 5 seeds", []),
+        ("a hypothesis bank; Smolyak's theorem", []),
+    ],
+    ids=[
+        "hypothesis",
+        "capital-seed",
+        "the-seed",
+        "symbols",
+        "numbered",
+        "two-papers",
+        "rng-args",
+        "rng-runs",
+        "prose",
+    ],
+)
+def test_the_scan_finds_a_paper_reference(text: str, expected: list[str]) -> None:
+    assert paper_terms(text) == expected
+
+
+def test_the_scan_reads_messages_warnings_and_code_spans() -> None:
+    source = (
+        "import warnings\n"
+        "raise DesignError(f'LMI of Theorem {k}: infeasible')\n"
+        "warnings.warn('the seed 002 gain', stacklevel=2)\n"
+        "raise DataError('seed: expected an integer')\n"
+    )
+    found = [(line, paper_terms(text)) for line, text in messages(source)]
+    assert sorted(found) == [(2, ["Theorem"]), (3, ["seed"]), (4, [])]
+    assert paper_terms("`Example.run(out, seed, plots)`", code_spans=True) == []
+    assert paper_terms("Example.run(out, seed, plots)") == ["seed"]
+    assert PAPER_FILE.search("see seed 004") and not PAPER_FILE.search("seed 0 of the benchmark")
 
 
 BUILTIN_ERRORS = {"TypeError", "ValueError", "RuntimeError", "KeyError", "IndexError", "OSError", "Exception"}
@@ -71,7 +210,7 @@ def _raised_builtins(source: str) -> list[tuple[int, str]]:
     return found
 
 
-@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(PACKAGE)))
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_errors_are_the_library_s_named_errors(path: Path) -> None:
     raised = _raised_builtins(path.read_text(encoding="utf-8"))
     assert not raised, f"{path.relative_to(ROOT)}: raises {raised}: use the named error of intervalobs.errors"
@@ -82,3 +221,28 @@ def test_the_scan_finds_a_builtin_error() -> None:
         (1, "ValueError"),
         (3, "TypeError"),
     ]
+
+
+def _fenced_blocks(markdown: str) -> list[str]:
+    """The fenced code blocks of a markdown text, in order (MyST directives included)."""
+    return re.findall(r"^```[^\n]*\n(.*?)^```", markdown, flags=re.MULTILINE | re.DOTALL)
+
+
+def test_the_readme_cites_all_five_papers_by_their_short_names() -> None:
+    from intervalobs.references import PAPERS
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    references = readme[readme.index("## References") :]
+    assert len(PAPERS) == 5
+    for paper in PAPERS.values():
+        assert f"**{paper.short}**" in references, f"README's References lacks {paper.short!r}"
+    for author in ("Gucik-Derigny", "Rotondo", "Khajenejad", "arXiv:2004.01861"):
+        assert author in references
+
+
+def test_the_docs_index_opens_with_pip_install_and_observe() -> None:
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    assert index.startswith("```{include} ../README.md"), "the index starts by including the README"
+    readme_blocks = _fenced_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
+    assert readme_blocks[0].strip().startswith("pip install")
+    assert "observe(" in readme_blocks[1] and "make" not in readme_blocks[1]

@@ -146,7 +146,7 @@ def test_width_design_meets_the_goal_soundly(seed: int) -> None:
     observer = HighGainIntervalObserver.design_for_width(
         system,
         bounds,
-        example.STEP,
+        h=example.STEP,
         phi_radius=example.PHI_RADIUS,
         input_rate=example.INPUT_RATE,
         weights=[0.0, 1.0, 1.0],

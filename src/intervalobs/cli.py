@@ -17,6 +17,7 @@ from . import __version__
 from . import cli_types as types
 from .errors import FileError, IntervalObserverError
 from .records import OBSERVERS
+from .references import short_name
 from .validation import as_output_folder
 
 if TYPE_CHECKING:
@@ -285,7 +286,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return int(exc.code or 0)
         if args.command == "list":
             for example in examples.values():
-                print(f"{example.name:20s}  {example.seed_file:26s}  {example.description}")
+                print(f"{example.name:20s}  {short_name(example.seed_file):36s}  {example.description}")
             return 0
         if args.command == "check":
             return _check(args.folders)
@@ -340,7 +341,11 @@ def _tightness(example: Example, results: Path | None, seed: int) -> int:
             summary = example.run(Path(tmp) / example.name, seed, False)
         if "tightness" not in summary:
             return _fail(f"NAME: expected an example with a tightness report (a linear one), got {example.name!r}")
-    print(format_tightness(summary["tightness"], title=f"{example.name}: tightness (seed {summary.get('seed')})"))
+    print(
+        format_tightness(
+            summary["tightness"], title=f"{example.name}: tightness ({short_name(str(summary.get('seed', '-')))})"
+        )
+    )
     return 0
 
 

@@ -1,9 +1,9 @@
-r"""Centred complex intervals (seed 004, Section 2; Combastel & Raka 2011).
+r"""Centred complex intervals (the sampled-output high-gain paper, Section 2; Combastel & Raka 2011).
 
 A complex interval vector in centred form is :math:`c \pm r = [c - r, c + r]` with
 :math:`c \in \mathbb{C}^n` and a radius :math:`r` whose real and imaginary parts are both
 nonnegative: it is the set of :math:`z` with :math:`|z^R - c^R| \le r^R` and
-:math:`|z^I - c^I| \le r^I` elementwise (a product of rectangles), seed 004 eq. (1).
+:math:`|z^I - c^I| \le r^I` elementwise (a product of rectangles), the sampled-output high-gain paper, eq. (1).
 
 * :func:`cabs` — :math:`\operatorname{cabs}(a) = |a^R| + i|a^I|`;
 * :func:`ctimes` — :math:`M \circ R = \operatorname{cabs}(M)\operatorname{cabs}(R) + 2|M^I||R^I|`;
@@ -55,7 +55,7 @@ def cabs(a: ArrayLike) -> ComplexArray:
     Returns
     -------
     numpy.ndarray
-        Complex array of the same shape (seed 004, Section 2, operator ``cabs``).
+        Complex array of the same shape (the sampled-output high-gain paper, Section 2, operator ``cabs``).
     """
     arr = np.asarray(a, dtype=complex)
     return np.abs(arr.real) + 1j * np.abs(arr.imag)
@@ -65,7 +65,7 @@ def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
     r"""Radius of :math:`M(0 \pm R)`: :math:`M \circ R = \operatorname{cabs}(M)\operatorname{cabs}(R) + 2|M^I||R^I|`.
 
     Its real part is :math:`|M^R|R^R + |M^I|R^I` and its imaginary part :math:`|M^I|R^R + |M^R|R^I`
-    (seed 004, Theorem 2.1).
+    (the sampled-output high-gain paper, Theorem 2.1).
 
     Parameters
     ----------
@@ -90,8 +90,8 @@ def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
 def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: ArrayLike, r_imag: ArrayLike) -> FloatArray:
     r"""Real part of :math:`M \circ R`, :math:`|M^R|R^R + |M^I|R^I`, from precomputed magnitudes.
 
-    Seed 004, Theorem 2.1: the real radius of :math:`M(c \pm R)`. (Its imaginary part is the same
-    expression with :math:`|M^R|` and :math:`|M^I|` swapped.) No validation: for hot loops whose
+    The sampled-output high-gain paper, Theorem 2.1: the real radius of :math:`M(c \pm R)`. (Its imaginary part is the
+    same expression with :math:`|M^R|` and :math:`|M^I|` swapped.) No validation: for hot loops whose
     magnitudes are computed once.
 
     Parameters
@@ -112,8 +112,8 @@ def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: Array
 def linear_image(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[ComplexArray, ComplexArray]:
     r"""Linear image of a centred complex interval, :math:`M(c \pm R) \subseteq Mc \pm M \circ R`.
 
-    Seed 004, Theorem 2.1. Each component of the image is a sum of terms involving distinct real
-    variables, so the rectangle is the exact hull of :math:`\{Mz : z \in c \pm R\}`.
+    The sampled-output high-gain paper, Theorem 2.1. Each component of the image is a sum of terms involving distinct
+    real variables, so the rectangle is the exact hull of :math:`\{Mz : z \in c \pm R\}`.
 
     Parameters
     ----------
@@ -139,7 +139,8 @@ def real_part_bounds(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[FloatArr
     r"""Lower and upper bounds of :math:`\operatorname{Re}(Mz)` for :math:`z \in c \pm R`.
 
     The real part of Theorem 2.1: :math:`\operatorname{Re}(Mc) \mp (|M^R|R^R + |M^I|R^I)`. This is how
-    the bounds of a real state are recovered from complex observer coordinates (seed 004, (25), (51)).
+    the bounds of a real state are recovered from complex observer coordinates (the sampled-output high-gain paper,
+    (25), (51)).
 
     Parameters
     ----------
@@ -160,7 +161,7 @@ def delta_operator(eta: ArrayLike) -> ComplexArray:
     r"""The matrix :math:`\Delta(\eta) = [\operatorname{diag}(\eta^R),\; i\operatorname{diag}(\eta^I)]`.
 
     With it a point of :math:`z^c \pm z^r` is :math:`z^c + \Delta(z^r)\sigma` for some
-    :math:`\sigma \in [-1, 1]^{2n}` (seed 004, Proposition 2.2, eqs. (3)–(4)).
+    :math:`\sigma \in [-1, 1]^{2n}` (the sampled-output high-gain paper, Proposition 2.2, eqs. (3)–(4)).
 
     Parameters
     ----------

@@ -1,11 +1,11 @@
-r"""Fault isolation from interval-observer signals and Monte Carlo performance campaigns (seed 001).
+r"""Fault isolation from interval-observer signals and Monte Carlo performance campaigns (Rotondo et al.).
 
 * :func:`isolate`, :func:`fault_signals`, :class:`IsolationRecord`: an LPV interval UIO run on a record,
   with its isolation signals :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30) projected on
   the columns of :math:`H` (27)–(28).
 * :func:`first_negative_time`, :func:`isolation_outcome`: a fault :math:`j` is flagged when its
   isolation signal :math:`\underline\varepsilon^{(j)}` or :math:`\overline\varepsilon^{(j)}` becomes
-  negative (seed 001, (27)–(28)); before the onset of any fault that is a false alarm.
+  negative (Rotondo et al., (27)–(28)); before the onset of any fault that is a false alarm.
 * :func:`psi_hat`, :func:`runs_for_sigma`: the Monte Carlo estimate :math:`\hat\Psi` (119) of the
   performance metric (118) and the number of runs for a standard deviation (120).
 * :func:`run_campaign`: Ψ̂ over a grid (uncertainty level × fault magnitude) for several scenarios on

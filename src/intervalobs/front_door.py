@@ -170,7 +170,7 @@ def memory_horizon(system: LTISystem, h: float | None = None) -> int:
 
 def _hull(problem: Problem) -> Observer:
     horizon = memory_horizon(problem.system, problem.h)
-    return HullEstimator.design(problem.system, problem.bounds, problem.h, horizon=horizon, filtered=True)
+    return HullEstimator.design(problem.system, problem.bounds, h=problem.h, horizon=horizon, filtered=True)
 
 
 def _bank(problem: Problem) -> Observer:
@@ -180,7 +180,7 @@ def _bank(problem: Problem) -> Observer:
 
 def _robust_hull(problem: Problem) -> Observer:
     horizon = min(memory_horizon(problem.system, problem.h), 40)
-    return RobustHullEstimator.design(problem.system, problem.bounds, problem.h, horizon=horizon)
+    return RobustHullEstimator.design(problem.system, problem.bounds, h=problem.h, horizon=horizon)
 
 
 def _robust_bank(problem: Problem) -> Observer:
@@ -201,14 +201,14 @@ def _unknown_input(problem: Problem) -> Observer:
         )
     assert problem.unknown_input is not None and problem.h is not None
     return UnknownInputIntervalObserver.design(
-        problem.system, problem.bounds, problem.unknown_input, problem.h, **problem.options
+        problem.system, problem.bounds, D=problem.unknown_input, h=problem.h, **problem.options
     )
 
 
 def _lpv(problem: Problem) -> Observer:
     if problem.h is None or "theta_rate" not in problem.options:
         raise ArgumentError("options: an LPV observer needs theta_rate (a bound of |dθ/dt|), got none")
-    return LPVIntervalObserver.design(problem.system, problem.bounds, problem.h, **problem.options)
+    return LPVIntervalObserver.design(problem.system, problem.bounds, h=problem.h, **problem.options)
 
 
 def _null_space(problem: Problem) -> Observer:

@@ -11,7 +11,7 @@ Conventions (DESIGN.md): for a real matrix :math:`A`, :math:`A^+ = \max(A, 0)` a
 
 .. math:: A^+\underline{x} - A^-\overline{x} \;\le\; Ax \;\le\; A^+\overline{x} - A^-\underline{x},
 
-which is the exact interval hull of :math:`\{Ax\}` (seed 003, Proposition 2 / Lemma 1);
+which is the exact interval hull of :math:`\{Ax\}` (Khajenejad & Yong, Proposition 2 / Lemma 1);
 :func:`matvec_bounds` and :func:`interval_matvec_bounds` compute it (and its interval-matrix form) on
 plain arrays for the observers' hot loops, and ``A @ x`` computes it on :class:`Interval` objects.
 
@@ -230,7 +230,7 @@ def matvec_bounds(a: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
 
     .. math:: A^+\underline{x} - A^-\overline{x} \le Ax \le A^+\overline{x} - A^-\underline{x}
 
-    (seed 003, Proposition 2 / Lemma 1). The bounds are attained at vertices of the box, so they are
+    (Khajenejad & Yong, Proposition 2 / Lemma 1). The bounds are attained at vertices of the box, so they are
     the interval hull of :math:`\{Ax : \underline{x} \le x \le \overline{x}\}`. Computed in
     round-to-nearest for the hot loops, whose outputs :func:`inflate` widens; ``a @ Interval(lower,
     upper)`` is the outward-rounded form.
@@ -295,8 +295,8 @@ def interval_matvec_bounds(
     Each term :math:`a_{ij}x_j` ranges over the hull of the four products of the ends, and the terms of
     one row involve distinct variables, so the row sums of those hulls are the exact range of
     :math:`(Ax)_i` over :math:`\underline{A} \le A \le \overline{A}`,
-    :math:`\underline{x} \le x \le \overline{x}`. This is the bound of seed 002, Lemma A.1, computed
-    without its case split. ``Interval(a_lower, a_upper) @ Interval(lower, upper)`` is the
+    :math:`\underline{x} \le x \le \overline{x}`. This is the bound of the integrated-observer paper, Lemma A.1,
+    computed without its case split. ``Interval(a_lower, a_upper) @ Interval(lower, upper)`` is the
     outward-rounded form.
 
     Parameters

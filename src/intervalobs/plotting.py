@@ -226,7 +226,7 @@ def plot_psi(
     level_label: str = "uncertainty level",
     magnitude_label: str = "fault magnitude",
 ) -> Figure:
-    """Heat map of a campaign's Ψ̂ (seed 001, (119)) over uncertainty levels × fault magnitudes.
+    """Heat map of a campaign's Ψ̂ (Rotondo et al., (119)) over uncertainty levels × fault magnitudes.
 
     Parameters
     ----------

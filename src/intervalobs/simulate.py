@@ -2,8 +2,8 @@
 
 Every truth simulator of the package lives here, written independently of the observers (no bound,
 no sampled model, no inclusion function is used): :func:`simulate` for :class:`LTISystem`,
-:func:`simulate_sampled` for the sampled-output :class:`SampledSystem` (seed 004) and
-:func:`simulate_nonlinear` for the discrete-time :class:`NonlinearSystem` (seed 003). They share the
+:func:`simulate_sampled` for the sampled-output :class:`SampledSystem` (the sampled-output high-gain paper) and
+:func:`simulate_nonlinear` for the discrete-time :class:`NonlinearSystem` (Khajenejad & Yong). They share the
 public helpers that draw admissible unknowns — :func:`noise_signal` (uniform, bang-bang ``"extreme"``
 switching at random steps, i.i.d. ``"vertex"``, sinusoidal, constant), :func:`draw_box` (a point or a
 random vertex of a box per run) — and :func:`runge_kutta_step`, the classical fourth-order step used
@@ -469,7 +469,7 @@ def simulate_sampled(
     runs: int | None = None,
     substeps: int = 4,
 ) -> SampledSimulation:
-    """Simulate seed 004's eq. (8) with admissible disturbance, noise and initial state.
+    """Simulate the sampled-output high-gain paper's eq. (8) with admissible disturbance, noise and initial state.
 
     Classical Runge–Kutta (:func:`runge_kutta_step`) on a grid ``substeps`` times finer than the
     observer's, the disturbance switching on that finer grid (inside the observer's steps), the known
@@ -596,7 +596,7 @@ def simulate_nonlinear(
     seed: int = 0,
     runs: int | None = None,
 ) -> NonlinearSimulation:
-    """Iterate seed 003's eq. (3) with admissible noise.
+    """Iterate Khajenejad & Yong's eq. (3) with admissible noise.
 
     Parameters
     ----------

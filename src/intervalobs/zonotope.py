@@ -1,6 +1,6 @@
 r"""Zonotopes: affine map, Minkowski sum, interval-matrix map, order reduction, interval hull, radii.
 
-A zonotope (seed 002, Definition A.1) is the affine image of a unit hypercube,
+A zonotope (the integrated-observer paper, Definition A.1) is the affine image of a unit hypercube,
 
 .. math:: \langle c, R\rangle = \{c + Rs : s \in [-1, 1]^m\},\qquad c \in \mathbb{R}^n,\ R \in \mathbb{R}^{n\times m}.
 
@@ -13,7 +13,7 @@ Notes
 -----
 **Soundness.** Every operation returns a set that *contains* the exact image: Minkowski sum and linear image are
 exact (Property 1, Definition A.2); the interval-matrix map (Properties 3–4) and the reduction
-(Property 2) over-approximate. Property 4 of the seed adds the term of the centre as the single
+(Property 2) over-approximate. Property 4 of the paper adds the term of the centre as the single
 generator ``diam(A)/2 · c``, which is not an enclosure of ``{ΔA c : |ΔA| ≤ diam(A)/2}`` (that set is a
 box, not a segment); here the centre and the generators share one sound diagonal term (see
 :func:`interval_matrix_image`).
@@ -36,7 +36,7 @@ _MAX_EXACT_GENERATORS = 20
 
 
 def hull_radius(generators: ArrayLike) -> FloatArray:
-    r"""Radius of the interval hull: the row sums :math:`\|R_i\|_1` (seed 002, (A2), (57)).
+    r"""Radius of the interval hull: the row sums :math:`\|R_i\|_1` (the integrated-observer paper, (A2), (57)).
 
     Parameters
     ----------
@@ -63,8 +63,8 @@ def interval_matrix_image(
 
     encloses the image for every matrix in the interval matrix. This is Property 3 (the diagonal
     :math:`S_{ii} = \sum_j \mathrm{diam}((AR)_{ij})/2 = (A_r|R|\mathbf 1)_i`) and Property 4 of
-    seed 002, with the centre's term made a box: the seed's single generator ``diam(A)/2 · c`` only
-    covers the matrices whose deviation is proportional to ``diam(A)``.
+    the integrated-observer paper, with the centre's term made a box: the paper's single generator ``diam(A)/2 · c``
+    only covers the matrices whose deviation is proportional to ``diam(A)``.
 
     Parameters
     ----------
@@ -91,7 +91,8 @@ def interval_matrix_image(
 
 
 def reduce_order(generators: ArrayLike, order: int) -> FloatArray:
-    r"""Combastel's reduction :math:`\downarrow_q` (seed 002, Property 2): at most ``order`` generators.
+    r"""Combastel's reduction :math:`\downarrow_q` (the integrated-observer paper, Property 2): at most ``order``
+    generators.
 
     The columns are sorted by decreasing Euclidean norm; the ``order - n`` largest are kept and the
     others are replaced by the box of their interval hull, ``diag(|R_small| 1)``, so that
@@ -124,7 +125,8 @@ def reduce_order(generators: ArrayLike, order: int) -> FloatArray:
 
 
 class Zonotope:
-    r"""The zonotope :math:`\langle c, R\rangle = \{c + Rs : \|s\|_\infty \le 1\}` (seed 002, (A1)).
+    r"""The zonotope :math:`\langle c, R\rangle = \{c + Rs : \|s\|_\infty \le 1\}` (the integrated-observer paper,
+    (A1)).
 
     Parameters
     ----------
@@ -173,7 +175,7 @@ class Zonotope:
         return int(self.generators.shape[1])
 
     def affine_map(self, matrix: ArrayLike, offset: ArrayLike | None = None) -> Zonotope:
-        r"""Exact image :math:`\{Mx + b\} = \langle Mc + b, MR\rangle` (seed 002, Property 1).
+        r"""Exact image :math:`\{Mx + b\} = \langle Mc + b, MR\rangle` (the integrated-observer paper, Property 1).
 
         Parameters
         ----------
@@ -189,7 +191,8 @@ class Zonotope:
         return Zonotope(m @ self.center + b, m @ self.generators)
 
     def minkowski_sum(self, other: Zonotope) -> Zonotope:
-        r"""Exact Minkowski sum :math:`\langle c_1 + c_2, [R_1, R_2]\rangle` (seed 002, Definition A.2).
+        r"""Exact Minkowski sum :math:`\langle c_1 + c_2, [R_1, R_2]\rangle` (the integrated-observer paper, Definition
+        A.2).
 
         Parameters
         ----------
@@ -238,7 +241,8 @@ class Zonotope:
         return Zonotope(self.center, reduce_order(self.generators, int(order)))
 
     def interval_hull(self) -> tuple[FloatArray, FloatArray]:
-        r"""Smallest box containing the zonotope, :math:`c \pm |R|\mathbf 1` (seed 002, (A2), (57)).
+        r"""Smallest box containing the zonotope, :math:`c \pm |R|\mathbf 1` (the integrated-observer paper, (A2),
+        (57)).
 
         Returns
         -------

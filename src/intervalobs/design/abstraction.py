@@ -1,4 +1,4 @@
-r"""Affine abstraction of a vector field over a box (seed 003, Proposition 1, LP (1), Corollary 1).
+r"""Affine abstraction of a vector field over a box (Khajenejad & Yong, Proposition 1, LP (1), Corollary 1).
 
 LP (1) looks for slopes and offsets with
 
@@ -13,7 +13,7 @@ The margin :math:`\sigma`. Every :math:`x\in\mathcal B` is a convex combination
 commute with it, so :math:`q_i(x) \le \overline{A}_ix + \overline{e}_i` holds on the box as soon as
 :math:`\sigma_i \ge \sup_{x\in\mathcal B}|q_i(x) - \sum_s\lambda_s(x)q_i(x_s)|` (the interpolation error
 of multilinear interpolation). For the class of :math:`C^1` functions with Jacobian bounds
-:math:`a_{ij} \le \partial q_i/\partial x_j \le b_{ij}` (the class of seed 003's Assumption 1;
+:math:`a_{ij} \le \partial q_i/\partial x_j \le b_{ij}` (the class of Khajenejad & Yong's Assumption 1;
 [18, Prop. 1] treats simplices, this is its box version): since :math:`\sum_s\lambda_s(x - x_s) = 0`,
 any constant vector :math:`c_i` may be subtracted from the gradients in the mean-value form, and with
 :math:`c_{ij} = (a_{ij} + b_{ij})/2`, :math:`G_{ij} = (b_{ij} - a_{ij})/2`,
@@ -137,7 +137,9 @@ def abstraction_sigma(
         raise AssumptionError("abstraction_sigma: give Jacobian bounds or second-derivative bounds")
     sigma = np.min(np.stack(candidates), axis=0)
     if not np.all(np.isfinite(sigma)):
-        raise AssumptionError("abstraction_sigma: unbounded derivative on the box (Assumption 1)")
+        raise AssumptionError(
+            "abstraction_sigma: a derivative of the map is unbounded on the box: give a bounded domain"
+        )
     return inflate(-sigma, sigma, floor=0.0)[1]  # an affine component keeps sigma = 0 exactly
 
 
@@ -148,7 +150,7 @@ def affine_abstraction(
     sigma: ArrayLike,
     m: int | None = None,
 ) -> AffineAbstraction:
-    r"""Solve LP (1) of seed 003 on a box with HiGHS and return sound affine bounds.
+    r"""Solve LP (1) of Khajenejad & Yong on a box with HiGHS and return sound affine bounds.
 
     Parameters
     ----------

@@ -1,10 +1,10 @@
-r"""Ranges of linear combinations of :math:`[f; g]` composed with a linear change of coordinates (seed 003).
+r"""Ranges of linear combinations of :math:`[f; g]` composed with a linear change of coordinates (Khajenejad & Yong).
 
 The nonlinear simultaneous input and state observers (:mod:`intervalobs.observers.gsisio`,
 :mod:`intervalobs.observers.null_space_gsisio`) need, at every step, bounds of
 :math:`\psi(z) = \Phi\,[f(x); g(x)]` with :math:`x = Z^{-1}z` over a box of :math:`z`, for several
 matrices :math:`\Phi` at once. :class:`ComposedRange` intersects three sound inclusions: the natural
-interval extension, the mean-value form and the Jacobian-based decomposition of seed 003, eq. (2)
+interval extension, the mean-value form and the Jacobian-based decomposition of Khajenejad & Yong, eq. (2)
 (:mod:`intervalobs.design.mixed_monotone`), with local Jacobian bounds on a split of the box and with
 global Jacobian bounds on the whole box.
 """
@@ -118,7 +118,7 @@ class ComposedRange:
     def _decomposition(
         self, Phi: FloatArray, zlo: FloatArray, zhi: FloatArray, jlo: FloatArray, jhi: FloatArray
     ) -> BoxPair:
-        """Seed 003 eq. (2) with Jacobian bounds ``(jlo, jhi)`` of psi valid on the box."""
+        """Khajenejad & Yong, eq. (2) with Jacobian bounds ``(jlo, jhi)`` of psi valid on the box."""
         first, cmat = jacobian_decomposition_parts(jlo, jhi)
         zeta_hi = np.where(first, zhi[..., None, :], zlo[..., None, :])
         zeta_lo = np.where(first, zlo[..., None, :], zhi[..., None, :])

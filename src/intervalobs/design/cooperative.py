@@ -14,8 +14,9 @@ obeys :math:`r^+ \le N r + b` with
 Perron vector of the achieved :math:`N` drives :math:`\rho(N)` down. A second LP, at a fixed rate,
 minimises the noise gain :math:`\beta` with :math:`b \le \beta p`, which bounds the steady-state radius by
 :math:`\beta p / (h\sigma)`. Coordinates are searched over a few choices (identity, the real modal
-basis, eigenvectors of pole-placed loops with spread real poles), as in the references of seeds 000
-and 004; the best steady-state bound wins, and the result is verified by an eigenvalue computation.
+basis, eigenvectors of pole-placed loops with spread real poles), as in the references of the aircraft UIO
+paper and the sampled-output high-gain paper; the best steady-state bound wins, and the result is verified by an
+eigenvalue computation.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
-r"""Output-derivative estimation for the unknown-input bounds of seed 000 (Section 2.2, eqs. (2)–(9)).
+r"""Output-derivative estimation for the unknown-input bounds of the aircraft UIO paper (Section 2.2, eqs. (2)–(9)).
 
 Two estimators of :math:`\dot\psi` (the derivative of the noise-free output :math:`\psi = Cx`) from the
 samples :math:`y_k = \psi(t_k) + \delta(t_k)`:
 
-* :class:`HOSMDifferentiator` — Levant's arbitrary-order sliding-mode differentiator as printed in seed
-  000, §2.2, integrated by explicit Euler (optionally with sub-steps), vectorised over outputs and Monte
+* :class:`HOSMDifferentiator` — Levant's arbitrary-order sliding-mode differentiator as printed in the
+  aircraft UIO paper, §2.2, integrated by explicit Euler (optionally with sub-steps), vectorised over outputs and Monte
   Carlo runs. Its error bound (4)/(8), :math:`\beta = \bar{\dot\delta} + \mu_1\bar\delta^{1/2}`, holds only
   after a convergence time and only if :math:`\mu_1` is right for the gains *and the integration step*:
   explicit Euler with the paper's :math:`\lambda = 100` at :math:`T_e = 10^{-4}` has a steady error
@@ -12,7 +12,7 @@ samples :math:`y_k = \psi(t_k) + \delta(t_k)`:
   therefore *demonstrated* (measured), never proved; see :func:`settling_time`.
 * :func:`difference_derivative_bounds` — a *provable* enclosure. If :math:`|\ddot\psi| \le L` (the
   assumption under which Levant's differentiator is designed, :math:`\lambda_s = 1.1L`) and the noise is
-  smooth with :math:`|\dot\delta| \le \bar{\dot\delta}` (seed 000, §1), the mean-value theorem gives
+  smooth with :math:`|\dot\delta| \le \bar{\dot\delta}` (the aircraft UIO paper, §1), the mean-value theorem gives
 
   .. math:: \dot\psi(t_k) \in \frac{y_k - y_{k-1}}{t_k - t_{k-1}} \pm \Big(\bar{\dot\delta}
             + \tfrac{L}{2}(t_k - t_{k-1})\Big),
@@ -48,7 +48,7 @@ _UNIT_ROUNDOFF = np.finfo(float).eps / 2
 
 
 def levant_gains(order: int, lipschitz: float) -> FloatArray:
-    r"""Levant's recommended gains for the recursion of seed 000, §2.2.
+    r"""Levant's recommended gains for the recursion of the aircraft UIO paper, §2.2.
 
     The equation of :math:`q_j` uses :math:`\lambda_j = \tilde\lambda_{s-j} L^{1/(s-j+1)}`, with
     :math:`\tilde\lambda = (1.1, 1.5, 2, 3, 5, 8)` and :math:`L` a bound of :math:`|\psi^{(s+1)}|`.
@@ -94,7 +94,7 @@ def hosm_error_bound(delta_bar: ArrayLike, delta_dot_bar: ArrayLike, mu1: float)
 
 
 class HOSMDifferentiator:
-    r"""Levant's ``s``-th order sliding-mode differentiator (seed 000, §2.2), explicit Euler.
+    r"""Levant's ``s``-th order sliding-mode differentiator (the aircraft UIO paper, §2.2), explicit Euler.
 
     .. math::
 

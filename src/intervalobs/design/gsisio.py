@@ -1,4 +1,4 @@
-r"""Design quantities of seed 003's GSISIO: Theorems 1–2 and Lemmas 2–5, recomputed.
+r"""Design quantities of Khajenejad & Yong's GSISIO: Theorems 1–2 and Lemmas 2–5, recomputed.
 
 :func:`gsisio_design` computes the gains of Theorem 1, the existence condition (8), the correctness
 radius :math:`\rho(K_1 + L_1)` (our addition), the decomposition matrices and Lipschitz constants of
@@ -40,7 +40,7 @@ BoxPair = tuple[FloatArray, FloatArray]
 
 @dataclass(frozen=True)
 class GSISIODesign:
-    r"""Everything Theorems 1–2 and Lemmas 2–5 of seed 003 compute, recomputed (no check raises here).
+    r"""Everything Theorems 1–2 and Lemmas 2–5 of Khajenejad & Yong compute, recomputed (no check raises here).
 
     Attributes
     ----------
@@ -61,7 +61,7 @@ class GSISIODesign:
     L_fd, L_gd : float
         Sound Lemma-2 constants :math:`\|W_f\|`, :math:`\|W_g\|`.
     L_fd_paper, L_gd_paper : float
-        The seed's formula :math:`L_q + 2\|C_q\|` (not a valid bound in general).
+        The paper's formula :math:`L_q + 2\|C_q\|` (not a valid bound in general).
     T_f, T_g : numpy.ndarray
         :math:`(I - K_1 - L_1)^\dagger(I + K_1 + L_1)` and :math:`(I - K_1 - L_1)^\dagger(K_2 + L_2)`.
     script_L, script_L_paper : float
@@ -122,7 +122,7 @@ class GSISIODesign:
         r"""Lemma 5: :math:`\delta^x_k = \mathcal L^k\delta_0 + \|\Delta z\|(1 - \mathcal L^k)/(1 - \mathcal L)`.
 
         Uses the sound :math:`\mathcal L`; NaN everywhere unless :math:`\mathcal L < 1` (condition (i)).
-        The steady state is :math:`\|\Delta z\|/(1 - \mathcal L)` (the seed prints
+        The steady state is :math:`\|\Delta z\|/(1 - \mathcal L)` (the paper prints
         :math:`\|\Delta z\|\mathcal L/(1 - \mathcal L)`, which its own recursion does not give).
 
         Parameters
@@ -237,7 +237,7 @@ def _condition_iii(script_l: float, n: int) -> dict[str, Any]:
     problem = cp.Problem(cp.Minimize(0), [P >> 1e-6 * eye, Gam >> 0, 0.5 * (big + big.T) << 0])
     note = "block (3,3) of the LMI is P, which must be NSD and positive definite at once: infeasible"
     try:
-        solve_lmi(problem, "(iii) of Theorem 1", "none: the LMI is infeasible for every system")
+        solve_lmi(problem, "width stability of Khajenejad & Yong", "none: the LMI is infeasible for every system")
         Pv = np.asarray(P.value)
         check = np.block([[Pv + np.asarray(Gam.value) - eye, Z, Pv], [Z, script_l**2 * eye - Pv, Z], [Pv, Z, Pv]])
         verify_definite("(iii)", check, -1, "-", tol=1e-9)
@@ -250,7 +250,7 @@ def _condition_iii(script_l: float, n: int) -> dict[str, Any]:
 def gsisio_design(
     system: NonlinearSystem, bounds: Bounds, jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None
 ) -> GSISIODesign:
-    r"""Recompute every design quantity of seed 003's Theorems 1–2 and Lemmas 2, 5 for a system.
+    r"""Recompute every design quantity of Khajenejad & Yong's Theorems 1–2 and Lemmas 2, 5 for a system.
 
     Parameters
     ----------

@@ -1,4 +1,5 @@
-r"""The high-gain parameter :math:`\theta` of seed 004, Theorem 4.4, computed as printed and as it must be read.
+r"""The high-gain parameter :math:`\theta` of the sampled-output high-gain paper, Theorem 4.4, computed as printed and
+as it must be read.
 
 Theorem 4.4 solves LMI (32) :math:`M_1^TQ + 2D + QM_1 \prec 0` (:math:`Q \succ 0`, :math:`D \prec 0`),
 sets :math:`M_2 = DQ^{-1}`, picks :math:`\alpha` from conditions (34)
@@ -117,7 +118,7 @@ def _lambda_min_m2(m1: FloatArray) -> float:
     constraints = [q >> np.eye(size), d << -np.eye(size), 0.5 * (lmi + lmi.T) << -1e-7 * np.eye(size)]
     problem = cp.Problem(cp.Minimize(cp.trace(q) - cp.trace(d)), constraints)
     relax = "M1 is badly scaled for the solvers: pass lambda_min explicitly"
-    solve_lmi(problem, "(32) (Theorem 4.4)", relax)
+    solve_lmi(problem, "high-gain parameter", relax)
     qv, dv = np.asarray(q.value), np.asarray(d.value)
     verify_definite("(32): M1ᵀQ + QM1 + 2D", m1.T @ qv + qv @ m1 + 2 * dv, -1, relax)
     m2 = dv @ np.linalg.inv(qv)

@@ -1,6 +1,8 @@
-r"""H∞ and zonotope-size LMI gains of seed 002, with the paper's errors corrected and every result verified.
+r"""H∞ and zonotope-size LMI gains of the integrated-observer paper, with the paper's errors corrected and every result
+verified.
 
-The observer error of seed 002 (Proposition 3.3, (15)) is :math:`e_{k+1} = (A_0 - LC)e_k + E_d d_k`,
+The observer error of the integrated-observer paper (Proposition 3.3, (15)) is :math:`e_{k+1} = (A_0 - LC)e_k + E_d
+d_k`,
 :math:`E_d = [E_\theta\ E_\omega\ -LE_\upsilon]`. The functions here compute the gain ``L``:
 
 * :func:`hinf_gain` — the H∞ LMI (19) (bounded real lemma, minimise γ), and with ``monotone=True``
@@ -8,7 +10,7 @@ The observer error of seed 002 (Proposition 3.3, (15)) is :math:`e_{k+1} = (A_0 
   (19) + (65) of the integrated scheme (the same constraint again).
 * :func:`zonotope_size_gain` — the zonotope-size LMI (26) of Theorem 3.5.
 
-Corrections to the printed LMIs (docs/paper-notes.md, seed 002):
+Corrections to the printed LMIs (docs/paper-notes.md, the integrated-observer paper):
 
 * (19), (54a), (55a) print ``+γI`` diagonal blocks; with them the matrix can never be negative
   definite. The bounded real lemma needs ``-γI`` — implemented.
@@ -195,7 +197,8 @@ def hinf_gain(
     p_structure: Literal["diagonal", "full"] = "diagonal",
     solver: str = "CLARABEL",
 ) -> GainDesign:
-    r"""Gain minimising γ in the H∞ LMI (19) (seed 002, Theorem 3.4), optionally monotone ((54)–(55), (65)).
+    r"""Gain minimising γ in the H∞ LMI (19) (the integrated-observer paper, Theorem 3.4), optionally monotone
+    ((54)–(55), (65)).
 
     Solves, for :math:`P = P^\top \succ 0`, ``M`` and γ (``-γI`` blocks: the printed ``+γI`` is an error)
 
@@ -245,7 +248,7 @@ def hinf_gain(
     if monotone and p_structure == "diagonal":
         ok, reason = monotone_gain_exists(a, c)
         if not ok:
-            raise AssumptionError(f"monotone H∞ design (54)-(55)/(65): {reason}")
+            raise AssumptionError(f"monotone H∞ design: no gain makes the error system nonnegative: {reason}")
     diagonal = monotone and p_structure == "diagonal"
     p_var = cp.diag(cp.Variable(n)) if diagonal else cp.Variable((n, n), symmetric=True)
     m_var = cp.Variable((n, p))
@@ -285,7 +288,8 @@ def zonotope_size_gain(
     rho: float = 0.9,
     solver: str = "CLARABEL",
 ) -> GainDesign:
-    r"""Gain of the zonotope-size LMI (26) (seed 002, Theorem 3.5), normalised by :math:`W \succeq I`.
+    r"""Gain of the zonotope-size LMI (26) (the integrated-observer paper, Theorem 3.5), normalised by :math:`W \succeq
+    I`.
 
     Minimises :math:`\mathrm{tr}\,\Gamma + \mathrm{tr}\,\Upsilon + \mathrm{tr}\,\Omega` (the ε of (26c))
     subject to

@@ -1,7 +1,7 @@
 r"""One path from a linear matrix inequality to a verified solution.
 
-Every LMI of the package (seed 002's (19), (26), (54)–(55); seed 004's (15) and (32); the
-boundedness LMIs (43)/(63)/(74)/(109) of the LPV observers) is posed as a :class:`cvxpy.Problem`
+Every LMI of the package (the integrated-observer paper's (19), (26), (54)–(55); the sampled-output high-gain paper's
+(15) and (32); the boundedness LMIs (43)/(63)/(74)/(109) of the LPV observers) is posed as a :class:`cvxpy.Problem`
 and solved by :func:`solve_lmi`:
 
 1. the requested solver (Clarabel by default), then SCS if the first one errs, returns no solution,

@@ -1,8 +1,8 @@
-r"""Design tools of the LPV interval observer and interval UIO (seed 001).
+r"""Design tools of the LPV interval observer and interval UIO (Rotondo et al.).
 
 Two things live here.
 
-**Sound elementwise bounds over a parameter box, with a proof** (seed 001, (11)–(15), (23)–(24)).
+**Sound elementwise bounds over a parameter box, with a proof** (Rotondo et al., (11)–(15), (23)–(24)).
 An uncertain entry :math:`g(p, s)` depends on parameters :math:`p` in a box :math:`P` (e.g. the
 manipulator's :math:`\tilde a, \tilde b, \tilde c`) and on a scalar scheduling feature :math:`s`
 (e.g. :math:`\cos(x_2 - x_1)`). :func:`certify_vertex_extremes` proves that, for every :math:`s`, the
@@ -27,7 +27,7 @@ Where every slab is sign-certified the vertex range is *exact*. The certificate 
 :math:`s` (the scheduling variable over one sampling step) stay sound:
 :class:`CertifiedVertexBounds`.
 
-**Boundedness analysis** (seed 001, LMI (43) of Theorem 3.1 and (74) of Lemma 4.1 with
+**Boundedness analysis** (Rotondo et al., LMI (43) of Theorem 3.1 and (74) of Lemma 4.1 with
 (75)–(79) read as (95)–(100)): :func:`boundedness_lmi` solves it with CVXPY on a coarse grid of
 :math:`\Theta` and :func:`verify_boundedness` checks the inequality on a fine grid with vectorised
 eigenvalue computations, for all subsets :math:`S_1, S_2`.
@@ -444,7 +444,7 @@ def certify_vertex_extremes(
       docstring, steps 1–2) give the slack (0 where the sign is certified).
 
     Coordinate ascent (step 3) then bounds the range over the box by the vertex range ± the summed
-    slacks. Seed 001 needs this for :math:`\Delta A_R = R\Delta A`, :math:`\Delta B_R`,
+    slacks. Rotondo et al. needs this for :math:`\Delta A_R = R\Delta A`, :math:`\Delta B_R`,
     :math:`\Delta B_{un,R}` ((14), (15), (24)).
 
     Parameters
@@ -887,7 +887,10 @@ def boundedness_lmi(
         if best is None or margin < best[0]:
             best = (margin, (pv, gv, eps1, solution.status))
     if best is None:
-        raise DesignError(f"boundedness LMI (43)/(74): no solution for any eps1 ({' | '.join(failures)})")
+        raise DesignError(
+            f"no certificate that the interval widths stay bounded over the scheduling box, for any eps1 "
+            f"(widen the decay rate or shrink the uncertainty): {' | '.join(failures)}"
+        )
     margin, (pv, gv, eps1, status) = best
     second = float(np.max(np.linalg.eigvalsh(pv / eps1 - gv * np.eye(n2))))
     return BoundednessCertificate(

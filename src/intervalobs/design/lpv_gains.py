@@ -1,4 +1,4 @@
-r"""Design of the LPV interval observer and interval UIO from LMIs (seed 001, Corollaries 3.1 and 4.1).
+r"""Design of the LPV interval observer and interval UIO from LMIs (Rotondo et al., Corollaries 3.1 and 4.1).
 
 Coordinates: :math:`C = (\tilde C\ 0)` (9), measured states first. The coordinate matrix is constant,
 
@@ -197,12 +197,15 @@ def _partition(system: LPVSystem) -> FloatArray:
     c = system.C
     if np.any(c[:, p:] != 0.0):
         raise AssumptionError(
-            f"C: expected the form (C̃ 0) of (9), measured states first (reorder the states), got nonzero columns "
+            f"C: expected the measured states first, C = (C̃ 0) (reorder the states), got nonzero columns "
             f"{sorted(set(np.nonzero(c[:, p:])[1] + p))}"
         )
     ct = c[:, :p]
     if np.linalg.cond(ct) > 1e12:
-        raise AssumptionError(f"C: expected an invertible C̃ (9), got condition number {np.linalg.cond(ct):.3g}")
+        raise AssumptionError(
+            f"C: expected the outputs to determine the measured states (an invertible C̃), got condition number "
+            f"{np.linalg.cond(ct):.3g}"
+        )
     return np.asarray(np.linalg.inv(ct))
 
 
@@ -211,7 +214,9 @@ def _uio_coordinates(system: LPVSystem, points: FloatArray) -> tuple[FloatArray,
     p, n, q = system.p, system.n, system.q
     bu = system.matrix_at("B_un", points)
     if not np.allclose(bu, bu[0], rtol=0.0, atol=_STRUCTURE_TOLERANCE * max(1.0, float(np.abs(bu).max()))):
-        raise AssumptionError("B_un: expected a constant B_un(θ) for the designed UIO (R constant, (26))")
+        raise AssumptionError(
+            "B_un: expected unknown-input directions B_un(θ) that do not vary with θ (the decoupling is designed once)"
+        )
     b1, b2 = bu[0][:p], bu[0][p:]
     u, _, _ = np.linalg.svd(b1)
     basis = np.hstack([b1, u[:, q:]])
@@ -226,9 +231,7 @@ def _uio_coordinates(system: LPVSystem, points: FloatArray) -> tuple[FloatArray,
 def _check_r(r: FloatArray, p: int) -> None:
     n = r.shape[0]
     if np.any(r[:p, p:] != 0.0) or not np.array_equal(r[p:, p:], np.eye(n - p)):
-        raise AssumptionError(
-            "R: expected the form ((R11, 0), (R21, I)) (16) with the identity on the unmeasured states"
-        )
+        raise AssumptionError("R: expected the form ((R11, 0), (R21, I)), the identity on the unmeasured states")
 
 
 def _structure_check(a_r: FloatArray, points: FloatArray, p: int) -> None:
@@ -237,7 +240,8 @@ def _structure_check(a_r: FloatArray, points: FloatArray, p: int) -> None:
     if np.any(a12 < 0):
         k, i, j = np.argwhere(a12 < 0)[0]
         raise DesignError(
-            f"(17): expected A_R12 = (RA)[:p, p:] >= 0, got {a12[k, i, j]:.3g} at entry ({i}, {j + p}), "
+            f"coordinates R: the unmeasured states must push the measured ones up, expected (RA)[:p, p:] >= 0, "
+            f"got {a12[k, i, j]:.3g} at entry ({i}, {j + p}), "
             f"theta = {points[k].tolist()}; choose R (R11) so that R11 A12 >= 0"
         )
     a22 = a_r[:, p:, p:].copy()
@@ -246,7 +250,8 @@ def _structure_check(a_r: FloatArray, points: FloatArray, p: int) -> None:
     if np.any(a22 < 0):
         k, i, j = np.argwhere(a22 < 0)[0]
         raise DesignError(
-            f"(18): expected A_R22 = (RA)[p:, p:] Metzler, got {a22[k, i, j]:.3g} at entry ({i + p}, {j + p}), "
+            f"coordinates R: the unmeasured states must stay ordered, expected (RA)[p:, p:] Metzler, "
+            f"got {a22[k, i, j]:.3g} at entry ({i + p}, {j + p}), "
             f"theta = {points[k].tolist()}; choose R21 so that R21 A12 + A22 is Metzler"
         )
 
@@ -331,7 +336,7 @@ def design_lpv_observer(
     eps1_candidates = sorted({max(eta_max, 0.05) * f for f in (0.5, 1.0, 2.0)})
     best: _Candidate | None = None
     failures = []
-    lmi_name = "(109)" if uio else "(63)"
+    lmi_name = "bounded-width LMI of the interval UIO" if uio else "bounded-width LMI of the interval observer"
     relax = f"reduce the ΔA bounds, change R{' or increase decay' if uio else ''}"
     for eps1 in eps1_candidates:
         problem = _LMIProblem(a_r, p, terms, gamma, kappa, eps1, eps2, q_scale)
@@ -346,7 +351,9 @@ def design_lpv_observer(
             best = candidate
     if best is None or best.margin >= 0:
         detail = f"best (1,1)-block eigenvalue {best.margin:+.3g}" if best is not None else " | ".join(failures)
-        raise DesignError(f"LMI {lmi_name}: no certificate on the {coarse.shape[0]}-point grid ({detail}); {relax}")
+        raise DesignError(
+            f"{lmi_name}: no gain keeps the widths bounded on the {coarse.shape[0]}-point grid ({detail}); {relax}"
+        )
     n2 = 2 * n
     cert = BoundednessCertificate(
         P=best.P,
@@ -389,7 +396,7 @@ def _design_coordinates(
         raise AssumptionError("B_un: the interval UIO needs unknown-input directions, got None")
     r, h_mat = _uio_coordinates(system, points)
     if np.linalg.cond(r) > 1e12:
-        raise DesignError("R: R B_un = H (26) gave a singular R")
+        raise DesignError("R: the coordinates that decouple the unknown inputs (R B_un = H) are singular")
     return r, h_mat, -decay * np.ones(system.q)
 
 
@@ -533,7 +540,8 @@ def _verify(system: LPVSystem, design: LPVObserverDesign, fine: FloatArray, swit
     for name, f in (("F_lower", fl), ("F_upper", fu)):
         if np.any(f[:, off] < 0):
             raise DesignError(
-                f"{name}: expected a Metzler matrix (64) on the fine grid, got min off-diagonal {f[:, off].min():.3g}"
+                f"{name}: expected a Metzler matrix (bounds that stay ordered) on the fine grid, "
+                f"got min off-diagonal {f[:, off].min():.3g}"
             )
     abscissa = float(np.max(np.linalg.eigvals(np.concatenate([fl, fu])).real))
     if not abscissa < 0:
@@ -541,7 +549,8 @@ def _verify(system: LPVSystem, design: LPVObserverDesign, fine: FloatArray, swit
     cert = verify_boundedness(design.certificate, fl, fu, dl, du, switchable=switch)
     if not cert.feasible:
         raise DesignError(
-            f"verification of {'(74)' if switch else '(63)'} on the {fine.shape[0]}-point grid failed: "
+            f"the bounded-width certificate{' with sign switching' if switch else ''} fails on the "
+            f"{fine.shape[0]}-point grid: "
             f"(1,1)-block eigenvalue {cert.fine_margin:+.3g}, (2,2)-block {cert.second_block_margin:+.3g}; refine grid"
         )
     return dataclasses.replace(design, certificate=cert, hurwitz_margin=abscissa, fine_points=int(fine.shape[0]))

@@ -1,12 +1,12 @@
-r"""Mixed-monotone decomposition functions and sound Jacobian bounds (seed 003, Definition 2, Prop. 3, (2)).
+r"""Mixed-monotone decomposition functions and sound Jacobian bounds (Khajenejad & Yong, Definition 2, Prop. 3, (2)).
 
 A decomposition function :math:`q_d(x, y)` of :math:`q:\mathbb{R}^n\to\mathbb{R}^m` is nondecreasing in
 :math:`x`, nonincreasing in :math:`y` and satisfies :math:`q_d(x, x) = q(x)`; then for every
-:math:`\underline{x}\le x\le\overline{x}` (seed 003, Proposition 3)
+:math:`\underline{x}\le x\le\overline{x}` (Khajenejad & Yong, Proposition 3)
 
 .. math:: q_d(\underline{x}, \overline{x}) \le q(x) \le q_d(\overline{x}, \underline{x}).
 
-Jacobian-based decomposition (Yang, Mickelin & Ozay 2019, the construction the seed cites as
+Jacobian-based decomposition (Yang, Mickelin & Ozay 2019, the construction the paper cites as
 [16, Theorem 2] and its eq. (2)). If :math:`\partial q_i/\partial x_j \in [a_{ij}, b_{ij}]` on the box,
 then
 
@@ -24,7 +24,7 @@ mixed, :math:`|a_{ij}| > b_{ij}`      :math:`y_j`          :math:`b_{ij}`
 ====================================  ===================  ======================
 
 Monotonicity follows from the sign of each partial derivative of :math:`q_{d,i}`; the mixed case picks
-the cheaper of the two valid choices. Hence :math:`C_q = [c_{ij}] \ge 0` always — the seed's printed
+the cheaper of the two valid choices. Hence :math:`C_q = [c_{ij}] \ge 0` always — the paper's printed
 :math:`C_f`, :math:`C_g` (with a negative entry, and not of this form) cannot come from (2).
 
 Width. Along the segment between :math:`\zeta^i(\overline{x},\underline{x})` and
@@ -35,7 +35,7 @@ Width. Along the segment between :math:`\zeta^i(\overline{x},\underline{x})` and
 
 so :math:`\|q_d(\overline{x},\underline{x}) - q_d(\underline{x},\overline{x})\|
 \le \|W_q\|\,\|\overline{x}-\underline{x}\|`.
-This is the sound replacement of the seed's Lemma 2 constant :math:`L_q + 2\|C_q\|`, which is **not**
+This is the sound replacement of the paper's Lemma 2 constant :math:`L_q + 2\|C_q\|`, which is **not**
 an upper bound in general (for :math:`q(x) = Ax` the width is :math:`|A|\Delta x` and
 :math:`\||A|\| > \|A\|` is possible; see :func:`paper_lipschitz_constant`).
 
@@ -115,9 +115,7 @@ def jacobian_bounds(
         raise BoundsError(f"{name}: expected lower <= upper, got lower > upper")
     j_lo, j_hi = interval_matrix(jacobian, lo, hi, shape, name)
     if not (np.all(np.isfinite(j_lo)) and np.all(np.isfinite(j_hi))):
-        raise AssumptionError(
-            f"{name}: unbounded on the box (Assumption 1, Lipschitz continuity): give a bounded domain"
-        )
+        raise AssumptionError(f"{name}: unbounded on the box (the map is not Lipschitz there): give a bounded domain")
     return j_lo, j_hi
 
 
@@ -142,7 +140,8 @@ def lipschitz_bound(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
 
 
 def jacobian_decomposition_parts(j_lower: ArrayLike, j_upper: ArrayLike) -> tuple[BoolArray, FloatArray]:
-    r"""The case split of Yang–Mickelin–Ozay (seed 003, eq. (2)): which argument feeds :math:`\zeta`, and :math:`C`.
+    r"""The case split of Yang–Mickelin–Ozay (Khajenejad & Yong, eq. (2)): which argument feeds :math:`\zeta`, and
+    :math:`C`.
 
     Parameters
     ----------
@@ -191,7 +190,7 @@ def width_matrix(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
 
 
 def paper_lipschitz_constant(lipschitz: float, c: ArrayLike) -> float:
-    r"""The seed's Lemma 2 constant :math:`L_{q_d} = L_q + 2\|C_q\|_2` (reported for comparison only).
+    r"""The paper's Lemma 2 constant :math:`L_{q_d} = L_q + 2\|C_q\|_2` (reported for comparison only).
 
     It is not a valid bound of the decomposition width in general: for :math:`q(x) = Ax` with
     :math:`A = [[1, 1], [1, -1]]`, :math:`C = 0`, :math:`L_q = \sqrt 2`, but the width is
@@ -258,7 +257,7 @@ def decomposition_bounds(
 
 @dataclass(frozen=True)
 class JacobianDecomposition:
-    r"""Yang–Mickelin–Ozay decomposition function with fixed Jacobian bounds (seed 003, eq. (2)).
+    r"""Yang–Mickelin–Ozay decomposition function with fixed Jacobian bounds (Khajenejad & Yong, eq. (2)).
 
     Parameters
     ----------
@@ -289,7 +288,7 @@ class JacobianDecomposition:
         if lo.ndim != 2 or lo.shape != hi.shape:
             raise DimensionError(f"JacobianDecomposition: expected two (m, n) bounds, got {lo.shape} and {hi.shape}")
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-            raise AssumptionError("JacobianDecomposition: Jacobian bounds must be finite (Assumption 1)")
+            raise AssumptionError("JacobianDecomposition: Jacobian bounds must be finite (a Lipschitz map on the box)")
         object.__setattr__(self, "j_lower", lo)
         object.__setattr__(self, "j_upper", hi)
 

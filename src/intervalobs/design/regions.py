@@ -1,7 +1,7 @@
-r"""Pole placement of :math:`A - LC` in disk LMI regions (seed 004, Section 4.1).
+r"""Pole placement of :math:`A - LC` in disk LMI regions (the sampled-output high-gain paper, Section 4.1).
 
 A disk with centre :math:`c = c_1 + ic_2` and radius :math:`r` is the :math:`\mathbb{D}_R`-region of
-degree one (seed 004, eqs. (6), (7), (14))
+degree one (the sampled-output high-gain paper, eqs. (6), (7), (14))
 
 .. math:: \{s : R_{00} + R_{10}s + \overline{R_{10}s} + R_{11}|s|^2 < 0\},\quad
           R_{00} = |c|^2 - r^2,\; R_{10} = -c_1 + ic_2,\; R_{11} = 1,
@@ -72,7 +72,7 @@ _MARGIN = 0.02
 
 @dataclass(frozen=True)
 class Disk:
-    """An open disk of the complex plane, the LMI region of seed 004, eq. (14).
+    """An open disk of the complex plane, the LMI region of the sampled-output high-gain paper, eq. (14).
 
     Parameters
     ----------
@@ -298,7 +298,7 @@ class Sector(_LinearRegion):
 
 
 Region = Disk | HalfPlane | VerticalStrip | HorizontalStrip | Sector
-r"""Any of the LMI (:math:`\mathbb{D}_R`) regions of seed 004, Section 2 (eq. (6))."""
+r"""Any of the LMI (:math:`\mathbb{D}_R`) regions of the sampled-output high-gain paper, Section 2 (eq. (6))."""
 
 
 def in_region(region: Region, s: complex | ComplexArray) -> Any:
@@ -392,7 +392,8 @@ def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
 def modal_decomposition(
     A: ArrayLike, C: ArrayLike, L: ArrayLike, order: Sequence[complex] | None = None
 ) -> ModalDecomposition:
-    """Diagonalise ``A - L C`` and check that it is C-diagonalisable and Hurwitz (seed 004, eq. (13)).
+    """Diagonalise ``A - L C`` and check that it is C-diagonalisable and Hurwitz (the sampled-output high-gain paper,
+    eq. (13)).
 
     Parameters
     ----------
@@ -437,7 +438,7 @@ def modal_decomposition(
     condition = float(np.linalg.cond(vecs))
     if not np.isfinite(condition) or condition > _MAX_CONDITION or separation < 1e-9 * (1 + np.max(np.abs(vals))):
         raise DesignError(
-            f"A - LC: expected distinct eigenvalues and a well-conditioned eigenbasis (C-diagonalisation, eq. (13)), "
+            f"A - LC: expected distinct eigenvalues and a well-conditioned eigenbasis (a diagonalisable loop), "
             f"got separation {separation:.3g} and condition number {condition:.3g}"
         )
     return ModalDecomposition(
@@ -539,7 +540,7 @@ def _mode_gain(lam: complex, b: ComplexArray, disk: Disk, real: bool, objective:
     problem = cp.Problem(cp.Minimize(cost), constraints)
     solution = solve_lmi(
         problem,
-        f"(15) (Theorem 4.1) for the disk centre {disk.center} radius {disk.radius}",
+        f"pole placement in the disk of centre {disk.center} and radius {disk.radius}",
         "enlarge the disk or move it (the mode may be unobservable)",
     )
     xv = float(np.asarray(x.value, dtype=float))
@@ -638,7 +639,8 @@ def _place_block(
 def place_in_disks(
     A: ArrayLike, C: ArrayLike, disks: Sequence[Disk | tuple[complex, float]], objective: str = "min_gain"
 ) -> RegionPlacement:
-    r"""Place every eigenvalue of :math:`A - LC` in its own disk (seed 004, Theorem 4.1, Algorithm 1).
+    r"""Place every eigenvalue of :math:`A - LC` in its own disk (the sampled-output high-gain paper, Theorem 4.1,
+    Algorithm 1).
 
     Eigenvalues of :math:`A` are matched to disks by least total distance; disk by disk (a conjugate
     pair of disks at once) LMI (15) is solved for the modal subsystem and the gain accumulated

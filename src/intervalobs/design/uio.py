@@ -1,6 +1,6 @@
-r"""Unknown-input decoupling and cooperative coordinates of seed 000 (Darouach-style UIO).
+r"""Unknown-input decoupling and cooperative coordinates of the aircraft UIO paper (Darouach-style UIO).
 
-For :math:`\dot x = Ax + Bu + D\xi + \omega`, :math:`y = Cx + \delta` (seed 000, eq. (1)) the observer
+For :math:`\dot x = Ax + Bu + D\xi + \omega`, :math:`y = Cx + \delta` (the aircraft UIO paper, eq. (1)) the observer
 matrices solve the algebraic constraints (21)–(22),
 
 .. math:: N + KC - ECA = A, \qquad ECD = -D,
@@ -57,7 +57,7 @@ _PLACEMENT_JITTER = 1e-13
 
 @dataclass(frozen=True)
 class UIODecoupling:
-    """The decoupling matrices of seed 000, eqs. (11), (25), with the hypotheses' evidence.
+    """The decoupling matrices of the aircraft UIO paper, eqs. (11), (25), with the hypotheses' evidence.
 
     Attributes
     ----------
@@ -168,7 +168,7 @@ def _undetectable_modes(a: FloatArray, c: FloatArray) -> list[complex]:
 
 
 def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None = None) -> UIODecoupling:
-    r"""Decoupling matrices ``E``, ``P`` of seed 000 (eqs. (11), (24)–(25)) with Hypotheses 4–5 checked.
+    r"""Decoupling matrices ``E``, ``P`` of the aircraft UIO paper (eqs. (11), (24)–(25)) with Hypotheses 4–5 checked.
 
     Parameters
     ----------
@@ -236,7 +236,7 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
 
 
 def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-    r"""The matrices of the compact constraint ``[N K E] Σ = Θ`` (seed 000, eqs. (23)–(24)).
+    r"""The matrices of the compact constraint ``[N K E] Σ = Θ`` (the aircraft UIO paper, eqs. (23)–(24)).
 
     .. math:: \Sigma = \begin{bmatrix} I_n & 0 \\ C & 0 \\ -CA & CD \end{bmatrix}, \qquad
               \Theta = [A \;\; -D], \qquad
@@ -436,7 +436,8 @@ def uio_pole_candidates(n: int) -> dict[str, NDArray[np.complex128]]:
 def asymptotic_state_width(
     decoupling: UIODecoupling, coords: UIOCoordinates, omega_radius: FloatArray, delta_radius: FloatArray
 ) -> FloatArray:
-    r"""Asymptotic width of the state bounds (seed 000, eqs. (30), (34), for the exactly integrated observer).
+    r"""Asymptotic width of the state bounds (the aircraft UIO paper, eqs. (30), (34), for the exactly integrated
+    observer).
 
     In coordinates :math:`w = T(x + E\psi)` the bounds obey
     :math:`\dot{\overline w} - \dot{\underline w} = M(\overline w - \underline w)

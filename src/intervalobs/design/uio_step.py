@@ -1,4 +1,5 @@
-r"""The constants of the unknown-input interval observer's exact step, with their rounding budget (seed 000).
+r"""The constants of the unknown-input interval observer's exact step, with their rounding budget (the aircraft UIO
+paper).
 
 The observer of :mod:`intervalobs.observers.unknown_input` runs, in the coordinates
 :math:`w = T(x + E\psi)`, the exact step
@@ -11,7 +12,7 @@ nonnegative integrals of that step (:math:`\Phi = e^{Mh}`, :math:`\Gamma`, :math
 :math:`\Gamma_1`, :math:`\Gamma_r`: module docstring of the observer), the maps of the state and
 input bounds, and an entrywise bound of every rounding-level departure of the computed matrices from
 the exact model (the "rounding budget"), which the observer adds outward. See the observer's module
-docstring for the argument (seed 000, eqs. (11), (14)–(15), (25), (31), (36)–(37)).
+docstring for the argument (the aircraft UIO paper, eqs. (11), (14)–(15), (25), (31), (36)–(37)).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-r"""Design of the high-gain interval observer for width (seed 004, made to look at the bounds it gives).
+r"""Design of the high-gain interval observer for width (the sampled-output high-gain paper, made to look at the bounds
+it gives).
 
 The paper chooses the LMI regions by hand and takes the least-norm gain that puts the eigenvalues of
 :math:`A - L_1C` in them (Algorithm 1); nothing in that choice looks at the width of the bounds. Here
@@ -277,7 +278,7 @@ def design_for_width(
     final = objective.modal_of(placement.L)
     if final is None:
         raise DesignError(
-            "design_for_width: the gain of Algorithm 1 in the derived disks violates the constraints "
+            "design_for_width: the gain placed in the derived disks violates the constraints "
             "(conditioning, separation or regions); verification failed"
         )
     bound = objective.bound_of(placement.L, final, h)

@@ -1,4 +1,4 @@
-r"""Seed 000, §5: 5th-order lateral-axis model of a fixed-wing aircraft with two unknown inputs.
+r"""The aircraft UIO paper, §5: 5th-order lateral-axis model of a fixed-wing aircraft with two unknown inputs.
 
 Data as printed (A, D, C, x0, noise bounds 1e-2, ξ = (cos t, sin t), HOSM s = 1, λ = 100, µ1 = 1.1,
 initial box ±1, Te = 1e-4 s) and the paper's printed design (E, P, K — printed transposed — and T),
@@ -132,7 +132,7 @@ AILERON_AMPLITUDE, AILERON_FREQUENCY = 0.2, 0.8
 
 
 def aircraft_system(known_inputs: bool = False) -> LTISystem:
-    """The model of seed 000, §5.1: ``ẋ = Ax + Bu + Dξ + ω``, ``y = Cx + δ`` (D is separate).
+    """The model of the aircraft UIO paper, §5.1: ``ẋ = Ax + Bu + Dξ + ω``, ``y = Cx + δ`` (D is separate).
 
     Parameters
     ----------
@@ -189,7 +189,7 @@ def control_box(t: ArrayLike) -> tuple[FloatArray, FloatArray]:
 
 
 def aircraft_bounds() -> Bounds:
-    """Initial box ±1 and the noise boxes ±1e-2 of seed 000, §5.1.
+    """Initial box ±1 and the noise boxes ±1e-2 of the aircraft UIO paper, §5.1.
 
     Returns
     -------

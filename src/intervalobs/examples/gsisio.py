@@ -1,6 +1,6 @@
-r"""Seed 003, Section V: the nonlinear example of the GSISIO paper, and our own full-rank demonstration.
+r"""Khajenejad & Yong, Section V: the nonlinear example of the GSISIO paper, and our own full-rank demonstration.
 
-Paper's system (n = 2 states, p = 2 outputs, q = 2 unknown inputs; the seed's n = l = p = 2):
+Paper's system (n = 2 states, p = 2 outputs, q = 2 unknown inputs; the paper's n = l = p = 2):
 
 .. math::
 
@@ -99,7 +99,7 @@ def _g_jacobian(x: Sequence[Any]) -> list[list[Any]]:
 
 
 def paper_system() -> NonlinearSystem:
-    """The example of seed 003, Section V (its boxes: :func:`paper_bounds`).
+    """The example of Khajenejad & Yong, Section V (its boxes: :func:`paper_bounds`).
 
     Returns
     -------

@@ -1,4 +1,4 @@
-r"""The numerical example of seed 004 (Section 5), as plain data and functions.
+r"""The numerical example of the sampled-output high-gain paper (Section 5), as plain data and functions.
 
 .. math::
 

@@ -1,4 +1,4 @@
-r"""Two-joint planar manipulator of seed 001, Section 5, as an uncertain LPV system.
+r"""Two-joint planar manipulator of Rotondo et al., Section 5, as an uncertain LPV system.
 
 Dynamics (121)–(122) with :math:`\phi = x_2 - x_1`, :math:`\kappa = \cos\phi`, :math:`\sigma = \sin\phi`,
 state :math:`x = (q_1, q_2, \dot q_1, \dot q_2)`, :math:`\vartheta = x`, :math:`C = I`:

@@ -1,4 +1,5 @@
-r"""Seed 002, Section 6.1: the 3-state numerical example, (68) (monotone) and (70) (one entry −0.1).
+r"""The integrated-observer paper, Section 6.1: the 3-state numerical example, (68) (monotone) and (70) (one entry
+−0.1).
 
 .. math:: x_{k+1} = (A_0 + \Delta A(\theta))x_k + Bu_k + E_\omega\omega_k,\quad y_k = Cx_k + E_\upsilon\upsilon_k,
 

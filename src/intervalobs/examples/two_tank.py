@@ -1,4 +1,4 @@
-r"""Seed 002, Section 6.2: the two-tank benchmark (72), Euler-discretised with Ts = 1 s.
+r"""The integrated-observer paper, Section 6.2: the two-tank benchmark (72), Euler-discretised with Ts = 1 s.
 
 .. math::
 

@@ -48,7 +48,8 @@ class EnvelopeLP(RecordsPath):
     one of two alignments: each variable and row with the status it had *at the same time* (the basis
     as it is: a variable keeps its slot), or with the status of the one *one step earlier*, i.e. at the
     same lag behind ``x_k`` (the basis rolled by one slot). Which one needs fewer pivots depends on the
-    example: on seed 002's (68), where the extremal trajectories of ``x_k`` are shaped by the shared
+    example: on the integrated-observer paper's (68), where the extremal trajectories of ``x_k`` are shaped by the
+    shared
     :math:`\delta`, the lagged basis (several times fewer pivots); on the two-tank, where the measurements
     shape them, the timed one (a quarter fewer). So each objective uses the alignment whose recent pivot
     count (:data:`_PIVOT_MEMORY`) is lower and tries the other one every :data:`_EXPLORE` steps. An

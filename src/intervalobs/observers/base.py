@@ -32,11 +32,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import ThreadpoolController
 
-from ..errors import DataError, DivergenceWarning, InconsistentDataError
+from ..errors import ArgumentTypeError, DataError, DivergenceWarning, InconsistentDataError
 from ..estimate import Estimate
 from ..validation import as_array, as_box, as_instance, as_signal, as_time, check_both_or_neither, check_finite
 
-__all__ = ["GROWTH_LIMIT", "Observer", "ObserverState", "check_growth"]
+__all__ = ["GROWTH_LIMIT", "Observer", "ObserverState", "check_growth", "options_after_bounds"]
 
 FloatArray = NDArray[np.float64]
 
@@ -56,6 +56,58 @@ def _one_blas_thread(run: Callable[_Params, _Result]) -> Callable[_Params, _Resu
             return run(*args, **kwargs)
 
     return limited
+
+
+_Design = TypeVar("_Design", bound=Callable[..., Any])
+
+
+def options_after_bounds(*old_order: str) -> Callable[[_Design], _Design]:
+    """Make every argument of a ``design`` after ``bounds`` keyword-only, warning for one release.
+
+    Every estimator's ``design(system, bounds, *, ...)`` takes its options by keyword, ``h`` (the
+    sampling period, where the estimator needs one) named the same everywhere. A call that still passes
+    options by position gets them mapped to their former names with a :class:`FutureWarning`.
+
+    .. deprecated:: 0.2.0
+       Options after ``bounds`` passed by position; they stop working in the next release.
+
+    Parameters
+    ----------
+    *old_order : str
+        The names of the options in the order they had as positional arguments.
+
+    Returns
+    -------
+    callable
+        A decorator for a ``design`` (under ``@classmethod``) whose options after ``bounds`` follow ``*``.
+    """
+
+    def decorate(design: _Design) -> _Design:
+        @functools.wraps(design)
+        def keyword_only(cls: type, system: Any, bounds: Any, *options: Any, **keywords: Any) -> Any:
+            if options:
+                name = f"{cls.__name__}.{design.__name__}"
+                if len(options) > len(old_order):
+                    raise ArgumentTypeError(
+                        f"{name}: expected at most {len(old_order) + 2} positional arguments (system, bounds, "
+                        f"{', '.join(old_order)}), got {len(options) + 2}"
+                    )
+                names = old_order[: len(options)]
+                twice = [n for n in names if n in keywords]
+                if twice:
+                    raise ArgumentTypeError(f"{name}: got {twice} both by position and by keyword")
+                warnings.warn(
+                    f"{name}: pass {', '.join(f'{n}=...' for n in names)} by keyword; options after `bounds` "
+                    "given by position stop working in the next release",
+                    FutureWarning,
+                    stacklevel=2,
+                )
+                keywords.update(zip(names, options, strict=True))
+            return design(cls, system, bounds, **keywords)
+
+        return keyword_only  # type: ignore[return-value]
+
+    return decorate
 
 
 def _named(run: Callable[..., Estimate]) -> Callable[..., Estimate]:

@@ -71,7 +71,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_box, as_choice
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .hull import HullEstimator
 from .interval_observer import IntervalObserver
 
@@ -188,10 +188,12 @@ class FiniteMemoryObserver(Observer):
 
     # -- design ----------------------------------------------------------------------------------
     @classmethod
+    @options_after_bounds("window", "h", "fallback")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         window: int = 40,
         h: float | None = None,
         fallback: Observer | None = None,

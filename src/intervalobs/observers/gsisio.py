@@ -1,6 +1,6 @@
-r"""Simultaneous input and state interval observers for nonlinear discrete-time systems (seed 003).
+r"""Simultaneous input and state interval observers for nonlinear discrete-time systems (Khajenejad & Yong).
 
-System (seed 003, eq. (3); :class:`~intervalobs.systems.nonlinear.NonlinearSystem`):
+System (Khajenejad & Yong, eq. (3); :class:`~intervalobs.systems.nonlinear.NonlinearSystem`):
 :math:`x_{k+1} = f(x_k) + Bu_k + Gd_k + w_k`, :math:`y_k = g(x_k) + Du_k + Hd_k + v_k`.
 
 :class:`GSISIO` — the paper's construction (4)–(7) with the gains of Theorem 1,
@@ -49,7 +49,7 @@ from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 from ..validation import as_array, as_box, check_no_kwargs
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["GSISIO"]
 
@@ -88,7 +88,7 @@ def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatAr
 
 
 class GSISIO(Observer):
-    r"""The paper's GSISIO, eqs. (4)–(7) with Theorem 1's gains (seed 003, Algorithm 1).
+    r"""The paper's GSISIO, eqs. (4)–(7) with Theorem 1's gains (Khajenejad & Yong, Algorithm 1).
 
     Use :meth:`design`. The bounds :math:`\underline f, \overline f, \underline g, \overline g` over the
     previous box are Corollary 1's (global-Jacobian decomposition (2) ∩ affine abstraction (1)) and,
@@ -143,10 +143,12 @@ class GSISIO(Observer):
         self._diff_inv = np.linalg.pinv(eye - d.K1 - d.L1)
 
     @classmethod
+    @options_after_bounds("jacobian_domain", "abstraction_domain")
     def design(
         cls,
         system: NonlinearSystem,
         bounds: Bounds,
+        *,
         jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None,
         abstraction_domain: tuple[ArrayLike, ArrayLike] | None = None,
         **options: Any,
@@ -187,13 +189,13 @@ class GSISIO(Observer):
             if q_h < system.q:
                 hidden = f"; H has rank {q_h} < {system.q}, so (I - K1 + L1) G V2 = 0 for H V2 = 0"
             raise AssumptionError(
-                "the gains cannot bound the state from both sides (condition (8)): "
+                "the gains cannot bound the state from both sides (rank condition): "
                 f"rk(I - K1 - L1) = {d.rank_condition_8[0]}, "
                 f"rk(I - K1 + L1) = {d.rank_condition_8[1]}, expected both = n = {n}{hidden}"
             )
         if not d.correctness_radius < 1.0:
             raise AssumptionError(
-                "correctness of (9): expected rho(K1 + L1) < 1 (error system an M-matrix), "
+                "the bounds would not be guaranteed: expected rho(K1 + L1) < 1 (error system an M-matrix), "
                 f"got {d.correctness_radius:.4g}"
             )
         dom = box if abstraction_domain is None else as_box("abstraction_domain", abstraction_domain, n)
@@ -270,7 +272,7 @@ class GSISIO(Observer):
         dict
             ``method`` and ``input_delay_steps`` (1: input row ``k`` bounds :math:`d_{k-1}`).
         """
-        return {"method": "GSISIO (seed 003, Theorem 1)", "input_delay_steps": 1}
+        return {"method": "GSISIO (the gains of Khajenejad & Yong)", "input_delay_steps": 1}
 
     def current_input_bounds(
         self, x_lower: ArrayLike, x_upper: ArrayLike, y: ArrayLike, u: ArrayLike | None = None

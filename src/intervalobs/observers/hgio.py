@@ -1,4 +1,5 @@
-r"""High-gain interval observer with sampled outputs (seed 004, Theorems 4.2 and 4.5), made sound.
+r"""High-gain interval observer with sampled outputs (the sampled-output high-gain paper, Theorems 4.2 and 4.5), made
+sound.
 
 Model (eq. (8)): :math:`\dot x = Ax + \varphi(t, u, x) + d`, :math:`y(t_k) = Cx(t_k) + V(t_k)`.
 With :math:`A - L_1C = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1` (eq. (13)) the truth obeys
@@ -54,7 +55,7 @@ from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
 from ..validation import as_box, as_choice, as_matrix, as_positive
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 if TYPE_CHECKING:
     from ..design.high_gain import ThetaDesign
@@ -209,7 +210,7 @@ class _Modal:
 
 
 class HighGainIntervalObserver(Observer):
-    """Continuous–discrete high-gain interval observer (seed 004, Theorems 4.2 and 4.5).
+    """Continuous–discrete high-gain interval observer (the sampled-output high-gain paper, Theorems 4.2 and 4.5).
 
     Parameters
     ----------
@@ -317,13 +318,14 @@ class HighGainIntervalObserver(Observer):
         self.width_design: WidthDesign | None = None
 
     @classmethod
+    @options_after_bounds("disks", "h")
     def design(
         cls,
         system: SampledSystem,
         bounds: Bounds,
+        *,
         disks: Sequence[Disk | tuple[complex, float]],
         h: float,
-        *,
         objective: str = "min_gain",
         alpha_d: float | None = None,
         alpha_n: float | None = None,
@@ -333,7 +335,8 @@ class HighGainIntervalObserver(Observer):
         predictor: str = "modal",
         rewrap: bool = True,
     ) -> HighGainIntervalObserver:
-        """The constructive design of seed 004: Algorithm 1 for ``L1``, then (optionally) Theorem 4.4.
+        """The constructive design of the sampled-output high-gain paper: Algorithm 1 for ``L1``, then (optionally)
+        Theorem 4.4.
 
         Parameters
         ----------
@@ -398,12 +401,13 @@ class HighGainIntervalObserver(Observer):
         return observer
 
     @classmethod
+    @options_after_bounds("h")
     def design_for_width(
         cls,
         system: SampledSystem,
         bounds: Bounds,
-        h: float,
         *,
+        h: float,
         phi_radius: ArrayLike,
         input_rate: float,
         weights: ArrayLike | None = None,
@@ -600,7 +604,7 @@ class HighGainIntervalObserver(Observer):
             ``method``, ``L``, ``output_gain``, ``theta``, ``eigenvalues`` and ``refined``.
         """
         return {
-            "method": "HGIO (seed 004, Theorems 4.2 and 4.5), "
+            "method": "high-gain interval observer with sampled outputs (the sampled-output high-gain paper), "
             + ("sound exact discretisation" if self.scheme == "exact" else "paper's Euler step (not sound)"),
             "L": self.L,
             "output_gain": self.output_gain,

@@ -3,7 +3,7 @@ r"""The exact interval hull of the consistent set: the tightest box any sound es
 For a linear model with box-bounded unknowns, the states :math:`x_k` consistent with the model, the
 prior box of :math:`x_0`, the noise boxes and the measurements form a polytope :math:`S_k`; its interval
 hull :math:`\square S_k` is the smallest box that contains every admissible state, so every sound
-estimator's box contains it (seed 002, Section 3: the zonotopic and interval observers are outer
+estimator's box contains it (the integrated-observer paper, Section 3: the zonotopic and interval observers are outer
 approximations of :math:`S_k`). Each bound of :math:`\square S_k` is a linear programme:
 
 .. math::
@@ -58,7 +58,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_positive
-from .base import Observer, ObserverState, _one_blas_thread
+from .base import Observer, ObserverState, _one_blas_thread, options_after_bounds
 
 __all__ = ["HullEstimator"]
 
@@ -148,7 +148,7 @@ class HullEstimator(Observer):
         returns the box of ``x_k`` given ``y_0 … y_k``.
     window_boxes : bool
         Also bound every state inside the window by its earlier box (not only the first one, the
-        prior). Slightly tighter for short windows (0.4 % at H = 10 on seed 002's (68), nothing at
+        prior). Slightly tighter for short windows (0.4 % at H = 10 on the integrated-observer paper's (68), nothing at
         H = 40) but about 1.5× more simplex pivots; redundant for the full history.
     workers : int
         HiGHS instances solving the ``2n`` LPs of a step in parallel threads (condensed LP only; HiGHS
@@ -167,9 +167,9 @@ class HullEstimator(Observer):
     Each step solves ``2n`` LPs (the model is built once per window length and only bounds and costs
     change). With a finite horizon, a stable (ρ(Φ) ≤ 1) model with box measurement noise uses the
     condensed LP at every step (states eliminated, :class:`CondensedWindowLP`; the first ``H`` steps as shorter
-    windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on seed
-    002's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP instead
-    of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain by a dense simplex of
+    windows from ``x_0``): the same set with ``H + 1`` rows, and bases restored aligned by time (on the
+    integrated-observer paper's (68) with ``H = 40``, 2.4 (switching noise) and 9.8 (i.i.d. vertex noise) pivots per LP
+    instead of 16 and 63 with the sparse window LP). Its ``2n`` objectives are solved as a chain by a dense simplex of
     our own (:class:`~intervalobs.lp.dense_simplex.DenseSimplex`): the first by the dual simplex from its
     basis of the previous step, each next one by the primal simplex from the optimum of the one before; HiGHS
     solves what it gives up on, and the sparse window LP. Every bound is certified by weak duality (module
@@ -238,12 +238,13 @@ class HullEstimator(Observer):
         """The route of every step's LP solves since :meth:`init` (``meta["solver_path"]``)."""
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
-        h: float | None = None,
         *,
+        h: float | None = None,
         horizon: int | None = 50,
         filtered: bool = False,
         window_boxes: bool = False,

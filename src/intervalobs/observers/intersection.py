@@ -32,7 +32,7 @@ from ..interval import inflate, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .interval_observer import IntervalObserver
 
 __all__ = ["IntersectionObserver", "output_contraction"]
@@ -158,10 +158,12 @@ class IntersectionObserver(Observer):
         self._restart = [isinstance(o, IntervalObserver) and o.method == "framer" for o in self.members]
 
     @classmethod
+    @options_after_bounds("h", "extra", "contract", "sweeps", "max_members")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         h: float | None = None,
         extra: Sequence[Observer] = (),
         contract: bool = True,
@@ -202,7 +204,7 @@ class IntersectionObserver(Observer):
         found: list[tuple[float, IntervalObserver]] = []
         for name, T in coordinate_candidates(model, system.C, system.F, v_radius).items():
             try:
-                obs = IntervalObserver.design(system, full, h, method="framer", candidates={name: T})
+                obs = IntervalObserver.design(system, full, h=h, method="framer", candidates={name: T})
             except DesignError:
                 continue
             assert obs.design_result is not None

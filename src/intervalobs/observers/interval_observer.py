@@ -25,7 +25,7 @@ from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_array, as_choice, as_matrix, check_no_kwargs
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["METHODS", "IntervalObserver"]
 
@@ -89,12 +89,13 @@ class IntervalObserver(Observer):
     (:class:`~intervalobs.design.tube.BlockNorms`).
 
     ``method="framer"``: the classical framer :math:`\overline{z}^+ = M^+\overline{z} - M^-\underline{z} + \dots`
-    of seed 002 (39)–(40), written in centre–radius form and valid for any sign pattern of :math:`M`,
+    of the integrated-observer paper, (39)–(40), written in centre–radius form and valid for any sign pattern of
+    :math:`M`,
 
     .. math:: z_r^+ = |M| z_r + |T|\big(r + |LF| v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
 
     with :math:`x_c = T^{-1}z_c`, :math:`x_r = |T^{-1}|z_r`; the interval term :math:`\delta\Phi\,x` is
-    bounded exactly (seed 002, Lemma A.1). It needs a stable width system
+    bounded exactly (the integrated-observer paper, Lemma A.1). It needs a stable width system
     :math:`\rho(|M| + |T|\delta\Phi|T^{-1}|) < 1`.
 
     Several gains (tube only; :meth:`design` passes the winning gain and the other candidates bounded in
@@ -201,7 +202,8 @@ class IntervalObserver(Observer):
         self.design_result: FramerDesign | TubeDesign | None = None
 
     @classmethod
-    def design(cls, system: LTISystem, bounds: Bounds, h: float | None = None, **options: Any) -> IntervalObserver:
+    @options_after_bounds("h")
+    def design(cls, system: LTISystem, bounds: Bounds, *, h: float | None = None, **options: Any) -> IntervalObserver:
         """Find a gain (and, for the framer, coordinates) automatically and build the observer.
 
         The tube (default) compares steady-state Kalman gains of the sampled model and the framer's

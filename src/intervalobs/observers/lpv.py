@@ -1,4 +1,4 @@
-r"""LPV interval observer (seed 001, (31)–(34)) and LPV interval UIO with isolation signals ((69)–(72)).
+r"""LPV interval observer (Rotondo et al., (31)–(34)) and LPV interval UIO with isolation signals ((69)–(72)).
 
 Continuous-time theory (Theorem 3.1, Lemma 4.1): with :math:`T C = I - R` (36), :math:`S` from
 (37)–(42) and Metzler :math:`\underline F, \overline F`, the lower observer state :math:`\underline z`
@@ -73,7 +73,7 @@ from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_array, as_box, as_matrix, as_positive
 from ._lpv_step import GenericStepEnclosure, metzler_step_matrices
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 
 __all__ = ["LPVIntervalObserver", "LPVIntervalUIO"]
 
@@ -96,7 +96,7 @@ def _measured_inverse(system: LPVSystem) -> FloatArray:
     p = system.p
     if np.any(system.C[:, p:] != 0.0):
         raise AssumptionError(
-            f"C: expected the form (C̃ 0) of (9), measured states first, got nonzero columns beyond the first {p}"
+            f"C: expected the measured states first, C = (C̃ 0), got nonzero columns beyond the first {p}"
         )
     return np.asarray(np.linalg.inv(system.C[:, :p]))
 
@@ -204,10 +204,12 @@ class LPVIntervalObserver(Observer):
         return as_positive("h", h, "a positive sampling interval")
 
     @classmethod
+    @options_after_bounds("h", "theta_rate")
     def design(
         cls,
         system: LPVSystem,
         bounds: Bounds,
+        *,
         h: float,
         theta_rate: ArrayLike,
         **design_options: Any,
@@ -646,11 +648,15 @@ class LPVIntervalUIO(LPVIntervalObserver):
         rb = np.einsum("kij,kjl->kil", model.r_matrix(points @ system.C.T), system.matrix_at("B_un", points))
         self.H = rb[0]
         if not np.allclose(rb, self.H, atol=1e-9 * max(1.0, float(np.abs(self.H).max()))):
-            raise AssumptionError("R, B_un: expected R(θ) B_un(θ) = H constant on theta_box (26)")
+            raise AssumptionError(
+                "R, B_un: expected R(θ) B_un(θ) = H constant on theta_box (unknown-input directions fixed)"
+            )
         for name, f in (("f_lower", self.f_lower), ("f_upper", self.f_upper)):
             gam = np.linalg.pinv(self.H) @ f @ self.H
             if not np.allclose(f @ self.H, self.H @ np.diag(np.diag(gam)), atol=1e-9):
-                raise AssumptionError(f"{name}: expected F H = H Γ with Γ diagonal ((103)–(104))")
+                raise AssumptionError(
+                    f"{name}: expected F H = H Γ with Γ diagonal (each unknown input decays on its own)"
+                )
 
     @staticmethod
     def _unknown_input_box(
@@ -658,14 +664,16 @@ class LPVIntervalUIO(LPVIntervalObserver):
     ) -> tuple[FloatArray, FloatArray]:
         box = as_box("unknown_input", unknown_input, system.q)
         if np.any(box[0] > 0) or np.any(box[1] < 0):
-            raise AssumptionError("unknown_input: expected lower <= 0 <= upper (Assumption 2.2)")
+            raise AssumptionError("unknown_input: expected lower <= 0 <= upper (no fault is a possible value)")
         return box
 
     @classmethod
+    @options_after_bounds("h", "theta_rate", "unknown_input", "decay")
     def design(
         cls,
         system: LPVSystem,
         bounds: Bounds,
+        *,
         h: float,
         theta_rate: ArrayLike,
         unknown_input: tuple[ArrayLike, ArrayLike] = ((), ()),
@@ -729,5 +737,5 @@ def _check_assumption_3(system: LPVSystem) -> None:
     bounds = system.bounds_at("dA", points)
     if bounds is not None and (np.any(bounds[0][:, :p, p:] != 0) or np.any(bounds[1][:, :p, p:] != 0)):
         raise AssumptionError(
-            "dA: expected ΔA12 = 0 (Assumption 2.3, (25)): unmeasured states must act on measured ones exactly"
+            "dA: expected ΔA12 = 0: the unmeasured states must act on the measured ones through exactly known terms"
         )

@@ -1,6 +1,6 @@
-r"""The sound simultaneous input and state observer for rank-deficient H (seed 003 made sound).
+r"""The sound simultaneous input and state observer for rank-deficient H (Khajenejad & Yong made sound).
 
-System (seed 003, eq. (3); :class:`~intervalobs.systems.nonlinear.NonlinearSystem`):
+System (Khajenejad & Yong, eq. (3); :class:`~intervalobs.systems.nonlinear.NonlinearSystem`):
 :math:`x_{k+1} = f(x_k) + Bu_k + Gd_k + w_k`, :math:`y_k = g(x_k) + Du_k + Hd_k + v_k`.
 
 :class:`NullSpaceGSISIO` is the sound variant of :class:`~intervalobs.observers.gsisio.GSISIO` for
@@ -745,4 +745,7 @@ class NullSpaceGSISIO(Observer):
         dict
             ``method`` and ``input_delay_steps`` (1: input row ``k`` bounds :math:`d_{k-1}`).
         """
-        return {"method": "NullSpaceGSISIO (seed 003 made sound: current d-free output)", "input_delay_steps": 1}
+        return {
+            "method": "NullSpaceGSISIO (Khajenejad & Yong made sound: uses the current output's input-free part)",
+            "input_delay_steps": 1,
+        }

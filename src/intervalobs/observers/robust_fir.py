@@ -63,7 +63,7 @@ from ..errors import AssumptionError, DataError
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation
-from .base import Observer
+from .base import Observer, options_after_bounds
 from .fir import FiniteMemoryObserver
 from .interval_observer import IntervalObserver
 
@@ -142,10 +142,12 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         )
 
     @classmethod
+    @options_after_bounds("window", "h", "fallback", "state_size")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         window: int = 10,
         h: float | None = None,
         fallback: Observer | None = None,

@@ -53,8 +53,8 @@ padded for their own rounding like the hull's condensed LP.
 :math:`\delta_l \in [\underline\delta_l, \overline\delta_l]` and :math:`x_{j,b}` in its box (exact at
 the vertices; McCormick 1976), gives a set inside the split LP's. The states stay LP columns (a sparse
 LP: the envelopes of step ``j`` read :math:`x_j` only) and every state of the window is bounded by its
-box. On seed 002's (68) it removes most of the remainder's width (docs/tightness.md: 1.35× → 1.21× the
-certified lower bound on the worst run, H = 20), at about 3 times the CPU time per step of the split
+box. On the integrated-observer paper's (68) it removes most of the remainder's width (docs/tightness.md: 1.35× → 1.21×
+the certified lower bound on the worst run, H = 20), at about 3 times the CPU time per step of the split
 LP (H = 40). The LP is one HiGHS model built once, with a slot per time of the window used cyclically;
 each step changes its bounds and the few coefficients of the newest slot, and every bound restarts from
 its basis of the previous step (:class:`EnvelopeLP`).
@@ -85,7 +85,7 @@ from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation, sampled_model
 from ..validation import as_positive
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .interval_observer import IntervalObserver
 
 __all__ = ["RobustHullEstimator"]
@@ -178,12 +178,13 @@ class RobustHullEstimator(Observer):
         self.delta_box: tuple[FloatArray, FloatArray] = (-self.model.radius.copy(), self.model.radius.copy())
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
-        h: float | None = None,
         *,
+        h: float | None = None,
         horizon: int = 40,
         identify: bool = True,
         fallback: Observer | Literal[False] | None = None,

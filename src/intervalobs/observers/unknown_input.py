@@ -1,14 +1,14 @@
-r"""Unknown-input interval observer for uncertain continuous-time LTI systems (seed 000).
+r"""Unknown-input interval observer for uncertain continuous-time LTI systems (the aircraft UIO paper).
 
-Model (seed 000, eq. (1), with the noise matrices of :class:`~intervalobs.systems.LTISystem`):
+Model (the aircraft UIO paper, eq. (1), with the noise matrices of :class:`~intervalobs.systems.LTISystem`):
 
 .. math:: \dot x = Ax + Bu + D\xi + E_\omega w, \qquad y = Cx + Fv, \qquad \psi = Cx,
 
 :math:`\xi` unknown and unbounded, :math:`w, v` in boxes, the measurement noise smooth
 (:math:`|\dot v| \le \bar{\dot v}`) and :math:`|\ddot\psi| \le L` (the assumption of Levant's
-differentiator, seed 000, Theorem 3).
+differentiator, the aircraft UIO paper, Theorem 3).
 
-Observer (seed 000, eq. (15)) in the coordinates :math:`z = Tx` of Hypothesis 6, in which
+Observer (the aircraft UIO paper, eq. (15)) in the coordinates :math:`z = Tx` of Hypothesis 6, in which
 :math:`TNT^{-1} = M` is Metzler and Hurwitz (diagonal for real poles, 3×3 cyclic blocks for complex
 pairs: :func:`~intervalobs.design.uio.metzler_block_form`). Equation (15) contains :math:`-TE\dot y`; we
 integrate it *exactly* by writing :math:`w = z + TE\psi = T(x + E\psi)`, for which (using :math:`PD = 0`,
@@ -111,7 +111,7 @@ from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem
 from ..validation import as_array, as_box, as_matrix, as_positive, as_signal, as_vector
-from .base import SPACING_TOLERANCE, Observer, ObserverState
+from .base import SPACING_TOLERANCE, Observer, ObserverState, options_after_bounds
 
 __all__ = ["UnknownInputIntervalObserver"]
 
@@ -129,7 +129,7 @@ def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
 
 
 class UnknownInputIntervalObserver(Observer):
-    """Interval observer of the state and of the unknown input ξ (seed 000, eqs. (15), (31), (37)).
+    """Interval observer of the state and of the unknown input ξ (the aircraft UIO paper, eqs. (15), (31), (37)).
 
     Build it with :meth:`design`; see the module docstring for the equations and step semantics.
 
@@ -258,13 +258,14 @@ class UnknownInputIntervalObserver(Observer):
 
     # ------------------------------------------------------------------ design
     @classmethod
+    @options_after_bounds("D", "h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         D: ArrayLike,
         h: float,
-        *,
         noise_rate: ArrayLike,
         output_accel: ArrayLike,
         W: ArrayLike | None = None,
@@ -277,7 +278,7 @@ class UnknownInputIntervalObserver(Observer):
         hosm_transient: float = 1.0,
         input_magnitude: float = 1e6,
     ) -> UnknownInputIntervalObserver:
-        """Check Hypotheses 4–6 and build the observer (seed 000, §4).
+        """Check Hypotheses 4–6 and build the observer (the aircraft UIO paper, §4).
 
         Parameters
         ----------
@@ -745,7 +746,7 @@ class UnknownInputIntervalObserver(Observer):
             xi_lo = np.concatenate([np.full_like(later[0][..., :1, :], -np.inf), later[0]], axis=-2)
             xi_hi = np.concatenate([np.full_like(later[1][..., :1, :], np.inf), later[1]], axis=-2)
         meta = {
-            "method": "unknown-input interval observer (seed 000)",
+            "method": "unknown-input interval observer (the aircraft UIO paper)",
             "derivative": self.derivative,
             "transient_s": float(times[0]) + self.transient_s,
             "poles": [complex(v) if v.imag else float(v.real) for v in self.coords.poles],

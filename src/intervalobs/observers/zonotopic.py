@@ -1,6 +1,6 @@
-r"""Seed 002's zonotopic set-based observer (Prop. 3.1) and integrated observer (Theorem 5.3).
+r"""The integrated-observer paper's zonotopic set-based observer (Prop. 3.1) and integrated observer (Theorem 5.3).
 
-Model (seed 002, (1)): :math:`x_{k+1} = (A_0 + \Delta A(\theta))x_k + Bu_k + E_\omega\omega_k`,
+Model (the integrated-observer paper, (1)): :math:`x_{k+1} = (A_0 + \Delta A(\theta))x_k + Bu_k + E_\omega\omega_k`,
 :math:`y_k = Cx_k + E_\upsilon\upsilon_k`, with :math:`\Delta A(\theta)` constant in the box ``system.dA``
 and the noises in the boxes of ``bounds``. Substituting :math:`LCx_k = Ly_k - LE_\upsilon\upsilon_k`,
 
@@ -43,7 +43,7 @@ from ..systems.lti import LTISystem
 from ..systems.sampling import sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
-from .base import Observer, ObserverState
+from .base import Observer, ObserverState, options_after_bounds
 from .interval_observer import IntervalObserver
 
 __all__ = ["IntegratedObserver", "ZonotopicObserver"]
@@ -55,7 +55,8 @@ _TINY = float(np.finfo(float).tiny)
 
 
 class ZonotopicObserver(Observer):
-    r"""Zonotopic set-based observer of seed 002, Proposition 3.1 (sound interval-matrix inclusion).
+    r"""Zonotopic set-based observer of the integrated-observer paper, Proposition 3.1 (sound interval-matrix
+    inclusion).
 
     With :math:`A^* = A_0 + \Delta A - LC` an interval matrix (midpoint :math:`M`, radius :math:`D`),
 
@@ -225,7 +226,7 @@ class ZonotopicObserver(Observer):
             ``certified``, ``transient_s``, and ``gain_design`` when designed.
         """
         info: dict[str, Any] = {
-            "method": "ZonotopicObserver (seed 002, Prop. 3.1)",
+            "method": "ZonotopicObserver (zonotopic set-based observer, the integrated-observer paper)",
             "L": self.L.tolist(),
             "order": self.order,
             "spectral_radius": self.spectral_radius,
@@ -257,7 +258,7 @@ class ZonotopicObserver(Observer):
 
 
 class IntegratedObserver(IntervalObserver):
-    r"""Integrated interval observer of seed 002, Theorem 5.3, made sound.
+    r"""Integrated interval observer of the integrated-observer paper, Theorem 5.3, made sound.
 
     Centre (63) and segments (64) are propagated separately:
 
@@ -290,10 +291,12 @@ class IntegratedObserver(IntervalObserver):
         self.fallback: str | None = None
 
     @classmethod
+    @options_after_bounds("h")
     def design(
         cls,
         system: LTISystem,
         bounds: Bounds,
+        *,
         h: float | None = None,
         **options: Any,
     ) -> IntegratedObserver:
@@ -332,7 +335,7 @@ class IntegratedObserver(IntervalObserver):
         except AssumptionError as exc:
             if fallback == "raise":
                 raise
-            reason = f"(65) dropped, gain from (19) alone: {exc}"
+            reason = f"monotonicity dropped, the H∞ gain alone: {exc}"
             result = hinf_gain(*args, monotone=False)
         observer = cls(system, bounds, result.gain)
         observer.gain_design = result
@@ -348,7 +351,9 @@ class IntegratedObserver(IntervalObserver):
             Those of :meth:`ZonotopicObserver.meta`, plus ``gain_design`` and ``fallback`` when set.
         """
         info = super().meta()
-        info["method"] = "IntegratedObserver (seed 002, Thm 5.3)"
+        info["method"] = (
+            "IntegratedObserver (zonotope of ΔA effects with an interval framer, the integrated-observer paper)"
+        )
         if self.gain_design is not None:
             info["gain_design"] = self.gain_design.as_dict()
         if self.fallback is not None:

@@ -35,7 +35,8 @@ COLORS = {"zonotopic": "tab:orange", "interval": "tab:blue", "integrated": "tab:
 def naive_framer(
     system: LTISystem, bounds: Bounds, L: ArrayLike, t: FloatArray, y: FloatArray, u: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Seed 002 (39)–(40) literally: ``M x̄`` and ``M x̲`` with ``M = A0 - LC`` of any sign (NOT sound).
+    """The integrated-observer paper's (39)–(40) literally: ``M x̄`` and ``M x̲`` with ``M = A0 - LC`` of any sign (NOT
+    sound).
 
     Returns the raw ``(lower, upper)`` arrays: with a non-monotone ``M`` they may even cross.
     """

@@ -1,4 +1,4 @@
-"""Reproduction ``aircraft-uio`` (seed 000, §5): state and unknown-input bounds on the aircraft model.
+"""Reproduction ``aircraft-uio`` (the aircraft UIO paper, §5): state and unknown-input bounds on the aircraft model.
 
 What it does:
 
@@ -43,8 +43,8 @@ def _observer(
     return UnknownInputIntervalObserver.design(
         ac.aircraft_system(known_inputs),
         ac.aircraft_bounds(),
-        ac.D,
-        ac.TE,
+        D=ac.D,
+        h=ac.TE,
         noise_rate=np.full(4, ac.DELTA_DOT_BAR),
         output_accel=np.full(4, ac.OUTPUT_ACCEL),
         derivative=derivative,  # type: ignore[arg-type]

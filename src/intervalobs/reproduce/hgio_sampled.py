@@ -1,4 +1,5 @@
-"""Reproduction ``hgio-sampled``: seed 004's example, the HGIO designed for width next to the paper's designs.
+"""Reproduction ``hgio-sampled``: the sampled-output high-gain paper's example, the HGIO designed for width next to the
+paper's designs.
 
 Designed for width (recommended): :meth:`HighGainIntervalObserver.design_for_width` (gain minimising
 the modal steady-state width bound, disks derived from the optimum, Algorithm 1 in them) with the
@@ -62,8 +63,9 @@ HULL_REFERENCE = {
 
 
 GeneralEstimator = Callable[[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], Estimate]
-"""An estimator of the general continuous-time nonlinear path (issue 32), built for seed 004's example: called
-with ``(t, y, u)`` of the reproduction's record (every run, ``y`` NaN between samples) and returning its
+"""An estimator of the general continuous-time nonlinear path (issue 32), built for the sampled-output high-gain
+paper's example: called with ``(t, y, u)`` of the reproduction's record (every run, ``y`` NaN between samples) and
+returning its
 :class:`~intervalobs.estimate.Estimate` on the grid ``t``."""
 
 GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {}
@@ -116,7 +118,7 @@ def general_path(
 
 
 def high_gain_gain(theta: float, K: np.ndarray) -> np.ndarray:
-    """``L = θ Δ_θ⁻¹ K`` with ``Δ_θ = diag(1, 1/θ, …, 1/θ^{n-1})`` (seed 004, eq. (10)).
+    """``L = θ Δ_θ⁻¹ K`` with ``Δ_θ = diag(1, 1/θ, …, 1/θ^{n-1})`` (the sampled-output high-gain paper, eq. (10)).
 
     Parameters
     ----------
@@ -151,8 +153,8 @@ def paper_designs() -> tuple[HighGainIntervalObserver, ModalDecomposition, Theta
     constructive = HighGainIntervalObserver.design(
         system,
         bounds,
-        example.DISKS,
-        example.STEP,
+        disks=example.DISKS,
+        h=example.STEP,
         alpha_d=example.ALPHA_D,
         alpha_n=example.ALPHA_N,
         input_rate=example.INPUT_RATE,
@@ -259,7 +261,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     widthwise = HighGainIntervalObserver.design_for_width(
         system,
         bounds,
-        example.STEP,
+        h=example.STEP,
         phi_radius=example.PHI_RADIUS,
         input_rate=example.INPUT_RATE,
         weights=WIDTH_WEIGHTS,
@@ -648,7 +650,7 @@ def _figures(
 EXAMPLE = Example(
     NAME,
     SEED_FILE,
-    "seed 004: sampled-output HGIO designed for width, constructive and θ = 1000 designs",
+    "sampled outputs, a nonlinear term: the observer designed for width, next to the paper's two designs",
     run,
     weight=16.0,
 )

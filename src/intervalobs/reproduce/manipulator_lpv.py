@@ -1,4 +1,4 @@
-"""Reproduction ``manipulator-lpv``: seed 001, Section 5 (LPV interval UIO on the two-joint manipulator).
+"""Reproduction ``manipulator-lpv``: Rotondo et al., Section 5 (LPV interval UIO on the two-joint manipulator).
 
 Design: certified exact ranges of ΔA_R, ΔB_R over the parameter box; boundedness LMI (74) at the
 paper's λ = 1 on a coarse grid, verified on the paper's 10 000-point grid for every subset pair; the
@@ -357,7 +357,7 @@ def run(out_dir: Path, seed: int = 0, plots: bool = True, full: bool = True) -> 
     summary = base_summary(
         example=EXAMPLE.name,
         seed_file=SEED_FILE,
-        observer="LPVIntervalUIO (seed 001 (31), (33), (69)–(72)), sound sampled-data step",
+        observer="LPVIntervalUIO (interval UIO of Rotondo et al.), sound sampled-data step",
         t=t,
         x=x[0],
         x_lower=est.lower[0],
@@ -507,9 +507,7 @@ def campaign_task(
         ``(run, scenario index, success, false_alarm, first negative time per fault)``.
     """
     if not 0.0 <= magnitude <= FAULT_BOUND:
-        raise BoundsError(
-            f"magnitude: expected a fault size in [0, {FAULT_BOUND:g}] (Assumption 2.2), got {magnitude:g}"
-        )
+        raise BoundsError(f"magnitude: expected a fault size in [0, {FAULT_BOUND:g}] , got {magnitude:g}")
     obs = _campaign_observer(float(level))
     model = _campaign_model(float(level))
     ids = list(run_ids)

@@ -1,4 +1,4 @@
-"""Reproduction ``nonlinear-gsisio``: seed 003, Section V (Figs. 1–2), and what it takes to make it sound.
+"""Reproduction ``nonlinear-gsisio``: Khajenejad & Yong, Section V (Figs. 1–2), and what it takes to make it sound.
 
 Recommended bounds (``x_lower``/``x_upper``, ``d_lower``/``d_upper``): :class:`NullSpaceGSISIO` on the
 paper's system — the paper's own construction cannot run there (condition (8) fails structurally, and
@@ -658,7 +658,7 @@ def _figures(
         ax.plot(t, truth, color="black", lw=1.0, label="truth")
         ax.set_ylabel(label)
     axes[0].legend(loc="upper right", fontsize="small")
-    axes[0].set_title("Seed 003 example, sound variant (NullSpaceGSISIO), bang-bang noise")
+    axes[0].set_title("Khajenejad & Yong example, sound variant (NullSpaceGSISIO), bang-bang noise")
     axes[-1].set_xlabel("step k")
     fig.tight_layout()
     save_figure(fig, out_dir / "fig1_states_inputs.png")
@@ -711,7 +711,11 @@ def _figures(
 
 
 EXAMPLE = Example(
-    NAME, SEED_FILE, "seed 003 GSISIO nonlinear example: paper's design checked, sound variant", run, weight=11.0
+    NAME,
+    SEED_FILE,
+    "nonlinear example with hidden unknown inputs: the printed design checked, a sound variant",
+    run,
+    weight=11.0,
 )
 
 

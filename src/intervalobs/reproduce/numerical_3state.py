@@ -1,4 +1,4 @@
-"""Reproduction ``numerical-3state``: seed 002, Section 6.1, systems (68) and (70), Figs. 2–5.
+"""Reproduction ``numerical-3state``: the integrated-observer paper, Section 6.1, systems (68) and (70), Figs. 2–5.
 
 Observers compared (all sound; the recommended bounds are the interval observer's on (68)):
 
@@ -309,6 +309,6 @@ def _ratio(a: list[float], b: list[float]) -> dict[str, Any]:
 EXAMPLE = Example(
     NAME,
     SEED_FILE,
-    "seed 002 3-state example (68)/(70): zonotopic, interval and integrated observers, H∞ LMI gains",
+    "two 3-state examples: zonotopic, interval and integrated observers, H∞ LMI gains",
     run,
 )

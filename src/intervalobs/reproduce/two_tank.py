@@ -1,4 +1,4 @@
-"""Reproduction ``two-tank``: seed 002, Section 6.2, the two-tank benchmark (72), Figs. 9–11.
+"""Reproduction ``two-tank``: the integrated-observer paper, Section 6.2, the two-tank benchmark (72), Figs. 9–11.
 
 Observers compared (all sound; the recommended bounds are the interval observer's):
 
@@ -206,6 +206,6 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
 EXAMPLE = Example(
     NAME,
     SEED_FILE,
-    "seed 002 two-tank benchmark (72): zonotopic, interval and integrated observers, printed gains checked",
+    "two-tank benchmark: zonotopic, interval and integrated observers, printed gains checked",
     run,
 )

@@ -9,8 +9,8 @@ Every model of the package has the same three kinds of bounded unknowns,
     \underline{v} \le v(t_k) \le \overline{v},
 
 with :math:`w` the additive disturbance of the state equation (the ``w`` of :class:`LTISystem` and
-:class:`NonlinearSystem`, the ``d`` of seeds 001 and 004) and :math:`v` the noise of the measurements.
-The user writes them once as :class:`Bounds` (scalars are broadcast, absent noises are zero);
+:class:`NonlinearSystem`, the ``d`` of Rotondo et al. and of the sampled-output high-gain paper) and :math:`v` the
+noise of the measurements. The user writes them once as :class:`Bounds` (scalars are broadcast, absent noises are zero);
 :meth:`Bounds.resolve` checks them against a model *once*, at the boundary of a design or a
 simulation, and returns :class:`ResolvedBounds`, whose three boxes are always present, have the
 model's sizes and give their centres and radii. Everything behind the boundary takes the resolved

@@ -1,4 +1,4 @@
-r"""Uncertain continuous-time LPV systems (seed 001, (1)–(2), Assumptions 2.1–2.3).
+r"""Uncertain continuous-time LPV systems (Rotondo et al., (1)–(2), Assumptions 2.1–2.3).
 
 .. math::
     \dot x = (A(\vartheta) + \Delta A(\vartheta))x + (B(\vartheta) + \Delta B(\vartheta))u
@@ -370,7 +370,7 @@ class SampledLPVModel(ABC):
 
     Methods are vectorised over a leading run axis and return *sound* enclosures valid for every
     admissible parameter, unknown input and intersample behaviour. ``R`` is the observer's coordinate
-    matrix :math:`R(\vartheta)` (seed 001, (14)–(16)). Subclasses set :attr:`system`.
+    matrix :math:`R(\vartheta)` (Rotondo et al., (14)–(16)). Subclasses set :attr:`system`.
 
     Attributes
     ----------

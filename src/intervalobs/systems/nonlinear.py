@@ -1,4 +1,4 @@
-r"""Nonlinear discrete-time systems with unknown inputs and bounded noise (seed 003, eq. (3)).
+r"""Nonlinear discrete-time systems with unknown inputs and bounded noise (Khajenejad & Yong, eq. (3)).
 
 .. math::
 
@@ -9,10 +9,10 @@ boxes ``w``, ``v`` of a :class:`~intervalobs.systems.bounds.Bounds`, with the in
 unknown input :math:`d_k` about which nothing is assumed (no bound, no model).
 
 Dimensions use the library's names: ``n`` states, ``m`` known inputs, ``p`` outputs, ``q`` unknown
-inputs (the seed calls them n, m, l, p). ``f`` and ``g`` follow the component convention of
+inputs (the paper calls them n, m, l, p). ``f`` and ``g`` follow the component convention of
 :mod:`intervalobs.inclusion`: they take a sequence of the n state components and return a sequence of
 components, written with NumPy functions, so that the same definition is evaluated at points, in
-interval arithmetic over boxes, and — for the Jacobian bounds the observers need (seed 003,
+interval arithmetic over boxes, and — for the Jacobian bounds the observers need (Khajenejad & Yong,
 Assumption 1) — in interval forward-mode differentiation (:mod:`intervalobs.interval_dual`). Jacobians
 written by the user (rows of entries, same convention) are optional; they are checked against the
 automatic ones.
@@ -41,7 +41,7 @@ FloatArray = NDArray[np.float64]
 
 
 class NonlinearSystem:
-    """A nonlinear discrete-time system with unknown inputs, seed 003 eq. (3).
+    """A nonlinear discrete-time system with unknown inputs, Khajenejad & Yong, eq. (3).
 
     Parameters
     ----------
@@ -80,7 +80,7 @@ class NonlinearSystem:
     DimensionError
         Shapes disagree, or ``f``/``g``/Jacobians return the wrong number of components.
     AssumptionError
-        ``[G; H]`` does not have full column rank (seed 003, Section III).
+        ``[G; H]`` does not have full column rank (Khajenejad & Yong, Section III).
     DataError
         A user Jacobian misses the automatic derivative at a sample point.
     """
@@ -138,12 +138,12 @@ class NonlinearSystem:
 
     @property
     def p(self) -> int:
-        """Number of outputs (the seed's l)."""
+        """Number of outputs (the paper's l)."""
         return int(self.H.shape[0])
 
     @property
     def q(self) -> int:
-        """Number of unknown inputs (the seed's p)."""
+        """Number of unknown inputs (the paper's p)."""
         return int(self.G.shape[1])
 
     @property

@@ -1,4 +1,4 @@
-r"""Continuous-time systems with a nonlinear term and sampled outputs (seed 004, eq. (8)).
+r"""Continuous-time systems with a nonlinear term and sampled outputs (the sampled-output high-gain paper, eq. (8)).
 
 .. math::
 
@@ -59,7 +59,7 @@ def _as_domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[Floa
 
 
 class SampledSystem:
-    """The continuous-discrete model of seed 004, eq. (8).
+    """The continuous-discrete model of the sampled-output high-gain paper, eq. (8).
 
     Parameters
     ----------
