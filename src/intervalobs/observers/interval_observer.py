@@ -32,7 +32,7 @@ FloatArray = NDArray[np.float64]
 
 METHODS = ("tube", "framer")
 
-COMPILED_MIN_SAMPLES = 100_000
+COMPILED_MIN_SAMPLES = 20_000
 """Samples (times runs) from which :meth:`IntervalObserver.run` uses the compiled loop: below, the step loop
 costs less than importing Numba and loading the compiled kernel (benchmarks/run.py measures both)."""
 

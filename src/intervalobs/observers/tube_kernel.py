@@ -42,7 +42,7 @@ POINT, FRAMER, TUBE_IDENTITY, TUBE_COORDINATES = 0, 1, 2, 3
 coordinates (|x| from the reported box), the tube in other coordinates (the coupling ``S``)."""
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _block_norms(v: FloatArray, sizes: NDArray[np.int64], rounding: float, out: FloatArray) -> None:
     """``out[b]`` = the 2-norm of block ``b`` of ``v`` (its absolute value for a block of size 1)."""
     i = 0
@@ -54,7 +54,7 @@ def _block_norms(v: FloatArray, sizes: NDArray[np.int64], rounding: float, out: 
         i += sizes[b]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _box(
     z_c: FloatArray,
     z_r: FloatArray,
@@ -91,7 +91,7 @@ def _box(
             upper[i] = min(upper[i], centre + radius + pad)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _disturbance(
     mode: int,
     z_c: FloatArray,
@@ -152,7 +152,7 @@ def _disturbance(
             out[g, b] += inputs[b] + min(norms[b], coupled) + spread
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _centres(
     z_c: FloatArray,
     drive: FloatArray,
@@ -182,7 +182,7 @@ def _centres(
         z_c[g] = new
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline="always")
 def _tube_radius(
     k: int, powers: FloatArray, lags: NDArray[np.int64], radii: FloatArray, disturbances: FloatArray
 ) -> None:
