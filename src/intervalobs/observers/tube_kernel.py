@@ -104,11 +104,16 @@ def _disturbance(
     work: FloatArray,
     out: FloatArray,
 ) -> None:
-    """Radius of everything unknown entering one step, per gain (``_disturbance_radius``); ``work``: (4, n)."""
+    """Radius entering one step per gain, framer or tube outside the identity (``_disturbance_radius``).
+
+    ``work``: (4, n) scratch. The point model and the tube in the identity coordinates are in :func:`run_boxes`.
+    """
     radius_input, k_phi, k_gamma, t_inv, abs_t_inv, s_phi = data
     gains, n = z_c.shape
     count = z_r.shape[1]
-    out[:] = radius_input
+    for g in range(gains):
+        for b in range(count):
+            out[g, b] = radius_input[g, b]
     if mode == POINT:
         return
     scratch, norms, inputs, x_abs = work[0], work[1, :count], work[2, :count], work[3]
@@ -117,15 +122,6 @@ def _disturbance(
         for j in range(u.size):
             scratch[i] += k_gamma[i, j] * abs(u[j])
     _block_norms(scratch, sizes, rounding, inputs)
-    if mode == TUBE_IDENTITY:  # |x_k| from the reported box, the same for every gain
-        lower, upper = box
-        for i in range(n):
-            total = inputs[i]
-            for j in range(n):
-                total += k_phi[i, j] * max(abs(lower[j]), abs(upper[j]))
-            for g in range(gains):
-                out[g, i] += total
-        return
     for g in range(gains):
         for j in range(n):
             centre, spread = 0.0, 0.0
@@ -260,9 +256,30 @@ def run_boxes(
             _box(z_c, radii[k], drive, mapping, margin, tiny, identity, singleton, lower[r, k], upper[r, k])
             if k + 1 == steps:
                 break
-            _disturbance(
-                mode, z_c, radii[k], u[r, k], (lower[r, k], upper[r, k]), data, sizes, rounding, work, disturbances[k]
-            )
+            if mode == POINT or mode == TUBE_IDENTITY:  # indexed in place: no views of this step's arrays
+                radius_input, k_phi, k_gamma = data[0], data[1], data[2]
+                for i in range(count):
+                    total = 0.0
+                    if mode == TUBE_IDENTITY:  # |x_k| from the reported box, the same for every gain
+                        for j in range(u.shape[2]):
+                            total += k_gamma[i, j] * abs(u[r, k, j])
+                        for j in range(n):
+                            total += k_phi[i, j] * max(abs(lower[r, k, j]), abs(upper[r, k, j]))
+                    for g in range(gains):
+                        disturbances[k, g, i] = radius_input[g, i] + total
+            else:
+                _disturbance(
+                    mode,
+                    z_c,
+                    radii[k],
+                    u[r, k],
+                    (lower[r, k], upper[r, k]),
+                    data,
+                    sizes,
+                    rounding,
+                    work,
+                    disturbances[k],
+                )
             _centres(z_c, drive, y[r, k], u[r, k], linear, work)
             _tube_radius(k, tube[0], tube[1], radii, disturbances)
     return lower, upper
