@@ -6,9 +6,9 @@ radius, the disturbance radius of an interval :math:`\Delta A`, the running driv
 margin and the intersection over the gains), one step after the other in a Numba loop. The framer is the
 tube with horizon 1 (:math:`|M^0| = I`, :math:`|M^1| = |M|`), so one loop serves both methods.
 
-Soundness
----------
-The recursion is evaluated in round-to-nearest, as the NumPy path is, and its outputs are widened by the
+Notes
+-----
+**Soundness.** The recursion is evaluated in round-to-nearest, as the NumPy path is, and its outputs are widened by the
 same :func:`~intervalobs.interval.inflate` rule: ``pad = margin_g * scale + tiny`` with the same margin
 ``margin_g`` (:func:`~intervalobs.interval.recursion_margin`) and the same scale (the magnitude of the
 centre, the radius and the drive, mapped back by :math:`|T^{-1}|`). Only the order of the sums differs
@@ -39,7 +39,7 @@ FloatArray = NDArray[np.float64]
 
 POINT, FRAMER, TUBE_IDENTITY, TUBE_COORDINATES = 0, 1, 2, 3
 """How the disturbance radius is formed: point model; interval ΔA for the framer, the tube in the identity
-coordinates (|x| from the reported box), the tube in other coordinates (the coupling ``S``)."""
+coordinates (``|x|`` from the reported box), the tube in other coordinates (the coupling ``S``)."""
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
