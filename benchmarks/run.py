@@ -3,6 +3,12 @@
 (a) For n in {2, 5, 10, 20}: `IntervalObserver.run` against a straightforward loop that applies the
     same framer recursion one step at a time (centre and radius with NumPy, no Python objects).
 (b) Per-run cost of `run` on a batch of M = 1, 100, 1000 Monte Carlo records.
+(c) Issue 36: the observer `IntervalObserver.design` returns by default (the tube, with its companion gains)
+    against a compiled loop of the same recursion without outward rounding (`unrounded_loop`: every gain's
+    centre and tube, the disturbance radius of interval dA from the intersected box, no margin, no drive),
+    at n = 2, 5, 10, 20, point A and interval dA, one record of `LONG_STEPS` samples and M = 1000 records of
+    `BATCH_STEPS`, on extreme-noise simulations; `run` is timed whole (validation, compiled recursion, the
+    Estimate), both warmed up first, best of 3 in this one process. Target: ratio <= 3.
 Writes benchmarks/results.json and prints a table.
 """
 
@@ -12,11 +18,14 @@ import json
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
-from intervalobs import Bounds, IntervalObserver, LTISystem
+from intervalobs import Bounds, IntervalObserver, LTISystem, simulate
 
-STEPS = 5000
+STEPS = 20_000
+LONG_STEPS = 100_000
+BATCH_RUNS, BATCH_STEPS = 1000, 100
 
 
 def system_of_size(n: int, uncertain: bool = False) -> tuple[LTISystem, Bounds]:
@@ -46,6 +55,92 @@ def plain_loop(observer: IntervalObserver, y: np.ndarray) -> tuple[np.ndarray, n
         z_r = abs_M @ z_r + radius_in
     lower[0], upper[0] = np.maximum(lower[0], lo0), np.minimum(upper[0], hi0)  # the first box is the prior's
     return lower, upper
+
+
+@numba.njit(cache=True)
+def unrounded_loop(y, ms, tl, offset, powers, lags, radius_input, k_phi, z_c0, z_r0, uncertain):
+    """The default tube's recursion in identity coordinates, step by step, in round-to-nearest without margins."""
+    runs, steps, p = y.shape
+    gains, n = z_c0.shape
+    lower, upper = np.empty((runs, steps, n)), np.empty((runs, steps, n))
+    radii, disturbances = np.empty((steps, gains, n)), np.empty((steps, gains, n))
+    for r in range(runs):
+        z_c = z_c0.copy()
+        new = np.empty(n)
+        radii[0] = z_r0
+        for k in range(steps):
+            for i in range(n):
+                lower[r, k, i], upper[r, k, i] = -np.inf, np.inf
+                for g in range(gains):
+                    lower[r, k, i] = max(lower[r, k, i], z_c[g, i] - radii[k, g, i])
+                    upper[r, k, i] = min(upper[r, k, i], z_c[g, i] + radii[k, g, i])
+            if k + 1 == steps:
+                break
+            for i in range(n):
+                extra = 0.0
+                if uncertain:
+                    for j in range(n):
+                        extra += k_phi[i, j] * max(abs(lower[r, k, j]), abs(upper[r, k, j]))
+                for g in range(gains):
+                    disturbances[k, g, i] = radius_input[g, i] + extra
+            for g in range(gains):
+                for i in range(n):
+                    total = offset[g, i]
+                    for j in range(n):
+                        total += ms[g, i, j] * z_c[g, j]
+                    for j in range(p):
+                        total += tl[g, i, j] * y[r, k, j]
+                    new[i] = total
+                z_c[g] = new
+                lag = min(k + 1, lags[g])
+                for i in range(n):
+                    total = 0.0
+                    for j in range(n):
+                        total += powers[g, lag, i, j] * radii[k + 1 - lag, g, j]
+                    for h in range(lag):
+                        for j in range(n):
+                            total += powers[g, h, i, j] * disturbances[k - h, g, j]
+                    radii[k + 1, g, i] = total
+    return lower, upper
+
+
+def compiled_row(n: int, uncertain: bool, runs: int, steps: int) -> dict:
+    """`run` of the default design against `unrounded_loop` on one simulated batch."""
+    system, bounds = system_of_size(n, uncertain)
+    observer = IntervalObserver.design(system, bounds)
+    assert observer._identity and observer.method == "tube"  # the reference loop is written for these
+    t = np.arange(steps, dtype=float)
+    y = simulate(system, bounds, t, noise="extreme", seed=n, runs=runs).y.reshape(runs, steps, 2)
+    internal = observer.init().internal
+    args = (
+        y,
+        observer._Ms,
+        observer._TL,
+        observer._offset,
+        observer._abs_powers,
+        observer._lags.astype(np.int64),
+        np.ascontiguousarray(observer._radius_input),
+        observer._K_phi,
+        internal["z_center"],
+        internal["z_radius"],
+        uncertain,
+    )
+    y_run = y[0] if runs == 1 else y
+    reference, estimate = unrounded_loop(*args), observer.run(t, y_run)  # warm-up: compile or load both
+    assert np.all(estimate.lower <= reference[0].reshape(estimate.lower.shape))  # same boxes, outward rounded
+    loop_time = best_of(lambda: unrounded_loop(*args))
+    run_time = best_of(lambda: observer.run(t, y_run))
+    return {
+        "n": n,
+        "model": "interval dA" if uncertain else "point A",
+        "runs": runs,
+        "steps": steps,
+        "gains": int(observer.gains.shape[0]),
+        "horizons": list(observer.horizons),
+        "unrounded loop us/step": 1e6 * loop_time / (runs * steps),
+        "run us/step": 1e6 * run_time / (runs * steps),
+        "ratio": run_time / loop_time,
+    }
 
 
 def best_of(fn, repeat: int = 3) -> float:
@@ -96,6 +191,16 @@ def main() -> None:
             row = {"model": kind, "runs": runs, "ms_per_run": 1e3 * per_run, "ratio_to_single": per_run / base}
             results["batching"].append(row)
             print(f"  M = {runs:>5}: {row['ms_per_run']:.4f} ms per run ({row['ratio_to_single']:.4f} of M = 1)")
+    print("(c) default design (tube, companion gains) against a compiled unrounded loop of its recursion")
+    results["compiled"] = [
+        compiled_row(n, uncertain, runs, steps)
+        for uncertain in (False, True)
+        for runs, steps in ((1, LONG_STEPS), (BATCH_RUNS, BATCH_STEPS))
+        for n in (2, 5, 10, 20)
+    ]
+    for row in results["compiled"]:
+        print("  " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
+    results["largest ratio to the compiled unrounded loop (target 3)"] = max(r["ratio"] for r in results["compiled"])
     out = Path(__file__).with_name("results.json")
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"written {out}")

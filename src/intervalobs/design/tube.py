@@ -103,6 +103,9 @@ class BlockNorms:
         Block sizes, each 1 or 2.
     """
 
+    rounding: float = _NORM_ROUNDING
+    """Relative upward rounding of a block of size 2's norm."""
+
     def __init__(self, sizes: Sequence[int]) -> None:
         self.sizes = tuple(int(size) for size in sizes)
         if any(size not in (1, 2) for size in self.sizes):

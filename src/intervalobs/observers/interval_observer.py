@@ -19,7 +19,6 @@ from ..design.tube import BlockNorms, TubeDesign, abs_powers, coupling, design_t
 from ..errors import ArgumentTypeError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
-from ..recursion import LinearRecursion
 from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
@@ -32,6 +31,10 @@ __all__ = ["METHODS", "IntervalObserver"]
 FloatArray = NDArray[np.float64]
 
 METHODS = ("tube", "framer")
+
+COMPILED_MIN_SAMPLES = 20_000
+"""Samples (times runs) from which :meth:`IntervalObserver.run` uses the compiled loop: below, the step loop
+costs less than importing Numba and loading the compiled kernel (benchmarks/run.py measures both)."""
 
 
 class IntervalObserver(Observer):
@@ -178,8 +181,6 @@ class IntervalObserver(Observer):
         self._identity = self.norms.singleton and np.array_equal(self.T, np.eye(self.n))
         if method == "tube" and self._uncertain and not self._identity:
             self._S_phi = coupling(self.model, self.T, self.norms)
-        self._center_recursions = [LinearRecursion(m) for m in self._Ms]
-        self._radius_cache = np.empty((0, self.norms.count))
         if method == "framer":
             self.spectral_radius = float(np.max(np.abs(np.linalg.eigvals(width_matrix))))
             if not self.spectral_radius < 1:
@@ -188,16 +189,11 @@ class IntervalObserver(Observer):
                     "of |T(Φ - LC)T⁻¹| + |T|δΦ|T⁻¹|; use IntervalObserver.design to find a gain"
                 )
             self._abs_M = np.abs(self.M)
-            self._radius_recursion = LinearRecursion(self._abs_M)
-            amplification = max(self._center_recursions[0].error_factor, self._radius_recursion.error_factor)
-            self.margin: float | FloatArray = recursion_margin(self.n, amplification, self.spectral_radius)
+            self.margin: float | FloatArray = recursion_margin(self.n, 1.0, self.spectral_radius)
         else:
             self._tubes()
             self.margin = np.array(  # each gain's box its own margin, shape (G, 1)
-                [
-                    [recursion_margin(self.n, recursion.error_factor, float(np.max(np.abs(np.linalg.eigvals(m)))))]
-                    for recursion, m in zip(self._center_recursions, self._Ms)
-                ]
+                [[recursion_margin(self.n, 1.0, float(np.max(np.abs(np.linalg.eigvals(m)))))] for m in self._Ms]
             )
         self.design_result: FramerDesign | TubeDesign | None = None
 
@@ -293,13 +289,12 @@ class IntervalObserver(Observer):
         return ObserverState(lower, upper, internal=internal)
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
-        """Bounds over a whole record; a point model's recursion is evaluated without a Python loop.
+        """Bounds over a whole record: the compiled recursion for long records, :meth:`step` for short ones.
 
-        A point model's centres go through the compiled linear recursion and its radii, which do not
-        depend on the data, are computed once. With interval ``ΔA`` the radii depend on the data: the
-        loop advances centres and radii only and maps them to boxes once for the whole record, where
-        the base loop would form every step's box (measurably faster on a single record).
-        Both give the numbers of :meth:`step`.
+        From ``COMPILED_MIN_SAMPLES`` samples (times runs) on, the recursion of :meth:`step` runs in one
+        compiled loop (:mod:`intervalobs.observers.tube_kernel`: the same sums, the same outward margins);
+        shorter records go through the step loop, which costs less than loading the compiled code.
+        Both give the numbers of :meth:`step` up to rounding, covered by the margin (tested).
 
         Parameters
         ----------
@@ -316,40 +311,61 @@ class IntervalObserver(Observer):
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
-        gains = () if self.method == "framer" else (self.gains.shape[0],)  # the tube's gain axis
-        if self.model.uncertain:
-            lead = ys.shape[:-2]
-            z_c = np.empty((times.size, *lead, *gains, self.n))  # time first, moved after the runs' axes
-            z_r = np.empty((times.size, *lead, *gains, self.norms.count))
-            drive = np.empty_like(z_c)
-            internal = state.internal
-            for k in range(times.size):
-                z_c[k], z_r[k], drive[k] = internal["z_center"], internal["z_radius"], internal["drive"]
-                if k + 1 < times.size:
-                    internal = self._advance(internal, ys[..., k, :], us[..., k, :])
-            z_c, z_r, drive = (np.moveaxis(a, 0, len(lead)) for a in (z_c, z_r, drive))
-        else:
-            known = us[..., :-1, :] @ self._TGamma.T
-            start = np.reshape(state.internal["z_center"], (-1, self.n))
-            centres = [
-                recursion(start[g], ys[..., :-1, :] @ self._TL[g].T + known + self._offset[g])
-                for g, recursion in enumerate(self._center_recursions)
-            ]
-            z_c = np.stack(centres, axis=-2) if gains else centres[0]
-            z_r = np.broadcast_to(self._default_radius(times.size), (*z_c.shape[:-1], self.norms.count))
-            magnitudes = np.stack(  # (..., T - 1, G, n): what each step adds to each gain's centre, in absolute value
-                [
-                    np.abs(ys[..., :-1, :]) @ np.abs(self._TL[g]).T + np.abs(known) + np.abs(self._offset[g])
-                    for g in range(len(self._center_recursions))
-                ],
-                axis=-2,
-            )
-            running = np.maximum.accumulate(magnitudes, axis=-3)  # row k: the largest drive of the steps before it
-            drive = np.concatenate([np.zeros_like(running[..., :1, :, :]), running], axis=-3)
-            drive = drive if gains else drive[..., 0, :]
-        lower, upper = self._x_box(z_c, z_r, drive)
+        if ys[..., 0].size < COMPILED_MIN_SAMPLES:
+            return self._loop(times, ys, us, state)[0]
+        lead = ys.shape[:-2]
+        runs = int(np.prod(lead, dtype=int))
+        flat_y, flat_u = (
+            np.ascontiguousarray(np.broadcast_to(a, (*lead, *a.shape[-2:])).reshape(runs, *a.shape[-2:]))
+            for a in (ys, us)
+        )
+        lower, upper = self._compiled(state, flat_y, flat_u)
+        lower, upper = lower.reshape(*lead, times.size, self.n), upper.reshape(*lead, times.size, self.n)
         lower[..., 0, :], upper[..., 0, :] = state.lower, state.upper
-        return Estimate.from_boxes(times, lower, upper, meta={**self.meta(), "rows": self.rows})
+        meta = {"transient_s": float(times[0]), **self.meta(), "rows": self.rows}
+        return Estimate.from_boxes(times, lower, upper, meta=meta)
+
+    def _compiled(self, state: ObserverState, ys: FloatArray, us: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Boxes of runs ``ys`` (R, T, p), ``us`` (R, T, m) by the compiled loop, from the initial ``state``."""
+        from . import tube_kernel  # Numba is imported only for a record long enough to pay for it
+
+        gains, count = self.gains.shape[0], self.norms.count
+        if self.method == "framer":
+            powers = np.stack([np.eye(self.n), self._abs_M])[None]
+            lags, mode = np.ones(1, dtype=np.int64), tube_kernel.FRAMER
+        else:
+            powers, lags = self._abs_powers, self._lags.astype(np.int64)
+            mode = tube_kernel.TUBE_IDENTITY if self._identity else tube_kernel.TUBE_COORDINATES
+        mode = mode if self._uncertain else tube_kernel.POINT
+        coupling = getattr(self, "_S_phi", np.zeros((count, count)))
+        dense = [  # every float array C-contiguous: one compiled signature for every observer
+            np.ascontiguousarray(a, dtype=float)
+            for a in (
+                np.reshape(state.internal["z_center"], (gains, self.n)),
+                np.reshape(state.internal["z_radius"], (gains, count)),
+                np.broadcast_to(self._radius_input, (gains, count)),
+                self._K_phi,
+                self._K_gamma,
+                self.T_inv,
+                self._abs_T_inv,
+                coupling,
+            )
+        ]
+        linear = [np.ascontiguousarray(a, dtype=float) for a in (self._Ms, self._TL, self._TGamma, self._offset)]
+        margin = np.broadcast_to(np.ravel(self.margin), (gains,)).astype(float)
+        lower, upper = tube_kernel.run_boxes(
+            ys,
+            us,
+            (dense[0], dense[1]),
+            (linear[0], linear[1], linear[2], linear[3]),
+            (np.ascontiguousarray(powers, dtype=float), lags),
+            (dense[2], dense[3], dense[4], dense[5], dense[6], dense[7]),
+            np.ascontiguousarray(self._back, dtype=float),
+            (np.asarray(self.norms.sizes, dtype=np.int64), self.norms.rounding),
+            (margin, float(np.finfo(float).tiny), bool(self._identity), bool(self.norms.singleton)),
+            mode,
+        )
+        return lower, upper
 
     # -- internals -------------------------------------------------------------------------------
     def _tubes(self) -> None:
@@ -390,37 +406,6 @@ class IntervalObserver(Observer):
         self._lags = np.asarray(horizons)
         self._lag = self._abs_powers[np.arange(len(horizons)), self._lags]  # |M_g^{J_g}|, from step J_g on
         self._oldest = longest - self._lags  # queue position of ρ_{k+1-J_g}
-
-    def _default_radius(self, steps: int) -> FloatArray:
-        """Radii from the design's initial box for a point model: data-independent, computed once."""
-        if self._radius_cache.shape[0] < steps:
-            rho0 = np.reshape(self.init().internal["z_radius"], (-1, self.norms.count))[0]
-            if self.method == "framer":
-                constant = np.broadcast_to(self._radius_input[0], (steps - 1, self.n))
-                self._radius_cache = self._radius_recursion(rho0, constant)
-            else:
-                tubes = [self._point_tube_radius(g, rho0, steps) for g in range(self.gains.shape[0])]
-                self._radius_cache = np.stack(tubes, axis=1)
-        return self._radius_cache[:steps]
-
-    def _point_tube_radius(self, gain: int, rho0: FloatArray, steps: int) -> FloatArray:
-        """Tube radii of one gain for a constant disturbance radius, vectorised: the recursion of ``_advance``.
-
-        For ``k ≤ J``: ``ρ_k = |M^k|ρ₀ + Σ_{i<k}|M^i|d``; after that ``ρ_k = |M^J|ρ_{k-J} + Σ_{i<J}|M^i|d``,
-        evaluated a block of ``J`` steps at a time.
-        """
-        horizon = self.horizons[gain]
-        powers = self._abs_powers[gain, : horizon + 1]
-        radii = np.empty((max(steps, horizon + 1), self.norms.count))
-        terms = powers[:horizon] @ self._radius_input[gain]
-        radii[0] = rho0
-        radii[1 : horizon + 1] = powers[1:] @ rho0 + np.cumsum(terms, axis=0)
-        constant = terms.sum(axis=0)
-        lagged = powers[horizon].T
-        for start in range(horizon + 1, steps, horizon):
-            stop = min(start + horizon, steps)
-            radii[start:stop] = radii[start - horizon : stop - horizon] @ lagged + constant
-        return radii[:steps]
 
     def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray, drive: FloatArray) -> FloatArray:
         """Radius of the box of everything unknown that enters one step (in z-coordinates), per gain."""
