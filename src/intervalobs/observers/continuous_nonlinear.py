@@ -55,6 +55,10 @@ from .base import Observer, ObserverState, record_consistency
 __all__ = ["ContinuousNonlinearObserver"]
 
 _EPS = float(np.finfo(float).eps)
+_NEGLIGIBLE = 1e-9
+"""A domain or parameter end is used to contract only where the set crosses it by more than this fraction of its
+width (a parameter's box is crossed by rounding after every step; leaving such a crossing is sound and saves a
+contraction per coordinate and sample)."""
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -298,13 +302,17 @@ class ContinuousNonlinearObserver(Observer):
         return zset, empty
 
     def _domain_contract(self, zset: StateZonotope, empty: BoolArray) -> tuple[StateZonotope, BoolArray]:
-        """Contract by the state domain and the parameter box (strips on single coordinates) where they cut."""
+        """Contract by the state domain and the parameter box (strips on single coordinates) where they cut.
+
+        A crossing below ``_NEGLIGIBLE`` times the set's width is left (no contraction is needed for soundness).
+        """
         low = np.concatenate([self.system.domain[0], self.bounds.p[0]])
         high = np.concatenate([self.system.domain[1], self.bounds.p[1]])
         size = low.size
         for i in np.flatnonzero(np.isfinite(low) | np.isfinite(high)):
             hull = zset.box()
-            if not np.any((hull.lower[..., i] < low[i]) | (hull.upper[..., i] > high[i])):
+            slack = _NEGLIGIBLE * (hull.upper[..., i] - hull.lower[..., i])
+            if not np.any((hull.lower[..., i] < low[i] - slack) | (hull.upper[..., i] > high[i] + slack)):
                 continue
             a = np.broadcast_to(np.eye(size)[i], zset.centre.shape)
             updated, now_empty = _strip_update(

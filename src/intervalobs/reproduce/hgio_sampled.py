@@ -17,6 +17,7 @@ observer's steps and the paper's samples every 5 ms.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,10 +29,12 @@ from ..design.high_gain import ThetaDesign, euler_radius_factor, theta_design
 from ..design.regions import HalfPlane, HorizontalStrip, ModalDecomposition, modal_decomposition, place_in_disks
 from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
+from ..observers.continuous_nonlinear import ContinuousNonlinearObserver
 from ..observers.hgio import HighGainIntervalObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import SampledSimulation, simulate_sampled
 from ..systems.bounds import Bounds
+from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.sampled import SampledSystem
 from .contract import Example, base_summary, write_reproduction
 
@@ -65,17 +68,73 @@ HULL_REFERENCE = {
 GeneralEstimator = Callable[[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], Estimate]
 """An estimator of the general continuous-time nonlinear path (issue 32), built for the sampled-output high-gain
 paper's example: called with ``(t, y, u)`` of the reproduction's record (every run, ``y`` NaN between samples) and
-returning its
-:class:`~intervalobs.estimate.Estimate` on the grid ``t``."""
+returning its :class:`~intervalobs.estimate.Estimate` on the sample times it bounds (a subset of ``t``)."""
 
-GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {}
-"""The hook for the general path: each entry is run on the same record as the HGIO and reported in
-``summary["design"]["general_path"]`` (width over the same window, its ratio to the recommended HGIO's,
-enclosure, seconds); empty until such an estimator is registered."""
+GENERAL_HORIZON = 10.0
+"""Length (s) of the record the general estimators run on (2000 samples, about a minute for both); their widths
+and the HGIO's are compared over ``[WIDTH_WINDOW, GENERAL_HORIZON]``."""
+
+
+def continuous_model(phi_in_field: bool) -> tuple[ContinuousNonlinearSystem, Bounds]:
+    r"""Seed 004's example as a :class:`ContinuousNonlinearSystem` with a clock, and its boxes.
+
+    States :math:`(x_1, x_2, x_3, s)` with :math:`\dot s = 1`, :math:`s(0) = 0`: the known input
+    :math:`u = 3\sin s - 2\sin 3s` is then exact inside each sampling interval (a held input would not be).
+
+    Parameters
+    ----------
+    phi_in_field : bool
+        True: :math:`\dot x = Ax + B_u u + e^{-|x|} + d` as written. False:
+        :math:`e^{-|x|} \in (0, 1]` joins the disturbance, :math:`\dot x = Ax + B_u u + 0.5 + w`,
+        :math:`w \in d \pm 0.5` (every trajectory of the example is one of this model, so its bounds hold;
+        the HGIO's ``phi_bounds`` use the same range).
+
+    Returns
+    -------
+    ContinuousNonlinearSystem
+    Bounds
+    """
+    a, b_u = example.A, example.B_U[:, 0]
+
+    def f(x: Any, u: Any, p: Any) -> tuple[Any, ...]:
+        drive = 3.0 * np.sin(x[3]) - 2.0 * np.sin(3.0 * x[3])
+        linear = [a[i, 0] * x[0] + a[i, 1] * x[1] + a[i, 2] * x[2] + b_u[i] * drive for i in range(3)]
+        extra = [np.exp(-np.abs(x[i])) for i in range(3)] if phi_in_field else [0.5] * 3
+        return (*(term + more for term, more in zip(linear, extra)), 1.0 + 0.0 * x[3])
+
+    e = np.vstack([np.eye(3), np.zeros((1, 3))])
+    system = ContinuousNonlinearSystem(f, lambda x, u: (x[0],), n=4, E=e, state_names=["x1", "x2", "x3", "s"])
+    given = example.bounds().resolve(example.system())
+    spread = 0.0 if phi_in_field else 0.5
+    x0 = (np.append(given.x0[0], 0.0), np.append(given.x0[1], 0.0))
+    return system, Bounds(x0=x0, w=(given.w[0] - spread, given.w[1] + spread), v=given.v)
+
+
+def _continuous_observer(phi_in_field: bool) -> GeneralEstimator:
+    """The :class:`ContinuousNonlinearObserver` on :func:`continuous_model`, samples up to ``GENERAL_HORIZON``."""
+
+    def estimate(t: NDArray[np.float64], y: NDArray[np.float64], u: NDArray[np.float64]) -> Estimate:
+        system, bounds = continuous_model(phi_in_field)
+        rows = np.flatnonzero(~np.isnan(y[0, :, 0]) & (t <= GENERAL_HORIZON + 1e-9))
+        observer = ContinuousNonlinearObserver(system, bounds, example.SAMPLE_PERIOD, substeps=1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # recorded in meta["diverging"]
+            full = observer.run(t[rows], y[:, rows])
+        return Estimate(t[rows], full.lower[..., :3], full.upper[..., :3], meta={"diverging": full.meta["diverging"]})
+
+    return estimate
+
+
+GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {
+    "continuous_nonlinear_observer": _continuous_observer(phi_in_field=True),
+    "continuous_nonlinear_observer_phi_as_disturbance": _continuous_observer(phi_in_field=False),
+}
+"""The general path (issue 32) on the same record as the HGIO, reported in ``summary["design"]["general_path"]``
+(width over the same window, its ratio to the recommended HGIO's, enclosure, ms per sample)."""
 
 
 def general_path(
-    t: NDArray[np.float64], sim: Any, window: NDArray[np.bool_], hgio_width: NDArray[np.float64]
+    t: NDArray[np.float64], sim: Any, hgio_widths: NDArray[np.float64], hgio_ms_per_sample: float
 ) -> dict[str, Any]:
     """Run every estimator of :data:`GENERAL_ESTIMATORS` on the record; widths next to the HGIO's.
 
@@ -85,33 +144,39 @@ def general_path(
         Grid of the record.
     sim : SampledRecord
         The truth and the measurements (``x``, ``y``, ``u``).
-    window : numpy.ndarray of bool, shape (T,)
-        Rows of the mean widths (the HGIO's window).
-    hgio_width : numpy.ndarray, shape (n,)
-        Mean widths of the recommended HGIO over ``window``.
+    hgio_widths : numpy.ndarray, shape (M, T, n)
+        Widths of the recommended HGIO on the grid.
+    hgio_ms_per_sample : float
+        The HGIO's milliseconds per sample (all runs together).
 
     Returns
     -------
     dict
-        ``hgio_width_mean`` and, per estimator, ``width_mean``, ``width_over_hgio``, ``enclosure``,
-        ``seconds`` and ``diverging``.
+        Per estimator, over its sample times in ``[WIDTH_WINDOW, end of its estimate]``: ``width_mean``,
+        ``hgio_width_mean`` (the HGIO's over the same rows), ``width_over_hgio``, ``enclosure``,
+        ``ms_per_sample`` (all runs together, as ``hgio_ms_per_sample``) and ``diverging``.
     """
     results: dict[str, Any] = {}
     for name, build_and_run in GENERAL_ESTIMATORS.items():
         start = time.perf_counter()
         est = build_and_run(t, sim.y, sim.u)
         seconds = time.perf_counter() - start
-        width = (est.upper - est.lower)[..., window, :].reshape(-1, hgio_width.size).mean(axis=0)
+        rows = np.searchsorted(t, est.t - 1e-9)
+        window = est.t >= WIDTH_WINDOW
+        n = hgio_widths.shape[-1]
+        width = (est.upper - est.lower)[..., window, :].reshape(-1, n).mean(axis=0)
+        hgio = hgio_widths[..., rows[window], :].reshape(-1, n).mean(axis=0)
         results[name] = {
             "width_mean": width,
-            "width_over_hgio": width / hgio_width,
-            "enclosure": est.enclosure(sim.x).as_dict(),
-            "seconds": seconds,
+            "hgio_width_mean": hgio,
+            "width_over_hgio": width / hgio,
+            "window_s": [WIDTH_WINDOW, float(est.t[-1])],
+            "enclosure": est.enclosure(sim.x[..., rows, :]).as_dict(),
+            "ms_per_sample": 1000.0 * seconds / est.t.size,
             "diverging": bool(est.meta.get("diverging", False)),
         }
     return {
-        "hgio_width_mean": hgio_width,
-        "window_s": [WIDTH_WINDOW, example.T_FINAL],
+        "hgio_ms_per_sample": hgio_ms_per_sample,
         "estimators": results,
         "status": "compared" if results else "no general estimator registered yet (GENERAL_ESTIMATORS)",
     }
@@ -387,7 +452,9 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
         "runs": RUNS,
         "truth_substeps": SUBSTEPS,
         "sample_period_s": example.SAMPLE_PERIOD,
-        "general_path": general_path(t, sim, window, width_w),
+        "general_path": general_path(
+            t, sim, est_w.upper - est_w.lower, 1000.0 * width_run_time / int(np.sum(~np.isnan(sim.y[0, :, 0])))
+        ),
     }
     summary["paper"] = {
         "p1": example.PAPER["p1"],

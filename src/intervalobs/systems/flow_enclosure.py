@@ -82,6 +82,7 @@ bound converges to the true reachable set as the set and the step shrink.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -255,9 +256,16 @@ def a_priori(
     Interval or None
         None when epsilon-inflation found no box (the caller halves the step).
     """
-    free = np.full(system.n, np.inf) if not domain else None
-    low = np.concatenate([system.domain[0] if free is None else -free, np.full(system.n_params, -np.inf)])
-    high = np.concatenate([system.domain[1] if free is None else free, np.full(system.n_params, np.inf)])
+    free = np.full(system.n, np.inf)
+    low = np.concatenate([system.domain[0] if domain else -free, np.full(system.n_params, -np.inf)])
+    high = np.concatenate([system.domain[1] if domain else free, np.full(system.n_params, np.inf)])
+    return _picard(system, u, w, start, tau, low, high)
+
+
+def _picard(
+    system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, start: Interval, tau: float, low: Any, high: Any
+) -> Interval | None:
+    """Step 1 of the module for boxes ``start`` with domains ``[low, high]`` (broadcast); None if not found."""
     span = Interval._raw(np.zeros(()), np.asarray(tau, dtype=float))
     guess = start + span * _right_side(system, u, w, start)
     for _ in range(_PICARD_ITERATIONS):
@@ -271,6 +279,15 @@ def a_priori(
             return _within(image, low, high)
         guess = image
     return None
+
+
+def _stacked(first: Interval, second: Interval) -> Interval:
+    """Two boxes of the same shape as one, along a new leading axis (one evaluation of a function for both)."""
+    return Interval._raw(np.stack([first.lower, second.lower]), np.stack([first.upper, second.upper]))
+
+
+def _bounds(box: Interval) -> tuple[FloatArray, FloatArray]:
+    return box.lower, box.upper
 
 
 def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
@@ -303,20 +320,24 @@ def _step(
     system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, zset: StateZonotope, tau: float, order: int
 ) -> tuple[StateZonotope, Interval] | None:
     """Steps 1-4 of the module over ``[0, tau]``; None when an a priori enclosure is not found."""
-    tilde = a_priori(system, u, w, zset.box(), tau)
     point = Interval._wrap(zset.centre)
-    hat = a_priori(system, u, w, point, tau, domain=False)
-    if tilde is None or hat is None:
-        return None
-    jacobian_function, _ = system.jacobians(u)
     size = zset.centre.shape[-1]
+    free = np.full(size - system.n_params, np.inf)
+    params = np.full(system.n_params, np.inf)
+    low = np.stack([np.concatenate([system.domain[0], -params]), np.concatenate([-free, -params])])
+    high = np.stack([np.concatenate([system.domain[1], params]), np.concatenate([free, params])])
+    shape = (2,) + (1,) * (zset.centre.ndim - 1) + (size,)
+    boxes = _picard(system, u, w, _stacked(zset.box(), point), tau, low.reshape(shape), high.reshape(shape))
+    if boxes is None:  # the set's trajectories and its centre's, one batch (the centre ignores the domain)
+        return None
+    tilde, hat = boxes[0], boxes[1]
+    jacobian_function, _ = system.jacobians(u)
     both = Interval._raw(np.minimum(tilde.lower, hat.lower), np.maximum(tilde.upper, hat.upper))
-    jac = Interval._raw(*interval_matrix(jacobian_function, both.lower, both.upper, (size, size)))
-    jac_hat = Interval._raw(*interval_matrix(jacobian_function, hat.lower, hat.upper, (size, size)))
+    jacs = Interval._raw(*interval_matrix(jacobian_function, *_bounds(_stacked(both, hat)), (size, size)))
+    jac, jac_hat = jacs[0], jacs[1]
     half_square = 0.5 * tau * tau
-    centre_end = (
-        point + _right_side(system, u, w, point) * tau + (jac_hat @ _right_side(system, u, w, hat)) * half_square
-    )
+    rates = _right_side(system, u, w, _stacked(point, hat))
+    centre_end = point + rates[0] * tau + (jac_hat @ rates[1]) * half_square
     spread = _fundamental_a_priori(jac, system.n, tau)
     phi = jac * tau + interval_product(jac, interval_product(jac, spread)) * half_square + np.eye(size)
     mid = phi.centre
