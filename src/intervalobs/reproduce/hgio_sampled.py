@@ -76,7 +76,7 @@ and the HGIO's are compared over ``[WIDTH_WINDOW, GENERAL_HORIZON]``."""
 
 
 def continuous_model(phi_in_field: bool) -> tuple[ContinuousNonlinearSystem, Bounds]:
-    r"""Seed 004's example as a :class:`ContinuousNonlinearSystem` with a clock, and its boxes.
+    r"""The sampled-output high-gain paper's example with a clock state, and its boxes.
 
     States :math:`(x_1, x_2, x_3, s)` with :math:`\dot s = 1`, :math:`s(0) = 0`: the known input
     :math:`u = 3\sin s - 2\sin 3s` is then exact inside each sampling interval (a held input would not be).
