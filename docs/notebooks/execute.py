@@ -19,7 +19,11 @@ def execute(path: Path) -> nbformat.NotebookNode:
     """Run ``path`` from top to bottom in a fresh kernel (working directory: this folder); return it executed."""
     notebook = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(
-        notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(HERE)}}
+        notebook,
+        timeout=600,
+        kernel_name="python3",
+        resources={"metadata": {"path": str(HERE)}},
+        record_timing=False,
     )
     client.execute()  # raises CellExecutionError, with the cell and its traceback, when a cell fails
     return notebook
@@ -30,6 +34,8 @@ def main(paths: list[str]) -> None:
     for path in [Path(p) for p in paths] or sorted(HERE.glob("*.ipynb")):
         notebook = execute(path)
         notebook.metadata.pop("widgets", None)
+        for cell in notebook.cells:  # no execution timestamps: a re-run changes only what the code prints and draws
+            cell.metadata.pop("execution", None)
         nbformat.write(notebook, path)
         print(f"executed {path.name}")
 
