@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -242,3 +243,16 @@ def test_a_labelled_record_is_read_by_the_model_names() -> None:
     bare = observe(motor, bounds, t, truth.y, voltage, estimator="IntervalObserver")
     np.testing.assert_array_equal(labelled.lower, bare.lower)
     assert labelled.enclosure(truth).max_violation == 0.0
+
+
+def test_the_pilot_charges_computing_not_waiting() -> None:
+    """The pilot's cost is CPU time: an estimator that waits (as on a loaded machine) is not charged for it."""
+    from intervalobs.front_door import _cost_per_sample
+
+    class Waiting:
+        def run(self, t, y, u=None):
+            time.sleep(0.002 * len(t))  # 2 ms of wall time a sample, no computing
+
+    t = np.arange(30.0)
+    cost = _cost_per_sample(Waiting(), t, np.zeros((30, 1)), None, {})  # type: ignore[arg-type]
+    assert cost < 1.0  # wall time would say 2 ms a sample
