@@ -26,8 +26,9 @@ from intervalobs.examples import gsisio as nonlinear_example
 from intervalobs.examples import numerical3
 from intervalobs.front_door import ESTIMATORS, filtered_rows, memory_horizon
 
-BUDGET = 50.0
-"""ms a sample for the default tests: the hull fits on a loaded two-core machine (the 5 ms case is marked slow)."""
+BUDGET = 5.0
+"""CPU ms a sample, the issue's budget: the pilot counts CPU time, so the load of the machine does not move the
+choice (the hull costs about 1 ms a sample here, the ΔA window LP 4-5 ms)."""
 
 
 def _mean_width(estimate, start: int = 10) -> float:
@@ -66,7 +67,9 @@ def test_uncertain_lti_is_sound_and_within_1_1_of_the_best(seed: int) -> None:
     system = _random_lti(seed, uncertain=True)
     t = np.arange(40.0)
     truth = simulate(system, BOUNDS, t, seed=seed, runs=3)
-    estimate = observe(system, BOUNDS, t, truth.y, budget=10 * BUDGET)  # the choice must not hang on the load
+    # the window LP costs 4.2-4.4 CPU ms a sample here, at the edge of 5 ms; on a slower machine the bank would
+    # run (1.15-1.24x the best on these records), so the choice is tested with room
+    estimate = observe(system, BOUNDS, t, truth.y, budget=10 * BUDGET)
     assert estimate.meta["estimator"] == "RobustHullEstimator" and estimate.meta["rows"] == "filtered"
     assert estimate.enclosure(truth.x).fraction == 1.0
     others = [
