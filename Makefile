@@ -48,7 +48,7 @@ lock:
 	$(PY) -m venv .venv-lock
 	.venv-lock/bin/pip install --quiet --upgrade pip pip-tools
 	.venv-lock/bin/pip-compile --quiet --upgrade --strip-extras --no-emit-index-url --no-emit-find-links \
-		--extra dev --extra docs -o $(LOCK) pyproject.toml
+		--extra dev --extra docs --extra notebooks -o $(LOCK) pyproject.toml
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
