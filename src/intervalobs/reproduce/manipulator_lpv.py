@@ -27,6 +27,8 @@ from ..diagnosis import Campaign, fault_signals, isolate, isolation_outcome, sce
 from ..errors import BoundsError, DesignError
 from ..estimate import enclosure_report
 from ..examples.manipulator import (
+    _KD,
+    _KP,
     FAULT_BOUND,
     FAULT_ONSET,
     LAMBDA,
@@ -36,8 +38,6 @@ from ..examples.manipulator import (
     X0,
     ManipulatorModel,
     angles_only_bounds,
-    controller,
-    rk4_step,
     simulate_closed_loop,
 )
 from ..observers.lpv import LPVIntervalUIO
@@ -472,13 +472,6 @@ def _campaign_observer(level: float) -> LPVIntervalUIO:
     )
 
 
-def _truth_step(x: FloatArray, tau: FloatArray, par: FloatArray) -> FloatArray:
-    """The true state one observer sample later: ``CAMPAIGN_SUBSTEPS`` RK4 steps, torque held."""
-    for _ in range(CAMPAIGN_SUBSTEPS):
-        x = rk4_step(x, tau, par, CAMPAIGN_H / CAMPAIGN_SUBSTEPS)
-    return x
-
-
 def campaign_task(
     level: float, magnitude: float, run_ids: Sequence[int], seed: int
 ) -> list[tuple[int, int, bool, bool, list[float | None]]]:
@@ -508,6 +501,8 @@ def campaign_task(
     """
     if not 0.0 <= magnitude <= FAULT_BOUND:
         raise BoundsError(f"magnitude: expected a fault size in [0, {FAULT_BOUND:g}] , got {magnitude:g}")
+    from ..examples.manipulator_kernel import closed_loop_block  # Numba only where a campaign runs
+
     obs = _campaign_observer(float(level))
     model = _campaign_model(float(level))
     ids = list(run_ids)
@@ -523,14 +518,13 @@ def campaign_task(
     zu = np.tile(st.internal["z_upper"], (4 * m, 1))
     first = np.full((4 * m, 2), np.nan)
     t = np.arange(0.0, CAMPAIGN_T_FINAL + CAMPAIGN_H / 2, CAMPAIGN_H)
+    nominal, gains, step = np.asarray(NOMINAL), np.array([_KP, _KD]), CAMPAIGN_H / CAMPAIGN_SUBSTEPS
     samples = max(CAMPAIGN_BLOCK_ROWS // (4 * m), 1)
     for start in range(0, t.size, samples):
         tb = t[start : start + samples]
         xs, us = np.empty((tb.size, 4 * m, 4)), np.empty((tb.size, 4 * m, 2))
-        for k, tk in enumerate(tb):  # the truth of the block, then the observer on it
-            xs[k], us[k] = x, controller(x, float(tk))
-            x = _truth_step(x, us[k] + faults if tk >= FAULT_ONSET else us[k], par)
-        *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)
+        closed_loop_block(x, tb, faults, FAULT_ONSET, par, nominal, gains, step, CAMPAIGN_SUBSTEPS, xs, us)
+        *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)  # the truth of the block, then the observer on it
         neg = (fault_signals(obs.H, el) < 0) | (fault_signals(obs.H, eh) < 0)  # (samples, runs, faults)
         new = np.any(neg, axis=0) & np.isnan(first)
         first[new] = tb[np.argmax(neg, axis=0)][new]
