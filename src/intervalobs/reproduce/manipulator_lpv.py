@@ -448,10 +448,13 @@ CAMPAIGN_T_FINAL = 26.0
 CAMPAIGN_BLOCK_ROWS = 8192
 """Samples times runs whose enclosures a task evaluates at once (LPVIntervalObserver.advance_many): long enough
 blocks that the per-sample overhead of the array calls vanishes, short enough to stay in cache."""
-CAMPAIGN_TASK_OVERHEAD = 60.0
-"""Fixed cost of a campaign task in runs: its 13 000-step time loop costs the same whatever the batch (issue 36).
-benchmarks/campaign_scaling.py measures it (``task_cost`` in benchmarks/campaign_scaling.json); on the loaded
-shared machine it found 26 to 130 runs, a range over which the cut for 2 to 16 workers is the same."""
+CAMPAIGN_TASK_OVERHEAD = 0.5
+"""Fixed cost of a campaign task in runs. Its 13 000-sample time loop (truth and observer) runs compiled, so a task
+costs nearly its runs alone (issue 36; it was 60 runs when the loop ran in Python); the half run stands for Dask's
+bookkeeping and the store. benchmarks/campaign_scaling.py measures it (``task_cost`` in campaign_scaling.json)."""
+CAMPAIGN_LEVEL_OVERHEAD = 14.0
+"""Cost, in runs, of a worker's first task of a level: the model's certified extremes (about 1.5 s, 14 runs of
+0.11 s) built once per level and process. benchmarks/campaign_scaling.py measures it (``design_s``)."""
 
 
 @functools.lru_cache(maxsize=16)
@@ -551,6 +554,7 @@ CAMPAIGN = Campaign(
     level_label="uncertainty level (% of nominal a, b, c)",
     magnitude_label="fault magnitude (N·m)",
     task_overhead=CAMPAIGN_TASK_OVERHEAD,
+    level_overhead=CAMPAIGN_LEVEL_OVERHEAD,
     describe={
         "level": "relative half-width of the a, b, c intervals (true values uniform in the box)",
         "magnitude": "fault size (N·m) acting for t > 20 s",
