@@ -35,7 +35,7 @@ METHODS = ("tube", "framer")
 
 COMPILED_MIN_SAMPLES = 20_000
 """Samples (times runs) from which :meth:`IntervalObserver.run` loads the compiled loop into a process that has not
-used it yet: loading it from Numba's cache costs about 0.3 s (a first compile on a fresh install about 3 s), the
+used it yet: loading it from Numba's cache costs about 0.3 s (a first compile on a fresh install 3 s or more), the
 step loop about 65 µs a sample at n = 2, so the default reproductions, whose records are shorter, compile nothing."""
 
 COMPILED_WARM_MIN_SAMPLES = 16
