@@ -84,13 +84,14 @@ def makespan(tasks: list[tuple[float, float, list[int]]], workers: int, cost: di
 def modelled(cost: dict[str, float], runs: int) -> list[dict[str, float]]:
     """The paper's grid with ``runs`` runs a cell on W workers: the chosen cut and the former one."""
     overhead = cost["fixed_s"] / cost["per_run_s"]
+    setup = cost["design_s"] / cost["per_run_s"]
     cells = [(lv, mg, list(range(runs))) for lv in CAMPAIGN.levels for mg in CAMPAIGN.magnitudes]
     old = campaign_tasks(cells, 1, batch=OLD_BATCH)
-    serial = makespan(campaign_tasks(cells, 1, overhead=overhead), 1, cost)
+    serial = makespan(campaign_tasks(cells, 1, overhead=overhead, level_overhead=setup), 1, cost)
     serial_old = makespan(old, 1, cost)
     rows = []
     for w in MODEL_WORKERS:
-        tasks = campaign_tasks(cells, w, overhead=overhead)
+        tasks = campaign_tasks(cells, w, overhead=overhead, level_overhead=setup)
         span, span_old = makespan(tasks, w, cost), makespan(old, w, cost)
         rows.append(
             {

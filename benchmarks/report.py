@@ -333,6 +333,27 @@ def shapes_section() -> list[str]:
     return [*lines, ""]
 
 
+def campaign_section() -> list[str]:
+    """Task cost, measured and modelled parallel efficiency of the manipulator campaign (campaign_scaling.py)."""
+    results = HERE / "campaign_scaling.json"
+    lines = ["## Campaign scaling", "", *_docstring(HERE / "campaign_scaling.py").splitlines(), ""]
+    if not results.exists():
+        return [*lines, "No results yet: run `python benchmarks/campaign_scaling.py`.", ""]
+    data = json.loads(results.read_text())
+    cost = data["task_cost"]
+    lines += [
+        f"On {data['cores']} cores: one task costs {cost['fixed_s']:.3g} s fixed + {cost['per_run_s']:.3g} s a run, "
+        f"a level's model {cost['design_s']:.3g} s (CPU, one process). Measured ({_cell(data['measured']['runs'])} "
+        f"runs a cell, magnitudes {_cell(data['measured']['magnitudes'])}, one level):",
+        "",
+        *_table(data["measured"]["rows"]),
+        "",
+    ]
+    for runs, rows in data["modelled_paper_grid"]["rows_by_runs_a_cell"].items():
+        lines += [f"Modelled, paper grid with {runs} runs a cell:", "", *_table(rows), ""]
+    return [*lines, f"Note: {data['note']}.", ""]
+
+
 def render() -> str:
     """The whole page.
 
@@ -343,7 +364,15 @@ def render() -> str:
     lines = ["# Benchmarks", "", "`make bench` runs the benchmarks below and rewrites this page.", ""]
     return (
         "\n".join(
-            [*lines, *recursion_section(), *tightness_section(), *robust_section(), *scale_section(), *shapes_section()]
+            [
+                *lines,
+                *recursion_section(),
+                *tightness_section(),
+                *robust_section(),
+                *scale_section(),
+                *shapes_section(),
+                *campaign_section(),
+            ]
         ).rstrip("\n")
         + "\n"
     )

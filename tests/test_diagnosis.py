@@ -22,6 +22,7 @@ from intervalobs.diagnosis import (
     SCHEDULER_TIMEOUT,
     Campaign,
     CampaignInterrupted,
+    _makespan,
     campaign_tasks,
     first_negative_time,
     isolation_outcome,
@@ -245,6 +246,29 @@ def test_tasks_are_cut_for_the_workers_present(left, workers):
     heavy = [len(ids) for _, _, ids in campaign_tasks(cells, workers, overhead=60.0)]
     assert len(heavy) <= len(tasks) and max(heavy) >= max(sizes)
     assert max(len(ids) for _, _, ids in campaign_tasks(cells, workers, batch=7)) == 7
+
+
+@pytest.mark.parametrize("workers", [2, 3, 8, 16, 64])
+def test_a_level_cost_orders_the_tasks_so_each_worker_keeps_to_few_levels(workers):
+    """With a cost per worker and level (the manipulator's model, ~14 runs), the order hands each worker of a
+    first-free dispatch a contiguous share of the levels: every run still in one task of its cell, at most
+    levels/workers + 2 levels per worker, and a shorter predicted campaign than the largest-first order (one
+    task a worker: one task and one level long)."""
+    levels = [0.02, 0.05, 0.1, 0.15, 0.2]
+    cells = [(lv, mg, list(range(100))) for lv in levels for mg in (0.25, 0.5, 1.0, 2.0, 5.0)]
+    tasks = campaign_tasks(cells, workers, overhead=0.5, level_overhead=14.0)
+    for level, magnitude, ids in cells:
+        assert sorted(r for lv, mg, part in tasks if (lv, mg) == (level, magnitude) for r in part) == ids
+    finish, met = np.zeros(workers), [set() for _ in range(workers)]
+    for level, _, ids in tasks:  # the first free worker takes the next task
+        w = int(np.argmin(finish))
+        finish[w] += 0.5 + len(ids) + (0.0 if level in met[w] else 14.0)
+        met[w].add(level)
+    assert max(len(m) for m in met) <= len(levels) / workers + 2
+    batch = max(len(ids) for _, _, ids in tasks)
+    plain = campaign_tasks(cells, workers, batch=batch, overhead=0.5)
+    shorter = _makespan(tasks, workers, 0.5, 14.0)
+    assert shorter < _makespan(plain, workers, 0.5, 14.0) if len(tasks) > workers else shorter <= batch + 14.5
 
 
 def test_progress_shows_runs_per_second_and_the_cut(tmp_path, capsys):

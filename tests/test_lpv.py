@@ -252,6 +252,49 @@ def test_advance_many_gives_the_numbers_of_advance(model, box_free):
     np.testing.assert_array_equal(zu_many, zu)
 
 
+def test_compiled_recursion_with_a_coupled_gain_is_the_numpy_one_to_rounding_and_encloses(model):
+    """With a non-diagonal Metzler F (no UIO term) the compiled z recursion may sum e^{Fh} z in another order than
+    BLAS: it stays within a few ulps (of the terms, |x| <= 1) of advance sample after sample, and the boxes contain
+    the truth at every parameter vertex."""
+    f = -np.eye(4) + 0.2 * (np.ones((4, 4)) - np.eye(4))
+    obs = LPVIntervalObserver(model, H, f, bounds=Bounds(x0=X0_BOX))
+    t = np.arange(0, 0.4 + H / 2, H)
+    params = model.bounds.vertices
+    x, u = simulate_closed_loop(t, params, np.zeros(2))
+    xs, us = x.transpose(1, 0, 2), u.transpose(1, 0, 2)
+    z0 = [np.tile(obs.init().internal[key], (len(params), 1)) for key in ("z_lower", "z_upper")]
+    lo_many, hi_many, *_ = obs.advance_many(*z0, xs, us)
+    zl, zu = z0
+    for k in range(t.size):
+        lo, hi, _, _, zl, zu = obs.advance(zl, zu, xs[k], us[k])
+        np.testing.assert_allclose(lo_many[k], lo, rtol=0, atol=1e-14)  # terms of magnitude <= 1: a few ulps
+        np.testing.assert_allclose(hi_many[k], hi, rtol=0, atol=1e-14)
+    assert np.all(lo_many <= xs) and np.all(xs <= hi_many)
+
+
+def test_compiled_truth_is_the_numpy_closed_loop_to_the_last_bit():
+    """closed_loop_block (the campaign's truth, compiled) gives the states and inputs of controller + rk4_step
+    sample after sample, faults switching on inside the block."""
+    from intervalobs.examples.manipulator import _KD, _KP, FAULT_ONSET
+    from intervalobs.examples.manipulator_kernel import closed_loop_block
+
+    rng = np.random.default_rng(3)
+    params = np.array([TRUE_PARAMETERS, *rng.uniform(0.9, 1.1, (2, 3)) * np.asarray(NOMINAL)])
+    faults = np.array([[0.0, 0.0], [FAULT_BOUND, 0.0], [-1.0, 2.0]])
+    t = FAULT_ONSET - 0.1 + np.arange(120) * 2e-3
+    x0 = np.asarray(X0) + rng.uniform(-0.1, 0.1, (3, 4))
+    x, xs, us = x0.copy(), np.empty((t.size, 3, 4)), np.empty((t.size, 3, 2))
+    closed_loop_block(x, t, faults, FAULT_ONSET, params, np.asarray(NOMINAL), np.array([_KP, _KD]), 1e-3, 2, xs, us)
+    ref = x0.copy()
+    for k, tk in enumerate(t):
+        np.testing.assert_array_equal(xs[k], ref)
+        u = controller(ref, float(tk))
+        np.testing.assert_array_equal(us[k], u)
+        for _ in range(2):
+            ref = rk4_step(ref, u + faults if tk >= FAULT_ONSET else u, params, 1e-3)
+    np.testing.assert_array_equal(x, ref)
+
+
 CAMPAIGN_OUTCOMES = {
     (0.02, 0.25): [
         [0, 0, True, False, [None, None]], [1, 0, True, False, [None, None]],

@@ -15,6 +15,7 @@ def compiled_and_loop(monkeypatch, observer, t, y, u=None):
     for threshold in (0, 10**15):
         with monkeypatch.context() as patch:
             patch.setattr(interval_observer, "COMPILED_MIN_SAMPLES", threshold)
+            patch.setattr(interval_observer, "COMPILED_WARM_MIN_SAMPLES", threshold)
             estimates.append(observer.run(t, y, u))
     return estimates
 
@@ -111,9 +112,30 @@ def test_long_records_take_the_compiled_path_and_short_ones_the_loop(monkeypatch
     original = IntervalObserver._compiled
     monkeypatch.setattr(IntervalObserver, "_compiled", lambda self, *a: calls.append(1) or original(self, *a))
     monkeypatch.setattr(interval_observer, "COMPILED_MIN_SAMPLES", 1000)
+    monkeypatch.setattr(interval_observer, "_kernel_loaded", lambda: False)
     t = np.arange(400.0)
     u = np.zeros((400, 1))
     observer.run(t, np.zeros((400, 2)), u)
     assert calls == []
     observer.run(t, np.zeros((3, 400, 2)), u)
     assert calls == [1]
+
+
+def test_once_loaded_the_compiled_loop_serves_short_records(monkeypatch):
+    """A process that has loaded the kernel runs records from COMPILED_WARM_MIN_SAMPLES samples on with it (the
+    same boxes as the step loop); shorter ones, and a process that has not loaded it, keep the step loop."""
+    _, _, observer = given_gain(True, "identity")
+    t, u = np.arange(40.0), np.zeros((40, 1))
+    y = np.random.default_rng(5).normal(scale=0.1, size=(40, 2))
+    monkeypatch.setattr(interval_observer, "COMPILED_MIN_SAMPLES", 0)
+    observer.run(t, y, u)
+    assert interval_observer._kernel_loaded()
+    monkeypatch.setattr(interval_observer, "COMPILED_MIN_SAMPLES", 10**15)
+    calls = []
+    original = IntervalObserver._compiled
+    monkeypatch.setattr(IntervalObserver, "_compiled", lambda self, *a: calls.append(1) or original(self, *a))
+    warm = observer.run(t, y, u)
+    observer.run(t[:8], y[:8], u[:8])
+    assert calls == [1]
+    monkeypatch.setattr(interval_observer, "COMPILED_WARM_MIN_SAMPLES", 10**15)
+    assert_same_boxes(warm, observer.run(t, y, u))

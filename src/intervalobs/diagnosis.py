@@ -289,6 +289,10 @@ class Campaign:
         Fixed cost of one task, in runs: a task of ``b`` runs takes about ``task_overhead + b`` times one
         run (the time loop of a batched task costs the same for 1 run or 50). :func:`campaign_tasks`
         weighs it against the workers' idle time at the end; measured by benchmarks/campaign_scaling.py.
+    level_overhead : float
+        Cost, in runs, that a worker pays the first time it meets a level (a model built per level and
+        cached in the worker's process). When positive, :func:`campaign_tasks` orders the tasks so that
+        each worker keeps to one or two levels.
     """
 
     name: str
@@ -302,6 +306,7 @@ class Campaign:
     level_label: str = "uncertainty level"
     magnitude_label: str = "fault magnitude"
     task_overhead: float = 0.0
+    level_overhead: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -367,12 +372,21 @@ CUT_TOLERANCE = 0.03
 best size's: a few per cent of balance is not worth many times the tasks."""
 
 
-def _makespan(sizes: Sequence[int], workers: int, overhead: float) -> float:
-    """Time, in runs, until ``workers`` workers finish tasks of ``sizes`` runs handed out largest first."""
-    finish = [0.0] * max(workers, 1)
-    for size in sorted(sizes, reverse=True):
-        heapq.heapreplace(finish, finish[0] + overhead + size)
-    return max(finish)
+def _makespan(
+    tasks: Sequence[tuple[float, float, Sequence[int]]], workers: int, overhead: float, level_overhead: float
+) -> float:
+    """Time, in runs, until ``workers`` workers finish ``tasks``, each handed in order to the first free worker.
+
+    A task of ``b`` runs costs ``overhead + b``, plus ``level_overhead`` when its worker meets its level first.
+    """
+    finish = [(0.0, w) for w in range(max(workers, 1))]
+    met: set[tuple[int, float]] = set()
+    for level, _, ids in tasks:
+        time_, w = finish[0]
+        time_ += overhead + len(ids) + (0.0 if (w, level) in met else level_overhead)
+        met.add((w, level))
+        heapq.heapreplace(finish, (time_, w))
+    return max(time_ for time_, _ in finish)
 
 
 def campaign_tasks(
@@ -380,14 +394,21 @@ def campaign_tasks(
     workers: int,
     batch: int | None = None,
     overhead: float = 0.0,
+    level_overhead: float = 0.0,
 ) -> list[tuple[float, float, list[int]]]:
     """Cut the runs left in each cell into tasks for ``workers`` workers.
 
     Each cell's runs are split into tasks of nearly equal size (differing by at most one run), of at
     most ``batch`` runs. With ``batch=None`` the size is chosen in 1 ... :data:`MAX_BATCH` to minimise
     the predicted time to finish them all on ``workers`` workers, a task of ``b`` runs costing
-    ``overhead + b`` runs' time, largest tasks first (the order Dask receives them); among times within
+    ``overhead + b`` runs' time, handed in order to the first free worker (the order Dask receives them:
+    largest first, or level-affine, below; a worker's first task of a level costs ``level_overhead`` more);
+    among times within
     :data:`CUT_TOLERANCE` of the best, the largest size wins (fewest tasks: least bookkeeping).
+
+    With ``level_overhead > 0`` the order is level-affine instead (:func:`_level_affine`): a worker that
+    takes the first free task gets a contiguous share of the level-major list, so it meets one or two
+    levels instead of all of them.
 
     Parameters
     ----------
@@ -399,11 +420,13 @@ def campaign_tasks(
         Most runs per task (default: chosen as above).
     overhead : float
         Fixed cost of a task, in runs (:attr:`Campaign.task_overhead`).
+    level_overhead : float
+        Cost of a worker's first task of a level, in runs (:attr:`Campaign.level_overhead`).
 
     Returns
     -------
     list of (level, magnitude, list of int)
-        The tasks, largest first.
+        The tasks, largest first (or level-affine).
     """
 
     def cut(size: int) -> list[tuple[float, float, list[int]]]:
@@ -414,14 +437,49 @@ def campaign_tasks(
             tasks += [(level, magnitude, list(ids[a:b])) for a, b in itertools.pairwise(edges)]
         return sorted(tasks, key=lambda task: -len(task[2]))
 
-    if batch is not None:
-        return cut(batch)
-    largest = min(MAX_BATCH, max((len(ids) for _, _, ids in cells), default=1))
-    times = {
-        size: _makespan([len(ids) for _, _, ids in cut(size)], workers, overhead) for size in range(1, largest + 1)
-    }
-    best = min(times.values())
-    return cut(max(size for size, time_ in times.items() if time_ <= best * (1 + CUT_TOLERANCE)))
+    def order(size: int) -> list[tuple[float, float, list[int]]]:
+        return _level_affine(cut(size), workers, overhead, level_overhead) if level_overhead > 0 else cut(size)
+
+    if batch is None:
+        largest = min(MAX_BATCH, max((len(ids) for _, _, ids in cells), default=1))
+        times = {size: _makespan(order(size), workers, overhead, level_overhead) for size in range(1, largest + 1)}
+        best = min(times.values())
+        batch = max(size for size, time_ in times.items() if time_ <= best * (1 + CUT_TOLERANCE))
+    return order(batch)
+
+
+def _level_affine(
+    tasks: list[tuple[float, float, list[int]]], workers: int, overhead: float, level_overhead: float
+) -> list[tuple[float, float, list[int]]]:
+    """Order ``tasks`` so that handing each to the first free worker gives worker ``w`` the ``w``-th share.
+
+    The tasks are listed level by level (largest first within a level) and split into ``workers``
+    contiguous shares of equal runs. The order follows the dispatch it will meet: the worker predicted to be
+    free first (costs as in :func:`_makespan`) gets the next task of its own share, or, once its share is
+    done, the last task of the share with the most runs left. Each worker then meets one or two levels
+    (levels over workers more when there are fewer workers than levels).
+    """
+    ordered = sorted(tasks, key=lambda task: task[0])  # stable: largest first within a level
+    total = sum(len(ids) for _, _, ids in ordered) or 1
+    shares: list[list[tuple[float, float, list[int]]]] = [[] for _ in range(max(workers, 1))]
+    done = 0
+    for task in ordered:
+        shares[min(int((done + len(task[2]) / 2) * len(shares) / total), len(shares) - 1)].append(task)
+        done += len(task[2])
+    for share in shares:
+        share.reverse()  # pop() takes the share's next task
+    finish = [(0.0, w) for w in range(len(shares))]
+    met: set[tuple[int, float]] = set()
+    out: list[tuple[float, float, list[int]]] = []
+    while len(out) < len(ordered):
+        time_, w = finish[0]
+        own = shares[w] or max(shares, key=lambda share: sum(len(ids) for _, _, ids in share))
+        task = own.pop() if own is shares[w] else own.pop(0)
+        time_ += overhead + len(task[2]) + (0.0 if (w, task[0]) in met else level_overhead)
+        met.add((w, task[0]))
+        heapq.heapreplace(finish, (time_, w))
+        out.append(task)
+    return out
 
 
 def _open_store(path: Path) -> sqlite3.Connection:
@@ -674,7 +732,7 @@ def _compute(
     report: dict[str, Any] = {"computed": 0, "failed": []}
     try:
         threads = sum(client.nthreads().values()) or workers
-        tasks = campaign_tasks(cells, threads, batch, campaign.task_overhead)
+        tasks = campaign_tasks(cells, threads, batch, campaign.task_overhead, campaign.level_overhead)
         report.update(tasks=len(tasks), workers=threads)
         bar = tqdm(
             total=done_of_total[1],

@@ -548,8 +548,8 @@ def _check_bounds(
 ) -> None:
     """Refuse NaN bounds (not an interval) in the ``usable`` rows and empty ones (lower > upper), naming the first."""
     for name, values in ((lower_name, lower), (upper_name, upper)):
-        missing = np.isnan(values) & usable[:, None]
-        if missing.any():
+        missing = np.isnan(values)
+        if missing.any() and (missing := missing & usable[:, None]).any():
             k = int(np.argwhere(missing)[0][-2])
             raise BoundsError(
                 f"Estimate: {name}: expected numbers (-inf/inf for no bound), got NaN at t = {t[k]:g} (row {k})"
@@ -574,7 +574,11 @@ def _after_first_empty(t: FloatArray, boxes: list[FloatArray]) -> NDArray[np.boo
     empty = np.zeros(lead, dtype=bool)
     for lo, hi in zip(boxes[::2], boxes[1::2]):
         if lo.shape == hi.shape and lo.shape[:-1] == lead:
-            empty |= np.any(~(lo <= hi), axis=-1)
+            ordered = lo <= hi  # False where empty or NaN
+            if not ordered.all():
+                empty |= ~ordered.all(axis=-1)
+    if not empty.any():
+        return None
     after = np.cumsum(empty, axis=-1) > 0
     return after if after.any() else None
 

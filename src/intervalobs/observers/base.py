@@ -173,21 +173,20 @@ def check_growth(estimate: Estimate) -> None:
         The result of a run; its ``meta`` is updated in place.
     """
     bounded = estimate.bounded_rows()
-    width = (
-        np.asarray(estimate.upper, dtype=float)[..., bounded, :]
-        - np.asarray(estimate.lower, dtype=float)[..., bounded, :]
-    )
-    steps = width.shape[-2]
+    rows = slice(None) if bounded.all() else bounded  # a slice keeps views: no copy of a consistent record
+    lower = np.asarray(estimate.lower, dtype=float)[..., rows, :]
+    upper = np.asarray(estimate.upper, dtype=float)[..., rows, :]
+    steps = lower.shape[-2]
     if steps < 10:
         return
     tenth = steps // 10
     with warnings.catch_warnings(), np.errstate(invalid="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows: rows a run has no bound for
-        early = np.nanmax(width[..., :tenth, :], axis=-2)
-        first_half = np.nanmax(width[..., : steps // 2, :], axis=-2)
-        late = np.nanmax(width[..., -tenth:, :], axis=-2)
+        early = np.nanmax(upper[..., :tenth, :] - lower[..., :tenth, :], axis=-2)
+        first_half = np.nanmax(upper[..., : steps // 2, :] - lower[..., : steps // 2, :], axis=-2)
+        late = np.nanmax(upper[..., -tenth:, :] - lower[..., -tenth:, :], axis=-2)
         lost = np.isfinite(early) & np.isposinf(late)
-        floor = 1e-9 * (1.0 + np.nanmax(np.abs(estimate.lower[..., bounded, :][..., :tenth, :]), axis=-2))
+        floor = 1e-9 * (1.0 + np.nanmax(np.abs(lower[..., :tenth, :]), axis=-2))
         ratio = np.where(np.isfinite(early) & np.isfinite(late), late / np.maximum(early, floor), 0.0)
     growing = (ratio > GROWTH_LIMIT) & (late >= 1.5 * first_half) & (steps >= 30)
     worst = float(np.max(ratio)) if ratio.size else 0.0

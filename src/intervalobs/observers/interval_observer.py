@@ -7,6 +7,7 @@ equations are in the class docstring.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
@@ -33,8 +34,20 @@ FloatArray = NDArray[np.float64]
 METHODS = ("tube", "framer")
 
 COMPILED_MIN_SAMPLES = 20_000
-"""Samples (times runs) from which :meth:`IntervalObserver.run` uses the compiled loop: below, the step loop
-costs less than importing Numba and loading the compiled kernel (benchmarks/run.py measures both)."""
+"""Samples (times runs) from which :meth:`IntervalObserver.run` loads the compiled loop into a process that has not
+used it yet: loading it from Numba's cache costs about 0.3 s (a first compile on a fresh install 3 s or more), the
+step loop about 65 µs a sample at n = 2, so the default reproductions, whose records are shorter, compile nothing."""
+
+COMPILED_WARM_MIN_SAMPLES = 16
+"""Samples (times runs) from which :meth:`IntervalObserver.run` uses the compiled loop once it is loaded in the
+process (a campaign of short records, a notebook after a long run): about 0.5 ms of fixed cost against 65 µs a
+sample for the step loop."""
+
+
+def _kernel_loaded() -> bool:
+    """Whether this process has already loaded the compiled loop (one compiled signature or more)."""
+    module = sys.modules.get(f"{__package__}.tube_kernel")
+    return module is not None and bool(module.run_boxes.signatures)
 
 
 class IntervalObserver(Observer):
@@ -291,9 +304,10 @@ class IntervalObserver(Observer):
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record: the compiled recursion for long records, :meth:`step` for short ones.
 
-        From ``COMPILED_MIN_SAMPLES`` samples (times runs) on, the recursion of :meth:`step` runs in one
-        compiled loop (:mod:`intervalobs.observers.tube_kernel`: the same sums, the same outward margins);
-        shorter records go through the step loop, which costs less than loading the compiled code.
+        From ``COMPILED_MIN_SAMPLES`` samples (times runs) on, or ``COMPILED_WARM_MIN_SAMPLES`` once the process
+        has loaded it, the recursion of :meth:`step` runs in one compiled loop
+        (:mod:`intervalobs.observers.tube_kernel`: the same sums, the same outward margins); shorter records go
+        through the step loop, which costs less than loading the compiled code.
         Both give the numbers of :meth:`step` up to rounding, covered by the margin (tested).
 
         Parameters
@@ -311,7 +325,7 @@ class IntervalObserver(Observer):
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
-        if ys[..., 0].size < COMPILED_MIN_SAMPLES:
+        if ys[..., 0].size < (COMPILED_WARM_MIN_SAMPLES if _kernel_loaded() else COMPILED_MIN_SAMPLES):
             return self._loop(times, ys, us, state)[0]
         lead = ys.shape[:-2]
         runs = int(np.prod(lead, dtype=int))

@@ -59,7 +59,7 @@ whose ``internal`` holds :math:`\underline z_{k+1}, \overline z_{k+1}` and the i
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -68,7 +68,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..design.lpv_gains import LPVObserverDesign, design_lpv_observer
 from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError, DimensionError
 from ..estimate import Estimate
-from ..interval import inflate, interval_matvec_bounds, matvec_bounds
+from ..interval import ROUNDING_MARGIN, inflate, interval_matvec_bounds, matvec_bounds
 from ..systems.bounds import Bounds
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
 from ..validation import as_array, as_box, as_matrix, as_positive
@@ -121,11 +121,6 @@ class _KnownTerms:
     unknown_lower: FloatArray
     unknown_upper: FloatArray
     unknown_input: bool
-
-    def sample(self, k: int) -> _KnownTerms:
-        """The terms of sample ``k`` of several (a leading sample axis)."""
-        arrays = {f.name: getattr(self, f.name) for f in fields(self)}
-        return replace(self, **{name: value[k] for name, value in arrays.items() if np.ndim(value)})
 
 
 class LPVIntervalObserver(Observer):
@@ -306,9 +301,11 @@ class LPVIntervalObserver(Observer):
 
         When the model's enclosures do not read the observer's box
         (:attr:`~intervalobs.systems.lpv.SampledLPVModel.box_free`), everything but the recursion of
-        :math:`z` is evaluated for the ``S`` samples in one vectorised call, so a long record of few runs no
-        longer costs a few hundred small array operations a sample (issue 36: the manipulator campaign's
-        fixed cost per task). Otherwise it is :meth:`advance` sample after sample.
+        :math:`z` is evaluated for the ``S`` samples in one vectorised call and the recursion of :math:`z`
+        runs compiled (:func:`~intervalobs.observers.lpv_kernel.run_z`, the same operations in the same
+        order), so a long record of few runs no longer costs a few hundred small array operations a sample
+        (issue 36: the manipulator campaign's fixed cost per task). Otherwise it is :meth:`advance` sample
+        after sample.
 
         Parameters
         ----------
@@ -325,19 +322,44 @@ class LPVIntervalObserver(Observer):
             Observer states after the last sample.
         """
         model = self.model
-        out = np.empty((4, *np.shape(y)[:2], self.n))
-        known = None
-        if model is not None and self.generic is None and model.box_free:
-            known = self._known_terms(model.step_enclosure(y, y, y, u, self.h), u)
-            r = model.r_matrix(y)
-        for k in range(out.shape[1]):
-            if known is None:
-                x_lo, x_hi, eps_lo, eps_hi, z_lower, z_upper = self.advance(z_lower, z_upper, y[k], u[k])
-            else:
-                x_lo, x_hi, eps_lo, eps_hi = self._state_box(r[k], z_lower, z_upper, y[k])
-                z_lower, z_upper = self._next_z(known.sample(k), x_lo, x_hi, z_lower, z_upper)
-            out[:, k] = x_lo, x_hi, eps_lo, eps_hi
-        return out[0], out[1], out[2], out[3], z_lower, z_upper
+        if model is None or self.generic is not None or not model.box_free:
+            out = np.empty((4, *np.shape(y)[:2], self.n))
+            for k in range(out.shape[1]):
+                *boxes, z_lower, z_upper = self.advance(z_lower, z_upper, y[k], u[k])
+                out[:, k] = boxes
+            return out[0], out[1], out[2], out[3], z_lower, z_upper
+        return self._advance_compiled(model, z_lower, z_upper, y, u)
+
+    def _advance_compiled(
+        self, model: SampledLPVModel, z_lower: FloatArray, z_upper: FloatArray, y: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """:meth:`advance_many` for enclosures that ignore the box: all but :math:`z` at once, :math:`z` compiled."""
+        from .lpv_kernel import run_z  # Numba only where a campaign needs it
+
+        known = self._known_terms(model.step_enclosure(y, y, y, u, self.h), u)
+        x_m = y @ self.c_inv.T
+        v_m = np.einsum("...ij,...j->...i", model.r_matrix(y)[..., : self.p, : self.p], x_m)
+        names = ("rate", "input", "unknown") if known.unknown_input else ("rate", "input")
+        terms = np.array(
+            [
+                [np.broadcast_to(getattr(known, f"{name}_{end}"), x_m.shape) for name in names]
+                for end in ("lower", "upper")
+            ]
+        )
+        z = np.array([np.broadcast_to(z_lower, x_m.shape[1:]), np.broadcast_to(z_upper, x_m.shape[1:])])
+        out = np.empty((4, *x_m.shape))
+        run_z(
+            z,
+            np.stack([x_m, v_m]),
+            np.stack([known.flow_lower, known.flow_upper]),
+            np.stack([known.da_lower, known.da_upper]),
+            terms,
+            np.stack([self.e_lower, self.phi_lower, self.e_upper, self.phi_upper]),
+            ROUNDING_MARGIN,
+            float(np.finfo(float).tiny),
+            out,
+        )
+        return out[0], out[1], out[2], out[3], z[0], z[1]
 
     def _known_terms(self, enc: StepEnclosure, u: FloatArray) -> _KnownTerms:
         r"""The terms of :math:`\psi` (33) that do not depend on :math:`z`: all but :math:`\Delta A_R` times the box."""

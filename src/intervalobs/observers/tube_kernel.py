@@ -57,38 +57,41 @@ def _block_norms(v: FloatArray, sizes: NDArray[np.int64], rounding: float, out: 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _box(
     z_c: FloatArray,
-    z_r: FloatArray,
+    radii: FloatArray,
     drive: FloatArray,
     matrices: tuple[FloatArray, FloatArray, FloatArray],
-    margin: FloatArray,
-    tiny: float,
-    identity: bool,
-    singleton: bool,
+    box: tuple[FloatArray, float, bool, bool],
+    at: tuple[int, int],
     lower: FloatArray,
     upper: FloatArray,
 ) -> None:
-    """The reported box of one sample: every gain's box, widened by its margin, intersected (``_x_box``)."""
+    """The reported box of sample ``k`` of run ``r`` (``at``): every gain's box, widened by its margin, intersected
+    (``_x_box``); ``radii`` (T, G, count) is read at ``k``. Scalars are indexed in place (no array views: at
+    n = 2 their bookkeeping cost as much as the arithmetic)."""
     t_inv, abs_t_inv, back = matrices
+    margin, tiny, identity, singleton = box
+    r, k = at
     gains, n = z_c.shape
-    lower[:] = -np.inf
-    upper[:] = np.inf
+    for i in range(n):
+        lower[r, k, i] = -np.inf
+        upper[r, k, i] = np.inf
     for g in range(gains):
         for i in range(n):
             if identity:
-                centre, radius = z_c[g, i], z_r[g, i]
-                scale = abs(z_c[g, i]) + z_r[g, i] + drive[g, i]
+                centre, radius = z_c[g, i], radii[k, g, i]
+                scale = abs(z_c[g, i]) + radii[k, g, i] + drive[g, i]
             else:
                 centre, radius, scale = 0.0, 0.0, 0.0
                 for j in range(n):
                     centre += t_inv[i, j] * z_c[g, j]
-                    scale += abs_t_inv[i, j] * (abs(z_c[g, j]) + drive[g, j] + (z_r[g, j] if singleton else 0.0))
-                for j in range(z_r.shape[1]):
-                    radius += (abs_t_inv[i, j] if singleton else back[i, j]) * z_r[g, j]
+                    scale += abs_t_inv[i, j] * (abs(z_c[g, j]) + drive[g, j] + (radii[k, g, j] if singleton else 0.0))
+                for j in range(radii.shape[2]):
+                    radius += (abs_t_inv[i, j] if singleton else back[i, j]) * radii[k, g, j]
                 if not singleton:
                     scale += radius
             pad = margin[g] * scale + tiny
-            lower[i] = max(lower[i], centre - radius - pad)
-            upper[i] = min(upper[i], centre + radius + pad)
+            lower[r, k, i] = max(lower[r, k, i], centre - radius - pad)
+            upper[r, k, i] = min(upper[r, k, i], centre + radius + pad)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -152,30 +155,33 @@ def _disturbance(
 def _centres(
     z_c: FloatArray,
     drive: FloatArray,
-    y: FloatArray,
-    u: FloatArray,
+    signals: tuple[FloatArray, FloatArray],
+    at: tuple[int, int],
     linear: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
     work: FloatArray,
 ) -> None:
-    """``z_c ← M_g z_c + TL_g y + TΓu + offset_g`` and the running drive of every gain, in place."""
+    """``z_c ← M_g z_c + TL_g y + TΓu + offset_g`` and the running drive of every gain, in place, with ``y, u``
+    (R, T, ·) of run ``r`` at sample ``k`` (``at``)."""
     ms, tl, t_gamma, offset = linear
+    y, u = signals
+    r, k = at
     gains, n = z_c.shape
-    known, new = work[0], work[1]
     for i in range(n):
-        known[i] = 0.0
-        for j in range(u.size):
-            known[i] += t_gamma[i, j] * u[j]
+        work[0, i] = 0.0
+        for j in range(u.shape[2]):
+            work[0, i] += t_gamma[i, j] * u[r, k, j]
     for g in range(gains):
         for i in range(n):
             total, term = 0.0, 0.0
             for j in range(n):
                 total += ms[g, i, j] * z_c[g, j]
-            for j in range(y.size):
-                total += tl[g, i, j] * y[j]
-                term += abs(tl[g, i, j]) * abs(y[j])
-            new[i] = total + known[i] + offset[g, i]
-            drive[g, i] = max(drive[g, i], term + abs(known[i]) + abs(offset[g, i]))
-        z_c[g] = new
+            for j in range(y.shape[2]):
+                total += tl[g, i, j] * y[r, k, j]
+                term += abs(tl[g, i, j]) * abs(y[r, k, j])
+            work[1, i] = total + work[0, i] + offset[g, i]
+            drive[g, i] = max(drive[g, i], term + abs(work[0, i]) + abs(offset[g, i]))
+        for i in range(n):
+            z_c[g, i] = work[1, i]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -240,7 +246,6 @@ def run_boxes(
     z_c0, z_r0 = start
     gains, n = z_c0.shape
     count = z_r0.shape[1]
-    margin, tiny, identity, singleton = box
     sizes, rounding = norms
     mapping = (data[3], data[4], back)
     lower = np.empty((runs, steps, n))
@@ -248,12 +253,15 @@ def run_boxes(
     radii = np.empty((steps, gains, count))
     disturbances = np.empty((steps, gains, count))
     work = np.empty((4, n))
-    for r in range(runs):
-        z_c = z_c0.copy()
-        drive = np.zeros((gains, n))
-        radii[0] = z_r0
+    z_c, drive = np.empty((gains, n)), np.empty((gains, n))
+    for r in range(runs):  # the run's state in place: no allocation per run
+        for g in range(gains):
+            for i in range(n):
+                z_c[g, i], drive[g, i] = z_c0[g, i], 0.0
+            for b in range(count):
+                radii[0, g, b] = z_r0[g, b]
         for k in range(steps):
-            _box(z_c, radii[k], drive, mapping, margin, tiny, identity, singleton, lower[r, k], upper[r, k])
+            _box(z_c, radii, drive, mapping, box, (r, k), lower, upper)
             if k + 1 == steps:
                 break
             if mode == POINT or mode == TUBE_IDENTITY:  # indexed in place: no views of this step's arrays
@@ -280,6 +288,6 @@ def run_boxes(
                     work,
                     disturbances[k],
                 )
-            _centres(z_c, drive, y[r, k], u[r, k], linear, work)
+            _centres(z_c, drive, (y, u), (r, k), linear, work)
             _tube_radius(k, tube[0], tube[1], radii, disturbances)
     return lower, upper

@@ -27,6 +27,8 @@ from ..diagnosis import Campaign, fault_signals, isolate, isolation_outcome, sce
 from ..errors import BoundsError, DesignError
 from ..estimate import enclosure_report
 from ..examples.manipulator import (
+    _KD,
+    _KP,
     FAULT_BOUND,
     FAULT_ONSET,
     LAMBDA,
@@ -36,8 +38,6 @@ from ..examples.manipulator import (
     X0,
     ManipulatorModel,
     angles_only_bounds,
-    controller,
-    rk4_step,
     simulate_closed_loop,
 )
 from ..observers.lpv import LPVIntervalUIO
@@ -448,10 +448,13 @@ CAMPAIGN_T_FINAL = 26.0
 CAMPAIGN_BLOCK_ROWS = 8192
 """Samples times runs whose enclosures a task evaluates at once (LPVIntervalObserver.advance_many): long enough
 blocks that the per-sample overhead of the array calls vanishes, short enough to stay in cache."""
-CAMPAIGN_TASK_OVERHEAD = 60.0
-"""Fixed cost of a campaign task in runs: its 13 000-step time loop costs the same whatever the batch (issue 36).
-benchmarks/campaign_scaling.py measures it (``task_cost`` in benchmarks/campaign_scaling.json); on the loaded
-shared machine it found 26 to 130 runs, a range over which the cut for 2 to 16 workers is the same."""
+CAMPAIGN_TASK_OVERHEAD = 0.5
+"""Fixed cost of a campaign task in runs. Its 13 000-sample time loop (truth and observer) runs compiled, so a task
+costs nearly its runs alone (issue 36; it was 60 runs when the loop ran in Python); the half run stands for Dask's
+bookkeeping and the store. benchmarks/campaign_scaling.py measures it (``task_cost`` in campaign_scaling.json)."""
+CAMPAIGN_LEVEL_OVERHEAD = 15.0
+"""Cost, in runs, of a worker's first task of a level: the model's certified extremes (about 1.8 s, 15 runs of
+0.12 s) built once per level and process. benchmarks/campaign_scaling.py measures it (``design_s``)."""
 
 
 @functools.lru_cache(maxsize=16)
@@ -470,13 +473,6 @@ def _campaign_observer(level: float) -> LPVIntervalUIO:
         bounds=Bounds(x0=(x0 - X0_RADIUS, x0 + X0_RADIUS)),
         unknown_input=(-FAULT_BOUND * np.ones(2), FAULT_BOUND * np.ones(2)),
     )
-
-
-def _truth_step(x: FloatArray, tau: FloatArray, par: FloatArray) -> FloatArray:
-    """The true state one observer sample later: ``CAMPAIGN_SUBSTEPS`` RK4 steps, torque held."""
-    for _ in range(CAMPAIGN_SUBSTEPS):
-        x = rk4_step(x, tau, par, CAMPAIGN_H / CAMPAIGN_SUBSTEPS)
-    return x
 
 
 def campaign_task(
@@ -508,6 +504,8 @@ def campaign_task(
     """
     if not 0.0 <= magnitude <= FAULT_BOUND:
         raise BoundsError(f"magnitude: expected a fault size in [0, {FAULT_BOUND:g}] , got {magnitude:g}")
+    from ..examples.manipulator_kernel import closed_loop_block  # Numba only where a campaign runs
+
     obs = _campaign_observer(float(level))
     model = _campaign_model(float(level))
     ids = list(run_ids)
@@ -523,14 +521,13 @@ def campaign_task(
     zu = np.tile(st.internal["z_upper"], (4 * m, 1))
     first = np.full((4 * m, 2), np.nan)
     t = np.arange(0.0, CAMPAIGN_T_FINAL + CAMPAIGN_H / 2, CAMPAIGN_H)
+    nominal, gains, step = np.asarray(NOMINAL), np.array([_KP, _KD]), CAMPAIGN_H / CAMPAIGN_SUBSTEPS
     samples = max(CAMPAIGN_BLOCK_ROWS // (4 * m), 1)
     for start in range(0, t.size, samples):
         tb = t[start : start + samples]
         xs, us = np.empty((tb.size, 4 * m, 4)), np.empty((tb.size, 4 * m, 2))
-        for k, tk in enumerate(tb):  # the truth of the block, then the observer on it
-            xs[k], us[k] = x, controller(x, float(tk))
-            x = _truth_step(x, us[k] + faults if tk >= FAULT_ONSET else us[k], par)
-        *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)
+        closed_loop_block(x, tb, faults, FAULT_ONSET, par, nominal, gains, step, CAMPAIGN_SUBSTEPS, xs, us)
+        *_, el, eh, zl, zu = obs.advance_many(zl, zu, xs, us)  # the truth of the block, then the observer on it
         neg = (fault_signals(obs.H, el) < 0) | (fault_signals(obs.H, eh) < 0)  # (samples, runs, faults)
         new = np.any(neg, axis=0) & np.isnan(first)
         first[new] = tb[np.argmax(neg, axis=0)][new]
@@ -557,6 +554,7 @@ CAMPAIGN = Campaign(
     level_label="uncertainty level (% of nominal a, b, c)",
     magnitude_label="fault magnitude (N·m)",
     task_overhead=CAMPAIGN_TASK_OVERHEAD,
+    level_overhead=CAMPAIGN_LEVEL_OVERHEAD,
     describe={
         "level": "relative half-width of the a, b, c intervals (true values uniform in the box)",
         "magnitude": "fault size (N·m) acting for t > 20 s",
