@@ -457,8 +457,24 @@ class ManipulatorModel(SampledLPVModel):
         return lo, hi, s * th[..., 2], s * th[..., 3]
 
     @staticmethod
-    def _scale(g_lo: FloatArray, g_hi: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return np.minimum(f * g_lo, f * g_hi), np.maximum(f * g_lo, f * g_hi)
+    def _velocity_columns(
+        lo: FloatArray, hi: FloatArray, f3: FloatArray, f4: FloatArray, first: int, row: int
+    ) -> tuple[FloatArray, FloatArray]:
+        """A 4×4 bound with entries ``first … first + 3`` times ``f3, f3, f4, f4`` at rows ``row, row + 1`` of
+        columns 3, 3, 4, 4 (the σ x3 and σ x4 columns of ΔA and ΔA_R)."""
+        al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
+        for k, f in enumerate((f3, f3, f4, f4)):
+            i, j, e = row + k % 2, 2 + k // 2, first + k
+            al[..., i, j], ah[..., i, j] = np.minimum(f * lo[e], f * hi[e]), np.maximum(f * lo[e], f * hi[e])
+        return al, ah
+
+    @staticmethod
+    def _input_block(lo: FloatArray, hi: FloatArray, first: int, row: int) -> tuple[FloatArray, FloatArray]:
+        """A 4×2 bound with entries ``first … first + 3`` row by row at rows ``row, row + 1`` (ΔB, ΔB_R)."""
+        bl, bh = np.zeros((*lo.shape[1:], 4, 2)), np.zeros((*lo.shape[1:], 4, 2))
+        bl[..., row : row + 2, :] = np.moveaxis(lo[first : first + 4].reshape(2, 2, *lo.shape[1:]), (0, 1), (-2, -1))
+        bh[..., row : row + 2, :] = np.moveaxis(hi[first : first + 4].reshape(2, 2, *hi.shape[1:]), (0, 1), (-2, -1))
+        return bl, bh
 
     def rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` at points (14)–(15).
@@ -474,14 +490,7 @@ class ManipulatorModel(SampledLPVModel):
         db_lower, db_upper : numpy.ndarray, shape (..., 4, 2)
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
-        shape = f3.shape
-        al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
-        for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
-            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
-        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
-        for (i, j), e in (((0, 0), 0), ((0, 1), 1), ((1, 0), 2), ((1, 1), 3)):
-            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
-        return al, ah, bl, bh
+        return (*self._velocity_columns(lo, hi, f3, f4, 4, 0), *self._input_block(lo, hi, 0, 0))
 
     def da_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` (11).
@@ -496,10 +505,7 @@ class ManipulatorModel(SampledLPVModel):
         lower, upper : numpy.ndarray, shape (..., 4, 4)
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
-        al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
-        for (i, j), e, f in (((2, 2), 12, f3), ((3, 2), 13, f3), ((2, 3), 14, f4), ((3, 3), 15, f4)):
-            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
-        return al, ah
+        return self._velocity_columns(lo, hi, f3, f4, 12, 2)
 
     def db_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` (12), (23).
@@ -513,11 +519,8 @@ class ManipulatorModel(SampledLPVModel):
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 2)
         """
-        lo, hi, f3, _ = self._entry_bounds(theta)
-        bl, bh = np.zeros((*f3.shape, 4, 2)), np.zeros((*f3.shape, 4, 2))
-        for (i, j), e in (((2, 0), 8), ((2, 1), 9), ((3, 0), 10), ((3, 1), 11)):
-            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
-        return bl, bh
+        lo, hi, _, _ = self._entry_bounds(theta)
+        return self._input_block(lo, hi, 8, 2)
 
     def naive_rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         r"""Bounds of :math:`\Delta A_R` from :math:`R \cdot [\underline{\Delta A}, \overline{\Delta A}]` by
@@ -586,14 +589,13 @@ class ManipulatorModel(SampledLPVModel):
             Joint angles at :math:`t_k` (rad).
         w_lower, w_upper : numpy.ndarray, shape (M, 2)
             Box of the joint velocities at :math:`t_k` (rad/s).
-        u : numpy.ndarray, shape (M, 2)
-            Known torque held over the step.
-        h : float
-            Step (s).
+        u, h : numpy.ndarray and float
+            Torque held over the step and step length, as for :meth:`flow_box`.
 
         Returns
         -------
         lower, upper : numpy.ndarray, shape (M, 4)
+            The flow box, as :meth:`flow_box` returns it.
 
         Raises
         ------
@@ -722,9 +724,7 @@ class ManipulatorModel(SampledLPVModel):
         al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
         for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
             al[..., i, j], ah[..., i, j] = product_bounds(f[0], f[1], g_lo[e], g_hi[e])
-        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
-        bl[..., :2, :] = g_lo[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
-        bh[..., :2, :] = g_hi[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
+        bl, bh = self._input_block(g_lo, g_hi, 0, 0)
         return StepEnclosure(flo, fhi, rate_lo, rate_hi, rx_lo, rx_hi, al, ah, bl, bh, bl, bh)
 
     def sample_parameters(self, runs: int, rng: np.random.Generator) -> FloatArray:

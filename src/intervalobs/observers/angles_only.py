@@ -261,12 +261,8 @@ class AnglesOnlyObserver(Observer):
 
         Parameters
         ----------
-        t : array_like, shape (T,)
-            Sample times (s), spacing ``h``.
-        y : array_like, shape (T, 2) or (M, T, 2)
-            Measured joint angles (rad).
-        u : array_like, shape (T, 2) or (M, T, 2)
-            Known torque, held over each step (N·m).
+        t, y, u : array_like
+            Sample times, joint angles and torques, as for :meth:`run_with_signals`.
 
         Returns
         -------
