@@ -106,7 +106,7 @@ def test_the_walk_finds_the_public_api():
         "intervalobs.observers.interval_observer.IntervalObserver",
         "intervalobs.observers.interval_observer.IntervalObserver.design",
         "intervalobs.simulate.simulate",
-        "intervalobs.systems.lti.LTISystem.n",
+        "intervalobs.systems.dimensions.ModelDimensions.n",
     ):
         assert expected in names
     exported = {n for n in intervalobs.__all__ if n != "__version__"}

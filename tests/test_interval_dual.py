@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from intervalobs.errors import DimensionError
+from intervalobs.errors import BoundsError, DimensionError
 from intervalobs.inclusion import evaluate_matrix, interval_matrix
 from intervalobs.interval import SUPPORTED_UFUNCS, Interval
 from intervalobs.interval_dual import IntervalDual, automatic_jacobian
@@ -148,3 +148,25 @@ def test_constants_and_numpy_scalars_mix_with_duals():
 def test_automatic_jacobian_checks_the_number_of_components():
     with pytest.raises(DimensionError, match="expected 2 components, got 3"):
         automatic_jacobian(lambda x: (x[0], x[1]), 2)([1.0, 2.0, 3.0])
+
+
+@pytest.mark.parametrize(
+    "divide", [lambda x: 1.0 / x, lambda x: x / x, lambda x: 2.0 * x / (x + 0.5)], ids=["rdiv", "div", "mixed"]
+)
+def test_a_divisor_that_may_vanish_on_the_box_is_refused(divide):
+    x = IntervalDual.variables([-1.0], [1.0])[0]
+    with pytest.raises(BoundsError, match="excluding 0"):
+        divide(x)
+
+
+def test_structural_zeros_stay_exact_through_products_and_quotients():
+    """A variable an expression does not involve gets an exact zero derivative (no subnormal pad).
+
+    The sign certificates of design.lpv count a derivative of one sign as monotone: a pad of ±5e-324 around
+    an exact zero would cost them a line.
+    """
+    x, y = IntervalDual.variables([0.5, 1.0], [0.9, 1.5])
+    out = (x**2 + 3.0) * (1.0 / (x + 2.0)) - 0.25 * x
+    assert out.derivative.lower[1] == 0.0 and out.derivative.upper[1] == 0.0
+    assert out.derivative.lower[0] < out.derivative.upper[0]
+    assert isinstance(y * out, IntervalDual)

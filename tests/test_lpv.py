@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from intervalobs import Bounds, DesignError
-from intervalobs.design.lpv import IntervalJet, boundedness_lmi, uio_observer_matrix, verify_boundedness
+from intervalobs.design.lpv import boundedness_lmi, uio_observer_matrix, verify_boundedness
 from intervalobs.diagnosis import isolate
 from intervalobs.errors import AssumptionError, BoundsError, DimensionError
 from intervalobs.examples.manipulator import (
@@ -19,6 +19,7 @@ from intervalobs.examples.manipulator import (
     rk4_step,
     simulate_closed_loop,
 )
+from intervalobs.interval_dual import IntervalDual
 from intervalobs.observers.lpv import LPVIntervalObserver, LPVIntervalUIO
 from intervalobs.systems.lpv import LPVSystem
 
@@ -36,31 +37,15 @@ def _direct_entries(at, bt, ct, k):
     return np.array([m11 - 1, m12, m21, m22 - 1, -bt * m12, b - bt * m22, bt * m11 - b, bt * m21])
 
 
-# --- interval forward-mode AD ------------------------------------------------------------------
+# --- interval forward-mode AD (the one type: intervalobs.interval_dual) ----------------------------
 
 
-def test_interval_jet_encloses_values_and_derivatives():
-    rng = np.random.default_rng(0)
-    lo = np.array([0.5, 1.0])
-    hi = np.array([0.9, 1.5])
-    x = IntervalJet.variable(lo[0], hi[0], 0, 2)
-    y = IntervalJet.variable(lo[1], hi[1], 1, 2)
-    f = (x * y - 2.0) / (x**2 + y) + 3.0 * x
-    for _ in range(500):
-        px, py = rng.uniform(lo, hi)
-        val = (px * py - 2.0) / (px**2 + py) + 3.0 * px
-        den = px**2 + py
-        dx = (py * den - (px * py - 2.0) * 2 * px) / den**2 + 3.0
-        dy = (px * den - (px * py - 2.0)) / den**2
-        assert f.lo <= val <= f.hi
-        assert f.dlo[0] <= dx <= f.dhi[0]
-        assert f.dlo[1] <= dy <= f.dhi[1]
+def test_the_former_interval_jet_is_interval_dual_with_a_future_warning():
+    import intervalobs.design.lpv as lpv_design
 
-
-def test_interval_jet_reciprocal_rejects_zero():
-    x = IntervalJet.variable(-1.0, 1.0, 0, 1)
-    with pytest.raises(BoundsError, match="excluding 0"):
-        x.reciprocal()
+    with pytest.warns(FutureWarning, match="IntervalJet is deprecated.*IntervalDual"):
+        assert lpv_design.IntervalJet is IntervalDual
+    assert "IntervalJet" not in lpv_design.__all__
 
 
 # --- certified bounds ----------------------------------------------------------------------------

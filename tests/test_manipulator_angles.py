@@ -1,19 +1,20 @@
-"""Seed 001 manipulator with only the joint angles measured (n_y = 2): velocity bounds and isolation."""
+"""The manipulator with only the joint angles measured (n_y = 2): velocity bounds and isolation (AnglesOnlyObserver)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from intervalobs.errors import DataError
+from intervalobs import Bounds
+from intervalobs.errors import ArgumentError, BoundsError, DataError
 from intervalobs.examples.manipulator import (
     FAULT_BOUND,
     X0,
     ManipulatorModel,
-    angles_only_bounds,
     controller,
     rk4_step,
 )
+from intervalobs.observers import AnglesOnlyObserver
 
 H = 1e-3
 SUBSTEPS = 8
@@ -55,10 +56,12 @@ def test_velocity_bounds_enclose_a_fine_truth_at_parameter_vertices(model):
     t = np.arange(0, 1.5 + H / 2, H)
     params = model.bounds.vertices
     x, u = _truth(params, t, _bang_bang, seed=1)
-    res = angles_only_bounds(model, t, x[..., :2], u, VELOCITY_BOX, BOTH)
+    res, signal_lower, signal_upper = AnglesOnlyObserver(model, H, VELOCITY_BOX, BOTH).run_with_signals(
+        t, x[..., :2], u
+    )
     assert np.all(res.lower <= x) and np.all(x <= res.upper)
     np.testing.assert_array_equal(res.lower[..., :2], x[..., :2])
-    assert res.signal_lower[:, 1:].min() >= 0.0 and res.signal_upper[:, 1:].min() >= 0.0
+    assert signal_lower[:, 1:].min() >= 0.0 and signal_upper[:, 1:].min() >= 0.0
     width = (res.upper - res.lower)[:, t >= 0.1, 2:]
     assert np.all(np.isfinite(width)) and width.max() < 0.1
 
@@ -80,8 +83,9 @@ def test_hypothesis_bank_isolates_a_fault_switching_on_inside_a_step(model):
     boxes = [FAULT_1_ABSENT, FAULT_2_ABSENT, FAULT_1_ABSENT, FAULT_2_ABSENT]
     lo = np.repeat([b[0] for b in boxes], 2, axis=0)
     hi = np.repeat([b[1] for b in boxes], 2, axis=0)
-    res = angles_only_bounds(model, t, q, np.concatenate([u, u, u0, u0]), VELOCITY_BOX, (lo, hi))
-    signal = np.minimum(res.signal_lower, res.signal_upper).min(axis=-1)
+    bank = AnglesOnlyObserver(model, H, VELOCITY_BOX, (lo, hi))
+    res, signal_lower, signal_upper = bank.run_with_signals(t, q, np.concatenate([u, u, u0, u0]))
+    signal = np.minimum(signal_lower, signal_upper).min(axis=-1)
     first = np.array([t[np.argmax(s < 0)] if np.any(s < 0) else np.inf for s in signal])
     assert np.all((first[:2] > onset) & (first[:2] <= onset + 0.01))
     assert np.all(np.isinf(first[2:]))
@@ -91,21 +95,60 @@ def test_hypothesis_bank_isolates_a_fault_switching_on_inside_a_step(model):
         assert np.all(res.lower[run] <= truth) and np.all(truth <= res.upper[run])
 
 
+def test_run_equals_init_and_steps_and_batched_steps_equal_each_run(model):
+    """The run loop, the online step and a batch of runs give the same boxes and signals (to 1e-12)."""
+    t = np.arange(0, 0.05 + H / 2, H)
+    x, u = _truth(model.bounds.vertices[[1, 6]], t, _bang_bang, seed=3)
+    observer = AnglesOnlyObserver.design(
+        model,
+        Bounds(x0=(np.r_[-1.0, -1.0, VELOCITY_BOX[0]], np.r_[1.0, 1.0, VELOCITY_BOX[1]])),
+        h=H,
+        unknown_input=BOTH,
+    )
+    batch, sig_lo, sig_hi = observer.run_with_signals(t, x[..., :2], u)
+    assert batch.meta["rows"] == "filtered" and batch.meta["method"] == "angles-only"
+    for run in range(2):
+        state = observer.init()
+        for k in range(t.size):
+            state = observer.step(state, x[run, k, :2], u[run, k])
+            np.testing.assert_allclose(state.lower, batch.lower[run, k], rtol=1e-12, atol=0)
+            np.testing.assert_allclose(state.upper, batch.upper[run, k], rtol=1e-12, atol=0)
+            np.testing.assert_allclose(state.internal["signal_lower"], sig_lo[run, k], rtol=1e-12, atol=0)
+            np.testing.assert_allclose(state.internal["signal_upper"], sig_hi[run, k], rtol=1e-12, atol=0)
+        single = observer.run(t, x[run, :, :2], u[run])
+        np.testing.assert_allclose(single.lower, batch.lower[run], rtol=1e-12, atol=0)
+        np.testing.assert_allclose(single.upper, batch.upper[run], rtol=1e-12, atol=0)
+
+
 @pytest.mark.parametrize(
-    ("kwargs", "match"),
+    ("kwargs", "error", "match"),
     [
-        ({"fault_box": (np.array([-6.0, -5.0]), np.array([5.0, 5.0]))}, "fault_box: expected lower <= 0 <= upper"),
-        ({"fault_box": (np.array([0.5, -5.0]), np.array([5.0, 5.0]))}, "fault_box: expected lower <= 0 <= upper"),
-        ({"lam": 0.0}, "lam: expected a positive finite"),
-        ({"t": np.array([0.0, 1e-3, 3e-3])}, "t: expected uniform spacing"),
-        ({"q": np.zeros((1, 4, 2))}, "q, u: expected finite arrays of shape"),
+        ({"unknown_input": (np.array([-6.0, -5.0]), np.array([5.0, 5.0]))}, BoundsError, "lower <= 0 <= upper"),
+        ({"unknown_input": (np.array([0.5, -5.0]), np.array([5.0, 5.0]))}, BoundsError, "lower <= 0 <= upper"),
+        ({"unknown_input": (np.zeros(3), np.zeros(3))}, BoundsError, r"shape \(2,\) or \(M, 2\)"),
+        ({"decay": 0.0}, ArgumentError, "decay: expected a positive"),
+        ({"t": np.array([0.0, 1e-3, 3e-3])}, DataError, "t: expected uniform spacing"),
+        ({"q": np.zeros((1, 4, 2))}, DataError, "y: expected"),
+        ({"unknown_input": (np.zeros((3, 2)), np.zeros((3, 2)))}, DataError, "expected 3 runs"),
     ],
-    ids=["fault-beyond-bound", "fault-box-without-zero", "lam-zero", "t-spacing", "q-shape"],
+    ids=[
+        "fault-beyond-bound",
+        "fault-box-without-zero",
+        "fault-box-shape",
+        "decay-zero",
+        "t-spacing",
+        "q-shape",
+        "bank-size",
+    ],
 )
-def test_bad_input_names_the_argument(model, kwargs, match):
-    args = {"t": np.arange(3) * H, "q": np.zeros((1, 3, 2)), "u": np.zeros((1, 3, 2)), "fault_box": BOTH}
+def test_bad_input_names_the_argument(model, kwargs, error, match):
+    args = {"t": np.arange(3) * H, "q": np.zeros((1, 3, 2)), "u": np.zeros((1, 3, 2)), "unknown_input": BOTH}
     args.update(kwargs)
-    with pytest.raises(DataError, match=match):
-        angles_only_bounds(
-            model, args["t"], args["q"], args["u"], VELOCITY_BOX, args["fault_box"], args.get("lam", 1.0)
-        )
+    with pytest.raises(error, match=match):
+        observer = AnglesOnlyObserver(model, H, VELOCITY_BOX, args["unknown_input"], decay=args.get("decay", 1.0))
+        observer.run(args["t"], args["q"], args["u"])
+
+
+def test_design_refuses_a_disturbance_box(model):
+    with pytest.raises(BoundsError, match=r"bounds\.w: expected none"):
+        AnglesOnlyObserver.design(model, Bounds(x0=(-1.0, 1.0), w=(-0.1, 0.1)), h=H, unknown_input=BOTH)

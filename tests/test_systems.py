@@ -1,8 +1,10 @@
 import numpy as np
 import pytest
 
-from intervalobs import IntervalObserverError, LTISystem
+from intervalobs import ContinuousNonlinearSystem, IntervalObserverError, LPVSystem, LTISystem, NonlinearSystem
 from intervalobs.errors import ArgumentError, BoundsError, DimensionError
+from intervalobs.systems import SampledSystem
+from intervalobs.systems.dimensions import ModelDimensions
 
 
 def test_shapes_are_checked_with_the_argument_name():
@@ -36,3 +38,43 @@ def test_defaults_and_from_control():
     assert discrete.dt == 0.1
     with pytest.raises(TypeError, match="unexpected keyword argument 'G'"):
         LTISystem.from_control(ss, G=1)
+
+
+def _models():
+    """One small model of each class with known sizes (n, m, p, q, nw, nv)."""
+    lti = LTISystem(np.eye(3), np.ones((2, 3)), B=np.ones((3, 1)), E=np.ones((3, 2)), F=np.ones((2, 4)))
+    lpv = LPVSystem(
+        A=lambda th: [[-1.0, th[0], 0.0], [0.0, -2.0, 0.0], [0.0, 0.0, -1.0]],
+        B=lambda th: [[1.0], [0.0], [th[0]]],
+        C=np.eye(3)[:2],
+        theta_box=([-1.0], [1.0]),
+        B_un=lambda th: [[0.0], [1.0], [0.0]],
+    )
+    nonlinear = NonlinearSystem(
+        lambda x: (0.5 * x[0], np.sin(x[1])), lambda x: (x[0],), G=[[1.0], [0.0]], H=[[0.0]], B=[[1.0, 0.0], [0.0, 1.0]]
+    )
+    continuous = ContinuousNonlinearSystem(
+        lambda x, u, p: (x[1], -p[0] * x[0] + u[0]), lambda x, u: (x[0], x[1], x[0]), n=2, m=1, n_params=1, E=np.eye(2)
+    )
+    sampled = SampledSystem(np.zeros((4, 4)), np.eye(4)[:1], m=2)
+    return [
+        ("lti", lti, (3, 1, 2, 0, 2, 4)),
+        ("lpv", lpv, (3, 1, 2, 1, 3, 0)),
+        ("nonlinear", nonlinear, (2, 2, 1, 1, 2, 1)),
+        ("continuous-nonlinear", continuous, (2, 1, 3, 0, 2, 3)),
+        ("sampled", sampled, (4, 2, 1, 0, 4, 1)),
+    ]
+
+
+MODELS = _models()
+
+
+@pytest.mark.parametrize(("name", "model", "sizes"), MODELS, ids=[m[0] for m in MODELS])
+def test_every_model_class_states_its_sizes_through_one_base(name, model, sizes):
+    assert isinstance(model, ModelDimensions)
+    assert (model.n, model.m, model.p, model.q, model.nw, model.nv) == sizes
+    assert all(type(v) is int for v in (model.n, model.m, model.p, model.q, model.nw, model.nv))
+    for size in ("n", "m", "p", "q", "nw", "nv"):
+        assert size not in vars(type(model)), f"{name} redeclares {size}"
+        with pytest.raises(AttributeError):
+            setattr(model, size, 7)

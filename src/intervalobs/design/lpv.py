@@ -11,8 +11,9 @@ range of :math:`g(\cdot, s)` over :math:`P` is the range over the :math:`2^{n_p}
 
 1. The :math:`s` axis is cut into cells; in each cell and for each parameter :math:`k` the other
    parameters are cut into slabs, and every *line* (cell × slab, the whole range of :math:`p_k`) into
-   pieces along :math:`p_k`. Interval forward-mode differentiation (:class:`IntervalJet`, outward
-   rounded) encloses :math:`\partial g / \partial p_k` on every piece: :math:`[d^-_j, d^+_j]`.
+   pieces along :math:`p_k`. Interval forward-mode differentiation
+   (:class:`~intervalobs.interval_dual.IntervalDual`, outward rounded) encloses
+   :math:`\partial g / \partial p_k` on every piece: :math:`[d^-_j, d^+_j]`.
 2. Along a line, moving :math:`p_k` to its upper end decreases :math:`g` by at most the negative mass
    :math:`\sum_j w_j \max(-d^-_j, 0)`, to its lower end by at most the positive mass
    :math:`\sum_j w_j \max(d^+_j, 0)`; the line's *slack* is the smaller one. It is 0 when the
@@ -36,6 +37,7 @@ eigenvalue computations, for all subsets :math:`S_1, S_2`.
 from __future__ import annotations
 
 import itertools
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -46,13 +48,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..interval import Interval, inflate, neg, pos, round_outward
+from ..interval_dual import IntervalDual
 from ..validation import as_box, as_matrix
 from .lmi import solve_lmi
 
 __all__ = [
     "BoundednessCertificate",
     "CertifiedVertexBounds",
-    "IntervalJet",
     "RationalForm",
     "boundedness_lmi",
     "certify_vertex_extremes",
@@ -78,149 +80,13 @@ def _round_up_nonnegative(x: FloatArray, roundings: int) -> FloatArray:
     return np.where(x > 0, round_outward(x, x, roundings)[1], x)
 
 
-class IntervalJet:
-    r"""An interval value with interval partial derivatives (forward-mode AD, outward rounded).
-
-    Supports ``+ - * /`` with other jets and with floats or arrays, unary minus, and :meth:`sqr`.
-    Every result encloses the true value and gradient for all points of the argument boxes, so a
-    derivative enclosure with one sign is a proof of monotonicity. The value and the derivatives are
-    :class:`~intervalobs.interval.Interval` objects, so every operation is its outward-rounded interval
-    arithmetic.
-
-    Parameters
-    ----------
-    lo, hi : array_like, shape S
-        Value enclosure.
-    dlo, dhi : array_like, shape ``(k, *S)``
-        Enclosures of the partial derivatives (one row per independent variable).
-    """
-
-    __array_ufunc__ = None
-
-    def __init__(self, lo: ArrayLike, hi: ArrayLike, dlo: ArrayLike, dhi: ArrayLike) -> None:
-        self.value = Interval(lo, hi)
-        self.derivative = Interval(dlo, dhi)
-
-    @classmethod
-    def _of(cls, value: Interval, derivative: Interval) -> IntervalJet:
-        out = cls.__new__(cls)
-        out.value, out.derivative = value, derivative
-        return out
-
-    @property
-    def lo(self) -> FloatArray:
-        """Lower end of the value."""
-        return self.value.lower
-
-    @property
-    def hi(self) -> FloatArray:
-        """Upper end of the value."""
-        return self.value.upper
-
-    @property
-    def dlo(self) -> FloatArray:
-        """Lower ends of the partial derivatives, shape ``(k, *S)``."""
-        return self.derivative.lower
-
-    @property
-    def dhi(self) -> FloatArray:
-        """Upper ends of the partial derivatives, shape ``(k, *S)``."""
-        return self.derivative.upper
-
-    @classmethod
-    def variable(cls, lo: ArrayLike, hi: ArrayLike, index: int, count: int) -> IntervalJet:
-        """The independent variable number ``index`` (of ``count``) ranging over ``[lo, hi]``.
-
-        Parameters
-        ----------
-        lo, hi : array_like
-            Range of the variable.
-        index : int
-            Its position among the independent variables.
-        count : int
-            Number of independent variables.
-
-        Returns
-        -------
-        IntervalJet
-        """
-        value = Interval(lo, hi)
-        d = np.zeros((count, *value.shape))
-        d[index] = 1.0
-        return cls._of(value, Interval._raw(d, d.copy()))
-
-    @staticmethod
-    def _lift(other: Any, like: IntervalJet) -> IntervalJet:
-        if isinstance(other, IntervalJet):
-            return other
-        v = np.asarray(other, dtype=float)
-        z = np.zeros((like.dlo.shape[0], *np.broadcast_shapes(v.shape, like.lo.shape)))
-        return IntervalJet._of(Interval._raw(v, v), Interval._raw(z, z))
-
-    def __add__(self, other: Any) -> IntervalJet:
-        o = self._lift(other, self)
-        return IntervalJet._of(self.value + o.value, self.derivative + o.derivative)
-
-    __radd__ = __add__
-
-    def __neg__(self) -> IntervalJet:
-        return IntervalJet._of(-self.value, -self.derivative)
-
-    def __sub__(self, other: Any) -> IntervalJet:
-        return self + (-self._lift(other, self))
-
-    def __rsub__(self, other: Any) -> IntervalJet:
-        return self._lift(other, self) + (-self)
-
-    def __mul__(self, other: Any) -> IntervalJet:
-        o = self._lift(other, self)
-        return IntervalJet._of(self.value * o.value, self.derivative * o.value + self.value * o.derivative)
-
-    __rmul__ = __mul__
-
-    def reciprocal(self) -> IntervalJet:
-        """``1/x`` for an interval that excludes zero.
-
-        Returns
-        -------
-        IntervalJet
-
-        Raises
-        ------
-        BoundsError
-            If the interval contains 0.
-        """
-        if np.any((self.lo <= 0) & (self.hi >= 0)):
-            raise BoundsError("IntervalJet.reciprocal: expected an interval excluding 0, got one containing 0")
-        inverse = self.value.reciprocal()
-        # d(1/x) = -x' / x^2, and 1/x^2 is the square of 1/x (nonnegative)
-        square = inverse * inverse
-        square = Interval._raw(np.maximum(square.lower, 0.0), square.upper)
-        return IntervalJet._of(inverse, -self.derivative * square)
-
-    def __truediv__(self, other: Any) -> IntervalJet:
-        return self * self._lift(other, self).reciprocal()
-
-    def __rtruediv__(self, other: Any) -> IntervalJet:
-        return self._lift(other, self) * self.reciprocal()
-
-    def sqr(self) -> IntervalJet:
-        """``x**2`` with the tight value enclosure (nonnegative).
-
-        Returns
-        -------
-        IntervalJet
-        """
-        a, b = np.abs(self.lo), np.abs(self.hi)
-        straddle = (self.lo <= 0) & (self.hi >= 0)
-        low, high = round_outward(np.minimum(a, b) ** 2, np.maximum(a, b) ** 2)
-        twice = Interval._raw(2 * self.lo, 2 * self.hi)
-        return IntervalJet._of(Interval._raw(np.where(straddle, 0.0, low), high), twice * self.derivative)
-
-    def __pow__(self, power: int) -> IntervalJet:
-        if power != 2:
-            raise NotImplementedError("IntervalJet supports only **2")
-        return self.sqr()
+def _as_dual(entry: Any, like: IntervalDual) -> IntervalDual:
+    """An entry as a dual: one that depends on no variable (a number) gets a zero derivative shaped like ``like``."""
+    if isinstance(entry, IntervalDual):
+        return entry
+    value = Interval._wrap(entry)
+    zero = np.zeros((*np.broadcast_shapes(value.shape, like.value.shape), like.derivative.shape[-1]))
+    return IntervalDual(value, Interval._raw(zero, zero))
 
 
 RationalForm = Callable[..., Sequence[tuple[Any, ...]]]
@@ -233,7 +99,8 @@ zeros).
 The coefficients multiply the monomials of the *affine* parameters (all subsets, in
 ``itertools.product`` order of inclusion bits: for affine ``(p_a, p_c)`` the monomials are
 ``1, p_c, p_a, p_a p_c``); ``q`` are the remaining parameters. Coefficients are written with
-``+ - * /`` and ``**2`` so that they work on arrays and on :class:`IntervalJet`.
+``+ - * /`` and ``**2`` so that they work on arrays and on
+:class:`~intervalobs.interval_dual.IntervalDual`.
 """
 
 
@@ -264,7 +131,9 @@ def _entries_from_rational(
             for cn, cd, mv in zip(num, den, mono):
                 n_val = n_val + cn * mv
                 d_val = d_val + cd * mv
-            value = n_val / d_val
+            # over boxes, the numerator times the reciprocal: the derivative enclosure n'/d - n d'/d^2 of the
+            # product rule (the quotient rule's (n' - (n/d) d')/d is neither inside nor around it); at points, n/d
+            value = n_val * (1.0 / d_val) if isinstance(d_val, IntervalDual) else n_val / d_val
             if with_factor and len(form) > 2:
                 value = form[2] * value
             out.append(value)
@@ -489,9 +358,11 @@ def certify_vertex_extremes(
     cores = _entries_from_rational(rational, n_p, aff, with_factor=False)
     edges = np.linspace(s0, s1, cells + 1)
     general = [j for j in range(n_p) if j not in aff]
-    box_jets = [IntervalJet.variable(np.full(cells, plo[j]), np.full(cells, phi[j]), j, n_p + 1) for j in range(n_p)]
-    s_cells = IntervalJet.variable(edges[:-1], edges[1:], n_p, n_p + 1)
-    factor_max = _factor_bounds(rational, names, box_jets, s_cells, aff, general, cells)
+    *box_duals, s_cells = IntervalDual.variables(
+        np.column_stack([np.broadcast_to(plo, (cells, n_p)), edges[:-1]]),
+        np.column_stack([np.broadcast_to(phi, (cells, n_p)), edges[1:]]),
+    )
+    factor_max = _factor_bounds(rational, names, box_duals, s_cells, aff, general, cells)
     n_e = len(names)
     slack = np.zeros((n_e, cells))
     certified = np.ones((n_e, n_p))
@@ -505,11 +376,11 @@ def certify_vertex_extremes(
             np.maximum.at(per_cell, cell, line_slack)
             slack[e] = _round_up_nonnegative(slack[e] + factor_max[e] * per_cell, 2)
     # |dg/ds| over the full parameter box, per cell (the maximum over cells is used)
-    vals = entries(*box_jets, s_cells)
+    vals = entries(*box_duals, s_cells)
     lipschitz = np.zeros(n_e)
     for e, v in enumerate(vals):
-        jet = IntervalJet._lift(v, s_cells)
-        lipschitz[e] = float(np.max(np.maximum(np.abs(jet.dlo[n_p]), np.abs(jet.dhi[n_p]))))
+        ds = _as_dual(v, s_cells).derivative[..., n_p]
+        lipschitz[e] = float(np.max(np.maximum(np.abs(ds.lower), np.abs(ds.upper))))
     if not np.all(np.isfinite(slack)) or not np.all(np.isfinite(lipschitz)):
         raise DesignError("certify_vertex_extremes: non-finite derivative enclosure; refine cells/splits")
     vertices = np.array(list(itertools.product(*[(plo[k], phi[k]) for k in range(n_p)])))
@@ -528,8 +399,8 @@ def certify_vertex_extremes(
 def _factor_bounds(
     rational: RationalForm,
     names: Sequence[str],
-    box_jets: list[IntervalJet],
-    s_cells: IntervalJet,
+    box_duals: list[IntervalDual],
+    s_cells: IntervalDual,
     aff: tuple[int, ...],
     general: list[int],
     cells: int,
@@ -538,20 +409,20 @@ def _factor_bounds(
 
     Returns the upper bound of ``|factor|`` per entry and cell (1 for an entry without a factor).
     """
-    mono = _monomials([box_jets[j] for j in aff])
-    forms = rational(*[box_jets[j] for j in general], s_cells)
+    mono = _monomials([box_duals[j] for j in aff])
+    forms = rational(*[box_duals[j] for j in general], s_cells)
     if len(forms) != len(names):
         raise DimensionError(f"names: expected {len(forms)} names (one per entry), got {len(names)}")
     factor_max = np.ones((len(names), cells))
     for e, form in enumerate(forms):
         if len(form) > 2:
-            factor_max[e] = np.absolute(IntervalJet._lift(form[2], s_cells).value).upper  # |.| is exact
+            factor_max[e] = np.absolute(_as_dual(form[2], s_cells).value).upper  # |.| is exact
         den = form[1]
         d_val: Any = 0.0
         for cd, mv in zip(den, mono):
             d_val = d_val + cd * mv
-        d_jet = IntervalJet._lift(d_val, s_cells)
-        if not (np.all(d_jet.lo > 0) or np.all(d_jet.hi < 0)):
+        d_box = _as_dual(d_val, s_cells).value
+        if not (np.all(d_box.lower > 0) or np.all(d_box.upper < 0)):
             raise AssumptionError(f"entry {names[e]!r}: its denominator may vanish on the parameter box")
     return factor_max
 
@@ -587,15 +458,14 @@ def _line_slacks(
             lo_vars.append(grid[j][idx[:, col]])
             hi_vars.append(grid[j][idx[:, col] + 1])
     s_lo_c, s_hi_c = edges[idx[:, 0]], edges[idx[:, 0] + 1]
-    jets = [IntervalJet.variable(lo_vars[j], hi_vars[j], j, n_p + 1) for j in range(n_p)]
-    s_jet = IntervalJet.variable(s_lo_c, s_hi_c, n_p, n_p + 1)
+    *duals, s_dual = IntervalDual.variables(np.column_stack([*lo_vars, s_lo_c]), np.column_stack([*hi_vars, s_hi_c]))
     piece_width = (Interval(hi_vars[k]) - lo_vars[k]).upper
     lines = idx.shape[0] // pieces
     slacks = []
-    for v in cores(*jets, s_jet):
-        jet = IntervalJet._lift(v, s_jet)
-        dlo = np.broadcast_to(jet.dlo[k], s_lo_c.shape)
-        dhi = np.broadcast_to(jet.dhi[k], s_lo_c.shape)
+    for v in cores(*duals, s_dual):
+        dk = _as_dual(v, s_dual).derivative[..., k]
+        dlo = np.broadcast_to(dk.lower, s_lo_c.shape)
+        dhi = np.broadcast_to(dk.upper, s_lo_c.shape)
         # moving p_k to its upper end loses at most the negative mass, to its lower end the positive
         # each mass: ``pieces`` products and ``pieces - 1`` sums
         neg_mass = (piece_width * np.maximum(-dlo, 0.0)).reshape(lines, pieces).sum(axis=1)
@@ -964,3 +834,22 @@ def verify_boundedness(
         fine_points=int(dl.shape[0]),
         subsets=len(masks) ** 2,
     )
+
+
+def __getattr__(name: str) -> Any:
+    """``IntervalJet``, the former interval forward-mode type of this module: :class:`IntervalDual`, with a warning.
+
+    .. deprecated:: 0.2.0
+       ``IntervalJet`` goes in the next release; use :class:`intervalobs.interval_dual.IntervalDual`
+       (``IntervalDual.variables(lower, upper)`` gives one dual per variable; derivatives are on the last axis).
+    """
+    if name != "IntervalJet":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        "intervalobs.design.lpv.IntervalJet is deprecated and goes in the next release: use "
+        "intervalobs.interval_dual.IntervalDual (IntervalDual.variables(lower, upper) gives one dual per variable; "
+        "derivatives are on the last axis)",
+        FutureWarning,
+        stacklevel=2,
+    )
+    return IntervalDual

@@ -28,18 +28,17 @@ model and PD gains (:func:`controller`) tracking :func:`reference`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..design.lpv import CertifiedVertexBounds, certify_vertex_extremes
-from ..errors import AssumptionError, BoundsError, DataError
-from ..interval import Interval, inflate, interval_matvec_bounds, matvec_bounds, product_bounds
+from ..errors import AssumptionError, BoundsError
+from ..interval import Interval, product_bounds
 from ..simulate import runge_kutta_step
 from ..systems.lpv import LPVSystem, SampledLPVModel, StepEnclosure
-from ..validation import as_box, as_time, as_vector
+from ..validation import as_vector
 
 __all__ = [
     "FAULT_BOUND",
@@ -50,9 +49,7 @@ __all__ = [
     "THETA_BOX",
     "TRUE_PARAMETERS",
     "X0",
-    "AnglesOnlyBounds",
     "ManipulatorModel",
-    "angles_only_bounds",
     "controller",
     "reference",
     "simulate_closed_loop",
@@ -460,8 +457,24 @@ class ManipulatorModel(SampledLPVModel):
         return lo, hi, s * th[..., 2], s * th[..., 3]
 
     @staticmethod
-    def _scale(g_lo: FloatArray, g_hi: FloatArray, f: FloatArray) -> tuple[FloatArray, FloatArray]:
-        return np.minimum(f * g_lo, f * g_hi), np.maximum(f * g_lo, f * g_hi)
+    def _velocity_columns(
+        lo: FloatArray, hi: FloatArray, f3: FloatArray, f4: FloatArray, first: int, row: int
+    ) -> tuple[FloatArray, FloatArray]:
+        """A 4×4 bound with entries ``first … first + 3`` times ``f3, f3, f4, f4`` at rows ``row, row + 1`` of
+        columns 3, 3, 4, 4 (the σ x3 and σ x4 columns of ΔA and ΔA_R)."""
+        al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
+        for k, f in enumerate((f3, f3, f4, f4)):
+            i, j, e = row + k % 2, 2 + k // 2, first + k
+            al[..., i, j], ah[..., i, j] = np.minimum(f * lo[e], f * hi[e]), np.maximum(f * lo[e], f * hi[e])
+        return al, ah
+
+    @staticmethod
+    def _input_block(lo: FloatArray, hi: FloatArray, first: int, row: int) -> tuple[FloatArray, FloatArray]:
+        """A 4×2 bound with entries ``first … first + 3`` row by row at rows ``row, row + 1`` (ΔB, ΔB_R)."""
+        bl, bh = np.zeros((*lo.shape[1:], 4, 2)), np.zeros((*lo.shape[1:], 4, 2))
+        bl[..., row : row + 2, :] = np.moveaxis(lo[first : first + 4].reshape(2, 2, *lo.shape[1:]), (0, 1), (-2, -1))
+        bh[..., row : row + 2, :] = np.moveaxis(hi[first : first + 4].reshape(2, 2, *hi.shape[1:]), (0, 1), (-2, -1))
+        return bl, bh
 
     def rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` at points (14)–(15).
@@ -477,14 +490,7 @@ class ManipulatorModel(SampledLPVModel):
         db_lower, db_upper : numpy.ndarray, shape (..., 4, 2)
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
-        shape = f3.shape
-        al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
-        for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
-            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
-        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
-        for (i, j), e in (((0, 0), 0), ((0, 1), 1), ((1, 0), 2), ((1, 1), 3)):
-            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
-        return al, ah, bl, bh
+        return (*self._velocity_columns(lo, hi, f3, f4, 4, 0), *self._input_block(lo, hi, 0, 0))
 
     def da_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` (11).
@@ -499,10 +505,7 @@ class ManipulatorModel(SampledLPVModel):
         lower, upper : numpy.ndarray, shape (..., 4, 4)
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
-        al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
-        for (i, j), e, f in (((2, 2), 12, f3), ((3, 2), 13, f3), ((2, 3), 14, f4), ((3, 3), 15, f4)):
-            al[..., i, j], ah[..., i, j] = self._scale(lo[e], hi[e], f)
-        return al, ah
+        return self._velocity_columns(lo, hi, f3, f4, 12, 2)
 
     def db_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` (12), (23).
@@ -516,11 +519,8 @@ class ManipulatorModel(SampledLPVModel):
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 2)
         """
-        lo, hi, f3, _ = self._entry_bounds(theta)
-        bl, bh = np.zeros((*f3.shape, 4, 2)), np.zeros((*f3.shape, 4, 2))
-        for (i, j), e in (((2, 0), 8), ((2, 1), 9), ((3, 0), 10), ((3, 1), 11)):
-            bl[..., i, j], bh[..., i, j] = lo[e], hi[e]
-        return bl, bh
+        lo, hi, _, _ = self._entry_bounds(theta)
+        return self._input_block(lo, hi, 8, 2)
 
     def naive_rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
         r"""Bounds of :math:`\Delta A_R` from :math:`R \cdot [\underline{\Delta A}, \overline{\Delta A}]` by
@@ -576,12 +576,32 @@ class ManipulatorModel(SampledLPVModel):
         -------
         lower, upper : numpy.ndarray, shape (M, 4)
         """
-        return self._flow(y[..., :2], y[..., 2:], y[..., 2:], u, h)
+        return self.flow_box_from_angles(y[..., :2], y[..., 2:], y[..., 2:], u, h)
 
-    def _flow(
+    def flow_box_from_angles(
         self, q: FloatArray, w_lower: FloatArray, w_upper: FloatArray, u: FloatArray, h: float
     ) -> tuple[FloatArray, FloatArray]:
-        """:meth:`flow_box` from the angles ``q`` at :math:`t_k` and a box ``[w_lower, w_upper]`` of the velocities."""
+        r""":meth:`flow_box` from the angles at :math:`t_k` and a box of the velocities.
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (M, 2)
+            Joint angles at :math:`t_k` (rad).
+        w_lower, w_upper : numpy.ndarray, shape (M, 2)
+            Box of the joint velocities at :math:`t_k` (rad/s).
+        u, h : numpy.ndarray and float
+            Torque held over the step and step length, as for :meth:`flow_box`.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (M, 4)
+            The flow box, as :meth:`flow_box` returns it.
+
+        Raises
+        ------
+        AssumptionError
+            If :math:`h\max|\ddot q| > 1` (the first-exit argument of :meth:`flow_box` needs it).
+        """
         w_abs = np.maximum(np.abs(w_lower), np.abs(w_upper))
         a0 = self._accel_bound(w_abs + 1.0, u)
         if np.any(h * a0 > 1.0):
@@ -666,12 +686,26 @@ class ManipulatorModel(SampledLPVModel):
         StepEnclosure
         """
         phase = self._phase(flo, fhi)
-        return self._box_enclosure(flo, fhi, u, np.cos(phase), np.sin(phase))
+        return self.box_enclosure_at_phase(flo, fhi, u, np.cos(phase), np.sin(phase))
 
-    def _box_enclosure(
+    def box_enclosure_at_phase(
         self, flo: FloatArray, fhi: FloatArray, u: FloatArray, kappa: Interval, sigma: Interval
     ) -> StepEnclosure:
-        """:meth:`box_enclosure` given the ranges of cos φ and sin φ over the box."""
+        r""":meth:`box_enclosure` given the ranges of cos φ and sin φ over the box.
+
+        Parameters
+        ----------
+        flo, fhi : numpy.ndarray, shape (M, 4)
+            Flow box of the step.
+        u : numpy.ndarray, shape (M, 2)
+            Known torque held over the step.
+        kappa, sigma : Interval, shape (M,)
+            Ranges of :math:`\cos\phi` and :math:`\sin\phi` over the box.
+
+        Returns
+        -------
+        StepEnclosure
+        """
         b = self.nominal[1]
         w1l, w1h, w2l, w2h = flo[..., 2], fhi[..., 2], flo[..., 3], fhi[..., 3]
         rx_lo, rx_hi = self._rx(kappa, flo, fhi)
@@ -690,9 +724,7 @@ class ManipulatorModel(SampledLPVModel):
         al, ah = np.zeros((*shape, 4, 4)), np.zeros((*shape, 4, 4))
         for (i, j), e, f in (((0, 2), 4, f3), ((1, 2), 5, f3), ((0, 3), 6, f4), ((1, 3), 7, f4)):
             al[..., i, j], ah[..., i, j] = product_bounds(f[0], f[1], g_lo[e], g_hi[e])
-        bl, bh = np.zeros((*shape, 4, 2)), np.zeros((*shape, 4, 2))
-        bl[..., :2, :] = g_lo[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
-        bh[..., :2, :] = g_hi[:4].reshape(2, 2, *shape).transpose(*range(2, 2 + len(shape)), 0, 1)
+        bl, bh = self._input_block(g_lo, g_hi, 0, 0)
         return StepEnclosure(flo, fhi, rate_lo, rate_hi, rx_lo, rx_hi, al, ah, bl, bh, bl, bh)
 
     def sample_parameters(self, runs: int, rng: np.random.Generator) -> FloatArray:
@@ -710,255 +742,3 @@ class ManipulatorModel(SampledLPVModel):
         numpy.ndarray, shape (runs, 3)
         """
         return np.asarray(rng.uniform(self.p_lower, self.p_upper, size=(runs, 3)))
-
-
-# --------------------------------------------------------------------------------------------------
-# Only the joint angles measured (n_y = 2)
-# --------------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class AnglesOnlyBounds:
-    r"""Result of :func:`angles_only_bounds`.
-
-    Attributes
-    ----------
-    lower, upper : numpy.ndarray, shape (M, T, 4)
-        Box of :math:`x(t_k) = (q, \dot q)` given :math:`y_0, \dots, y_k` (angles exact, velocities
-        bounded).
-    signal_lower, signal_upper : numpy.ndarray, shape (M, T, 2)
-        Consistency signals of the momentum box with the angle increment, known at :math:`t_k`
-        (row 0: ``inf``, nothing to compare yet). Both are :math:`\ge 0` for every admissible
-        realisation of the run's fault box; a negative value proves that the measured angles are not
-        consistent with it.
-    """
-
-    lower: FloatArray
-    upper: FloatArray
-    signal_lower: FloatArray
-    signal_upper: FloatArray
-
-
-def _mass(nominal: tuple[float, float, float], kappa: FloatArray) -> FloatArray:
-    """Nominal :math:`M(\\phi)` at points :math:`\\kappa = \\cos\\phi`, shape (..., 2, 2)."""
-    a, b, c = nominal
-    out = np.empty((*kappa.shape, 2, 2))
-    out[..., 0, 0], out[..., 1, 1] = a, c
-    out[..., 0, 1] = out[..., 1, 0] = b * kappa
-    return out
-
-
-def angles_only_bounds(
-    model: ManipulatorModel,
-    t: ArrayLike,
-    q: ArrayLike,
-    u: ArrayLike,
-    velocity_box: tuple[ArrayLike, ArrayLike],
-    fault_box: tuple[ArrayLike, ArrayLike],
-    lam: float = LAMBDA,
-) -> AnglesOnlyBounds:
-    r"""Interval estimator of the manipulator's velocities from the joint angles only (:math:`C = (I_2\ 0)`).
-
-    The paper's observer needs :math:`\dot q` measured: it is part of the scheduling vector
-    :math:`\vartheta = x`, and :math:`CB_{un} = 0` for :math:`C = (I_2\ 0)`. Here the scheduling
-    variable :math:`\phi = q_2 - q_1` is measured and the velocities enter only through boxes
-    (interval scheduling). Coordinates: the nominal momentum :math:`p = M(\phi)\dot q`, whose rate is
-    the first two rows of the paper's :math:`\tfrac{d}{dt}(Rx)` (:meth:`ManipulatorModel.box_enclosure`):
-
-    .. math:: \dot p = (b\sigma\dot q_1\dot q_2 + u_1,\, -b\sigma\dot q_1\dot q_2 + u_2)
-              + \Delta A_R x + \Delta B_R u + (I + \Delta B_{un,R})u_{un}.
-
-    On the step :math:`[t_k, t_{k+1}]`, with :math:`q_k` measured,
-    :math:`\zeta = M(\phi)(\dot q - \lambda(q - q_k))` obeys :math:`\dot\zeta = -\lambda\zeta + \psi`,
-    :math:`\psi = \dot p - \lambda(\dot M + \lambda M)(q - q_k)`, :math:`\dot M = -b\sigma\dot\phi
-    \left(\begin{smallmatrix}0&1\\1&0\end{smallmatrix}\right)` (a constant Metzler :math:`F = -\lambda I`
-    in coordinates :math:`R(\phi)` that depend on the measured angle only). With :math:`X_k` a box of
-    :math:`x(t)` on the step (:meth:`ManipulatorModel.flow_box` from the angles and the velocity box),
-    :math:`\psi` is bounded over :math:`X_k` by interval arithmetic, and
-
-    .. math:: p_{k+1} \in e^{-\lambda h}P_k + \tfrac{1 - e^{-\lambda h}}{\lambda}[\underline\psi_k,
-              \overline\psi_k] + \lambda M(\phi_{k+1})(q_{k+1} - q_k),\qquad
-              \dot q_k \in M(\phi_k)^{-1}P_k \ \text{(exact hull)}.
-
-    The angle increment also bounds :math:`p_k` (one step late): :math:`M(\phi_k)(q_{k+1} - q_k) =
-    \int p\,dt + \int (M(\phi_k) - M(\phi))\dot q\,dt \in h p_k + \tfrac{h^2}{2}[\dot p] +
-    h\,b(\kappa_k - \cos\Phi_k)\left(\begin{smallmatrix}0&1\\1&0\end{smallmatrix}\right)\dot Q_k`
-    (weights :math:`h - s \ge 0`), a box :math:`C_k` of :math:`p_k`. The estimator intersects
-    :math:`P_k` with :math:`C_k` before propagating; the signals are :math:`\overline{C}_k -
-    \underline{P}_k` and :math:`\overline{P}_k - \underline{C}_k`: negative means the intersection is
-    empty, i.e. the record is inconsistent with the run's fault box. The run then restarts from
-    :math:`C_k` alone: its box means nothing any more, but it stays finite, so a refuted hypothesis
-    does not stop the other runs of the batch (the flow box's :math:`h\max|\ddot q| \le 1`).
-    All boxes are widened by :func:`~intervalobs.interval.inflate`.
-
-    Soundness needs only the model, the parameter box, :math:`u_{un} \in` ``fault_box`` and
-    :math:`h\max|\ddot q| \le 1` (checked); :math:`\lambda > 0` makes the widths bounded
-    (the velocity box enters :math:`\psi` only through the Coriolis terms, :math:`\Delta A_R` and
-    :math:`O(h)` terms).
-
-    Parameters
-    ----------
-    model : ManipulatorModel
-        The manipulator (nominal parameters, certified parameter box, fault bound of the flow box).
-    t : array_like, shape (T,)
-        Uniform sample times (s), T ≥ 2.
-    q : array_like, shape (M, T, 2)
-        Measured joint angles of M runs (rad).
-    u : array_like, shape (M, T, 2)
-        Known torque, held over each step (N·m).
-    velocity_box : tuple of array_like, shape (2,)
-        Prior box of :math:`\dot q(t_0)` (rad/s).
-    fault_box : tuple of array_like, shape (2,) or (M, 2)
-        Box of :math:`u_{un}` assumed by each run, lower ≤ 0 ≤ upper, inside the model's fault bound.
-    lam : float
-        :math:`\lambda > 0` (1/s); the paper's λ by default. The angle increments (the boxes
-        :math:`C_k`) dominate the widths; a large λ lets the injection :math:`\lambda M(q_{k+1} - q_k)`
-        absorb a fault before the signals see it.
-
-    Returns
-    -------
-    AnglesOnlyBounds
-
-    Raises
-    ------
-    DataError
-        If shapes, the time grid, the fault box or ``lam`` are invalid.
-    AssumptionError
-        If :math:`h\max|\ddot q| > 1` on some step.
-    """
-    tt, qs, us, (f_lo, f_hi) = _angles_only_record(model, t, q, u, fault_box, lam)
-    h, runs = float(tt[1] - tt[0]), qs.shape[0]
-    v_lo, v_hi = as_box("velocity_box", velocity_box, 2)
-    decay, gain = float(np.exp(-lam * h)), float(-np.expm1(-lam * h) / lam)
-    kap_all, mass, inv, (meas_all, meas_scale), (shift_all, shift_scale) = _angle_terms(model.nominal, qs, h, lam)
-    lower, upper = np.empty((runs, tt.size, 4)), np.empty((runs, tt.size, 4))
-    lower[..., :2] = upper[..., :2] = qs
-    sig_lo, sig_hi = np.full((runs, tt.size, 2), np.inf), np.full((runs, tt.size, 2), np.inf)
-    p_lo, p_hi = inflate(*matvec_bounds(mass[:, 0], np.broadcast_to(v_lo, (runs, 2)), np.broadcast_to(v_hi, (runs, 2))))
-    for k in range(tt.size):
-        w_lo, w_hi = inflate(*matvec_bounds(inv[:, k], p_lo, p_hi))
-        lower[:, k, 2:], upper[:, k, 2:] = w_lo, w_hi
-        if k + 1 == tt.size:
-            break
-        (psi_lo, psi_hi), (m_lo, m_hi) = _angles_only_step_bounds(
-            model,
-            qs[:, k],
-            us[:, k],
-            (w_lo, w_hi),
-            (f_lo, f_hi),
-            lam,
-            h,
-            kap_all[:, k, None],
-            meas_all[:, k],
-            meas_scale[:, k],
-        )
-        sig_lo[:, k + 1], sig_hi[:, k + 1] = m_hi - p_lo, p_hi - m_lo
-        ok = np.all((m_hi >= p_lo) & (m_lo <= p_hi), axis=-1)[:, None]
-        p_lo, p_hi = np.where(ok, np.maximum(p_lo, m_lo), m_lo), np.where(ok, np.minimum(p_hi, m_hi), m_hi)
-        # propagate ζ over the step and shift to p_{k+1}
-        shift = shift_all[:, k]
-        size = decay * np.maximum(np.abs(p_lo), np.abs(p_hi)) + gain * np.maximum(np.abs(psi_lo), np.abs(psi_hi))
-        p_lo, p_hi = inflate(
-            decay * p_lo + gain * psi_lo + shift, decay * p_hi + gain * psi_hi + shift, scale=size + shift_scale[:, k]
-        )
-    return AnglesOnlyBounds(lower, upper, sig_lo, sig_hi)
-
-
-def _angles_only_record(
-    model: ManipulatorModel,
-    t: ArrayLike,
-    q: ArrayLike,
-    u: ArrayLike,
-    fault_box: tuple[ArrayLike, ArrayLike],
-    lam: float,
-) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray]]:
-    """The checked record of :func:`angles_only_bounds`: times, angles, torques and each run's fault box."""
-    tt = as_time("t", t)
-    qs = np.asarray(q, dtype=float)
-    us = np.asarray(u, dtype=float)
-    if tt.size < 2:
-        raise DataError(f"t: expected at least 2 sample times, got {tt.size}")
-    h = float(tt[1] - tt[0])
-    if not np.allclose(np.diff(tt), h, rtol=1e-9, atol=0.0):  # the observers' SPACING_TOLERANCE
-        raise DataError("t: expected uniform spacing")
-    if qs.ndim != 3 or qs.shape[1:] != (tt.size, 2) or us.shape != qs.shape or not np.all(np.isfinite(qs + us)):
-        raise DataError(f"q, u: expected finite arrays of shape (M, {tt.size}, 2), got {qs.shape}, {us.shape}")
-    runs = qs.shape[0]
-    f_lo = np.broadcast_to(np.asarray(fault_box[0], dtype=float), (runs, 2))
-    f_hi = np.broadcast_to(np.asarray(fault_box[1], dtype=float), (runs, 2))
-    if np.any(f_lo > 0) or np.any(f_hi < 0) or np.any(np.maximum(-f_lo, f_hi) > model.fault_bound):
-        raise DataError(
-            f"fault_box: expected lower <= 0 <= upper within ±{model.fault_bound:g}, "
-            f"got {f_lo.tolist()}, {f_hi.tolist()}"
-        )
-    if not (np.isfinite(lam) and lam > 0):
-        raise DataError(f"lam: expected a positive finite λ, got {lam!r}")
-    return tt, qs, us, (f_lo, f_hi)
-
-
-def _angles_only_step_bounds(
-    model: ManipulatorModel,
-    qk: FloatArray,
-    uk: FloatArray,
-    velocity: tuple[FloatArray, FloatArray],
-    fault: tuple[FloatArray, FloatArray],
-    lam: float,
-    h: float,
-    kap: FloatArray,
-    meas: FloatArray,
-    meas_scale: FloatArray,
-) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
-    r"""Bounds of ψ over the step from ``t_k`` and the box ``C_k`` of ``p_k`` from the angle increment.
-
-    ``kap`` is :math:`\kappa_k` (shape (M, 1)), ``meas`` is :math:`M(\phi_k)(q_{k+1} - q_k)/h` and
-    ``meas_scale`` the size of its terms (for the outward margin); see :func:`angles_only_bounds`.
-    """
-    b = model.nominal[1]
-    diag = lam * lam * np.array([model.nominal[0], model.nominal[2]])
-    eye = np.eye(2)
-    flo, fhi = model._flow(qk, velocity[0], velocity[1], uk, h)
-    phase = model._phase(flo, fhi)
-    kappa, sigma = np.cos(phase), np.sin(phase)
-    enc = model._box_enclosure(flo, fhi, uk, kappa, sigma)
-    # ṗ over the step; ΔA_R has nonzero entries only in rows 1-2, columns 3-4
-    da = interval_matvec_bounds(enc.da_lower[:, :2, 2:], enc.da_upper[:, :2, 2:], flo[:, 2:], fhi[:, 2:])
-    db = interval_matvec_bounds(enc.db_lower[:, :2], enc.db_upper[:, :2], uk, uk)
-    fb = interval_matvec_bounds(eye + enc.dbun_lower[:, :2], eye + enc.dbun_upper[:, :2], fault[0], fault[1])
-    pd_lo = enc.rate_lower[:, :2] + da[0] + db[0] + fb[0]
-    pd_hi = enc.rate_upper[:, :2] + da[1] + db[1] + fb[1]
-    # ψ = ṗ − λ(Ṁ + λM)(q − q_k): diagonal λ²(a, c), off-diagonal λb(λκ − σφ̇); q − q_k ∈ [dl, dh] ∋ 0
-    s_lo, s_hi = product_bounds(sigma.lower, sigma.upper, flo[:, 3] - fhi[:, 2], fhi[:, 3] - flo[:, 2])
-    off_lo, off_hi = lam * b * (lam * kappa.lower - s_hi), lam * b * (lam * kappa.upper - s_lo)
-    dl, dh = flo[:, :2] - qk, fhi[:, :2] - qk
-    o_lo, o_hi = product_bounds(off_lo[:, None], off_hi[:, None], dl[:, ::-1], dh[:, ::-1])
-    psi = (pd_lo - diag * dh - o_hi, pd_hi - diag * dl - o_lo)
-    # the angle increment bounds p_k (box C_k): M(φ_k)Δq/h − (h/2)[ṗ] − b(κ_k − cos Φ)J[q̇]
-    e_lo, e_hi = product_bounds(
-        b * (kap - kappa.upper[:, None]), b * (kap - kappa.lower[:, None]), flo[:, [3, 2]], fhi[:, [3, 2]]
-    )
-    return psi, inflate(meas - 0.5 * h * pd_hi - e_hi, meas - 0.5 * h * pd_lo - e_lo, scale=meas_scale)
-
-
-def _angle_terms(
-    nominal: tuple[float, float, float], qs: FloatArray, h: float, lam: float
-) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
-    r"""Everything of :func:`angles_only_bounds` that depends on the measured angles only, for all samples at once.
-
-    Returns :math:`\kappa` (M, T), :math:`M(\phi)` and its inverse (M, T, 2, 2), then
-    :math:`M(\phi_k)(q_{k+1} - q_k)/h` and :math:`\lambda M(\phi_{k+1})(q_{k+1} - q_k)` (M, T - 1, 2), each with
-    the size of its terms (for the outward margin).
-    """
-    a, b, c = nominal
-    kap_all = np.cos(qs[..., 1] - qs[..., 0])  # (M, T)
-    mass = _mass(nominal, kap_all)  # (M, T, 2, 2)
-    det = a * c - (b * kap_all) ** 2
-    inv = np.stack([np.full_like(kap_all, c), -b * kap_all, -b * kap_all, np.full_like(kap_all, a)], axis=-1)
-    inv = inv.reshape(mass.shape)
-    inv = inv / det[..., None, None]
-    dq_all = np.diff(qs, axis=1)  # (M, T - 1, 2)
-    q_abs = np.abs(qs[:, :-1]) + np.abs(qs[:, 1:])
-    meas_all = np.einsum("mkij,mkj->mki", mass[:, :-1], dq_all) / h  # M(φ_k)(q_{k+1} − q_k)/h
-    meas_scale = np.abs(meas_all) + np.einsum("mkij,mkj->mki", np.abs(mass[:, :-1]), q_abs) / h
-    shift_all = lam * np.einsum("mkij,mkj->mki", mass[:, 1:], dq_all)  # λM(φ_{k+1})(q_{k+1} − q_k)
-    shift_scale = np.abs(shift_all) + lam * np.einsum("mkij,mkj->mki", np.abs(mass[:, 1:]), q_abs)
-    return kap_all, mass, inv, (meas_all, meas_scale), (shift_all, shift_scale)

@@ -1,5 +1,6 @@
 """Observers, one module per family, all on the protocol of :mod:`intervalobs.observers.base`."""
 
+from .angles_only import AnglesOnlyObserver
 from .base import Observer, ObserverState
 from .continuous_nonlinear import ContinuousNonlinearObserver
 from .fir import FiniteMemoryObserver
@@ -18,6 +19,7 @@ from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
     "GSISIO",
+    "AnglesOnlyObserver",
     "ContinuousNonlinearObserver",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",

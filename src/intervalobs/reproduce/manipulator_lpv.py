@@ -5,7 +5,7 @@ paper's λ = 1 on a coarse grid, verified on the paper's 10 000-point grid for e
 same with the naive bounds R·[ΔA] (infeasible at λ = 1). Simulation: the four scenarios of Section 5
 (faults of 5 N·m from t = 20 s), truth by RK4 at 1 ms with our computed-torque controller, the
 sampled interval UIO at 1 ms. Section ``angles_only``: the same four records with only the joint
-angles measured (n_y = 2): velocity bounds of :func:`~intervalobs.examples.manipulator.angles_only_bounds`
+angles measured (n_y = 2): velocity bounds of :class:`~intervalobs.observers.angles_only.AnglesOnlyObserver`
 and isolation by a bank of consistency tests (the paper's signals cannot isolate: C B_un = 0). Also
 defines ``CAMPAIGN`` for ``intervalobs campaign manipulator-lpv``.
 """
@@ -37,9 +37,9 @@ from ..examples.manipulator import (
     TRUE_PARAMETERS,
     X0,
     ManipulatorModel,
-    angles_only_bounds,
     simulate_closed_loop,
 )
+from ..observers.angles_only import AnglesOnlyObserver
 from ..observers.lpv import LPVIntervalUIO
 from ..systems.bounds import Bounds
 from .contract import Example, base_summary, write_reproduction
@@ -149,7 +149,7 @@ def angles_only_analysis(
 ) -> tuple[dict[str, Any], dict[str, FloatArray]]:
     """The four scenarios with only the joint angles measured: velocity bounds and isolation.
 
-    One run of :func:`~intervalobs.examples.manipulator.angles_only_bounds` per scenario and fault box:
+    One :class:`~intervalobs.observers.angles_only.AnglesOnlyObserver` bank, a run per scenario and fault box:
     ``±5`` N·m on both faults (the state estimator, sound in every scenario) and, for the isolation,
     the box of each hypothesis of :data:`HYPOTHESES` (fault j fixed at 0). A negative consistency
     signal of hypothesis j proves fault j.
@@ -174,16 +174,18 @@ def angles_only_analysis(
     boxes = np.array([[[-f, -f], [f, f]], [[0.0, -f], [0.0, f]], [[-f, 0.0], [f, 0.0]]])
     runs = x.shape[0]
     t0 = time.perf_counter()
-    res = angles_only_bounds(
+    bank = AnglesOnlyObserver(
         model,
-        t,
-        np.concatenate([x[..., :2]] * 3),
-        np.concatenate([u] * 3),
+        float(t[1] - t[0]),
         (np.asarray(X0)[2:] - X0_RADIUS[2:], np.asarray(X0)[2:] + X0_RADIUS[2:]),
         (np.repeat(boxes[:, 0], runs, axis=0), np.repeat(boxes[:, 1], runs, axis=0)),
+        decay=LAMBDA,
+    )
+    res, signal_lower, signal_upper = bank.run_with_signals(
+        t, np.concatenate([x[..., :2]] * 3), np.concatenate([u] * 3)
     )
     elapsed = time.perf_counter() - t0
-    signal = np.minimum(res.signal_lower, res.signal_upper).min(axis=-1)  # (3·runs, T)
+    signal = np.minimum(signal_lower, signal_upper).min(axis=-1)  # (3·runs, T)
     hyp = np.stack([signal[runs : 2 * runs], signal[2 * runs :]], axis=-1)  # (runs, T, 2): column j = hypothesis j
     pre = t <= FAULT_ONSET
     settled = t >= 0.1
@@ -209,7 +211,7 @@ def angles_only_analysis(
         }
     section = {
         "measured": "joint angles only, y = (q1, q2), C = (I2 0), n_y = 2",
-        "estimator": "angles_only_bounds: nominal momentum p = M(φ)q̇, ζ = M(φ)(q̇ − λ(q − q_k)) on each step "
+        "estimator": "AnglesOnlyObserver: nominal momentum p = M(φ)q̇, ζ = M(φ)(q̇ − λ(q − q_k)) on each step "
         "(F = −λI), ψ over the step's flow box (velocities from the estimated box: interval scheduling), "
         "intersected with the box of p_k given by the angle increment",
         "lambda": LAMBDA,

@@ -32,6 +32,7 @@ from ..errors import BoundsError, DimensionError
 from ..inclusion import MatrixFunction, VectorFunction, evaluate_function
 from ..interval_dual import automatic_jacobian
 from ..validation import as_matrix, as_names
+from .dimensions import ModelDimensions
 
 __all__ = ["ContinuousNonlinearSystem"]
 
@@ -40,7 +41,7 @@ DynamicsFunction = Callable[[Sequence[Any], Sequence[Any], Sequence[Any]], Seque
 OutputFunction = Callable[[Sequence[Any], Sequence[Any]], Sequence[Any]]
 
 
-class ContinuousNonlinearSystem:
+class ContinuousNonlinearSystem(ModelDimensions):
     r"""A continuous-time nonlinear system with sampled outputs (``dt`` is None, as for :class:`LTISystem`).
 
     Parameters
@@ -111,52 +112,29 @@ class ContinuousNonlinearSystem:
         for name, value in (("n", n), ("m", m), ("n_params", n_params)):
             if not isinstance(value, (int, np.integer)) or value < (1 if name == "n" else 0):
                 raise DimensionError(f"{name}: expected an integer >= {1 if name == 'n' else 0}, got {value!r}")
-        self._n, self._m, self._n_params = int(n), int(m), int(n_params)
-        self.E = np.zeros((self._n, 0)) if E is None else as_matrix("E", E, (self._n, None))
+        self._n_params = int(n_params)
+        self.E = np.zeros((n, 0)) if E is None else as_matrix("E", E, (n, None))
         self.f, self.g = f, g
-        self.domain = self._domain(domain)
-        zero_x, zero_u, zero_p = np.zeros(self._n), np.zeros(self._m), np.ones(self._n_params)
+        self.domain = self._domain(domain, n)
+        zero_x, zero_u, zero_p = np.zeros(n), np.zeros(m), np.ones(self._n_params)
+        p = int(evaluate_function(lambda x: g(x, list(zero_u)), zero_x, None, "g").shape[-1])
+        self._set_dimensions(n=n, m=m, p=p, nw=self.E.shape[1], nv=p)
         self.evaluate_f(zero_x, zero_u, zero_p)
-        self._p = int(evaluate_function(lambda x: g(x, list(zero_u)), zero_x, None, "g").shape[-1])
-        self.state_names = as_names("state_names", state_names, self._n, "x")
-        self.output_names = as_names("output_names", output_names, self._p, "y")
-        self.input_names = as_names("input_names", input_names, self._m, "u")
+        self.state_names = as_names("state_names", state_names, self.n, "x")
+        self.output_names = as_names("output_names", output_names, p, "y")
+        self.input_names = as_names("input_names", input_names, self.m, "u")
 
-    def _domain(self, domain: tuple[ArrayLike, ArrayLike] | None) -> tuple[FloatArray, FloatArray]:
+    @staticmethod
+    def _domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[FloatArray, FloatArray]:
         if domain is None:
-            return np.full(self._n, -np.inf), np.full(self._n, np.inf)
+            return np.full(n, -np.inf), np.full(n, np.inf)
         if not isinstance(domain, (tuple, list)) or len(domain) != 2:
             raise BoundsError(f"domain: expected a (lower, upper) pair, got {type(domain).__name__}")
-        lower = np.broadcast_to(np.asarray(domain[0], dtype=float), (self._n,)).copy()
-        upper = np.broadcast_to(np.asarray(domain[1], dtype=float), (self._n,)).copy()
+        lower = np.broadcast_to(np.asarray(domain[0], dtype=float), (n,)).copy()
+        upper = np.broadcast_to(np.asarray(domain[1], dtype=float), (n,)).copy()
         if np.any(np.isnan(lower) | np.isnan(upper)) or np.any(lower > upper):
             raise BoundsError(f"domain: expected lower <= upper without NaN, got {lower.tolist()}, {upper.tolist()}")
         return lower, upper
-
-    @property
-    def n(self) -> int:
-        """Number of states."""
-        return self._n
-
-    @property
-    def m(self) -> int:
-        """Number of known inputs."""
-        return self._m
-
-    @property
-    def p(self) -> int:
-        """Number of outputs."""
-        return self._p
-
-    @property
-    def nw(self) -> int:
-        """Number of disturbance channels (columns of ``E``)."""
-        return int(self.E.shape[1])
-
-    @property
-    def nv(self) -> int:
-        """Number of measurement-noise channels (one per output)."""
-        return self._p
 
     @property
     def n_params(self) -> int:
@@ -181,14 +159,14 @@ class ContinuousNonlinearSystem:
             Component-convention function of ``n + n_params`` components.
         """
         ua = np.asarray(u, dtype=float)
-        inputs = [ua[..., j] for j in range(self._m)]
-        n = self._n
+        inputs = [ua[..., j] for j in range(self.m)]
+        n = self.n
 
         def field(z: Sequence[Any]) -> list[Any]:
             rates = list(self.f(list(z[:n]), inputs, list(z[n:])))
             if len(rates) != n:
                 raise DimensionError(f"f: expected {n} components, got {len(rates)}")
-            return rates + [0.0] * self._n_params
+            return rates + [0.0] * self.n_params
 
         return field
 
@@ -206,8 +184,8 @@ class ContinuousNonlinearSystem:
             Component-convention function of ``n + n_params`` components with p outputs.
         """
         ua = np.asarray(u, dtype=float)
-        inputs = [ua[..., j] for j in range(self._m)]
-        n = self._n
+        inputs = [ua[..., j] for j in range(self.m)]
+        n = self.n
         return lambda z: self.g(list(z[:n]), inputs)
 
     def jacobians(self, u: ArrayLike) -> tuple[MatrixFunction, MatrixFunction]:
@@ -222,7 +200,7 @@ class ContinuousNonlinearSystem:
         -------
         field_jacobian, output_jacobian : callable
         """
-        size = self._n + self._n_params
+        size = self.n + self.n_params
         return automatic_jacobian(self.augmented_field(u), size), automatic_jacobian(self.output_map(u), size)
 
     def evaluate_f(self, x: ArrayLike, u: ArrayLike, p: ArrayLike) -> FloatArray:
@@ -244,11 +222,11 @@ class ContinuousNonlinearSystem:
         xa, ua, pa = (np.asarray(a, dtype=float) for a in (x, u, p))
         out = self.f(
             [xa[..., j] for j in range(xa.shape[-1])],
-            [ua[..., j] for j in range(self._m)],
-            [pa[..., j] for j in range(self._n_params)],
+            [ua[..., j] for j in range(self.m)],
+            [pa[..., j] for j in range(self.n_params)],
         )
-        if len(out) != self._n:
-            raise DimensionError(f"f: expected {self._n} components, got {len(out)}")
+        if len(out) != self.n:
+            raise DimensionError(f"f: expected {self.n} components, got {len(out)}")
         lead = np.broadcast_shapes(xa.shape[:-1], ua.shape[:-1], pa.shape[:-1])
         return np.stack([np.broadcast_to(np.asarray(c, dtype=float), lead) for c in out], axis=-1)
 
@@ -267,7 +245,7 @@ class ContinuousNonlinearSystem:
         numpy.ndarray, shape (..., p)
         """
         ua = np.asarray(u, dtype=float)
-        return evaluate_function(lambda x: self.g(x, [ua[..., j] for j in range(self._m)]), x, None, "g")
+        return evaluate_function(lambda x: self.g(x, [ua[..., j] for j in range(self.m)]), x, None, "g")
 
     def __repr__(self) -> str:
         return f"ContinuousNonlinearSystem(n={self.n}, m={self.m}, p={self.p}, nw={self.nw}, n_params={self.n_params})"

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import AssumptionError, BoundsError, DimensionError, IntervalObserverError
 from ..interval import Interval
 from ..validation import as_box, as_matrix, as_vector
+from .dimensions import ModelDimensions
 
 __all__ = ["LPVSystem", "SampledLPVModel", "StepEnclosure"]
 
@@ -38,7 +39,7 @@ MatrixFunction = Callable[..., Any]
 BoundSpec = tuple[ArrayLike, ArrayLike] | Callable[..., Any]
 
 
-class LPVSystem:
+class LPVSystem(ModelDimensions):
     r"""An uncertain continuous-time LPV system, validated on construction.
 
     Matrix functions follow the library's component convention (:mod:`intervalobs.inclusion`): they
@@ -103,26 +104,26 @@ class LPVSystem:
         a0 = self._eval("A", A, points)
         if a0.shape[1] != a0.shape[2]:
             raise DimensionError(f"A: expected square matrices (n×n), got shape {a0.shape[1:]}")
-        self.n = a0.shape[1]
-        b0 = self._eval("B", B, points, rows=self.n)
-        self.m = b0.shape[2]
-        self.C = as_matrix("C", C, (None, self.n))
-        self.p = self.C.shape[0]
-        if np.linalg.matrix_rank(self.C) != self.p:
-            raise AssumptionError(f"C: expected full row rank {self.p}, got rank {np.linalg.matrix_rank(self.C)}")
-        self.q = 0
+        n = a0.shape[1]
+        m = self._eval("B", B, points, rows=n).shape[2]
+        self.C = as_matrix("C", C, (None, n))
+        p = self.C.shape[0]
+        if np.linalg.matrix_rank(self.C) != p:
+            raise AssumptionError(f"C: expected full row rank {p}, got rank {np.linalg.matrix_rank(self.C)}")
+        q = 0
         if B_un is not None:
-            bu = self._eval("B_un", B_un, points, rows=self.n)
-            self.q = bu.shape[2]
+            bu = self._eval("B_un", B_un, points, rows=n)
+            q = bu.shape[2]
             for k, mat in enumerate(bu):
                 r_b, r_cb = np.linalg.matrix_rank(mat), np.linalg.matrix_rank(self.C @ mat)
-                if r_b != self.q or r_cb != self.q:
+                if r_b != q or r_cb != q:
                     raise AssumptionError(
-                        f"B_un: expected rank(B_un) = rank(C B_un) = {self.q} (problem statement, "
+                        f"B_un: expected rank(B_un) = rank(C B_un) = {q} (problem statement, "
                         f"n_un <= n_y), got {r_b} and {r_cb} at theta = {points[k].tolist()}"
                     )
-            if self.q > self.p:
-                raise AssumptionError(f"B_un: expected n_un <= n_y = {self.p}, got n_un = {self.q}")
+            if q > p:
+                raise AssumptionError(f"B_un: expected n_un <= n_y = {p}, got n_un = {q}")
+        self._set_dimensions(n=n, m=m, p=p, q=q, nw=n, nv=0)
         self.dA = self._bound_spec("dA", dA, self.n)
         self.dB = self._bound_spec("dB", dB, self.m)
         self.dB_un = self._bound_spec("dB_un", dB_un, self.q)
@@ -130,16 +131,6 @@ class LPVSystem:
             if spec is not None:
                 self._check_bounds(name, spec, points, cols)
         self.c = np.zeros(self.n) if c is None else as_vector("c", c, self.n)
-
-    @property
-    def nw(self) -> int:
-        """Number of disturbance channels (``d`` enters every state)."""
-        return self.n
-
-    @property
-    def nv(self) -> int:
-        """Number of measurement-noise channels (none: :math:`y = Cx`)."""
-        return 0
 
     def test_points(self) -> FloatArray:
         """The centre and up to 63 vertices of ``theta_box`` used for validation.

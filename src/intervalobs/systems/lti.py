@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ArgumentTypeError, BoundsError, DimensionError
 from ..validation import as_matrix, as_names, as_positive
+from .dimensions import ModelDimensions
 
 __all__ = ["LTISystem"]
 
@@ -28,7 +29,7 @@ FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
 
 
-class LTISystem:
+class LTISystem(ModelDimensions):
     """A linear time-invariant system with optional elementwise interval uncertainty on ``A``.
 
     Parameters
@@ -56,7 +57,9 @@ class LTISystem:
     Attributes
     ----------
     n, m, p, nw, nv : int
-        Numbers of states, known inputs, outputs, process-noise and measurement-noise channels.
+        Numbers of states, known inputs, outputs, process-noise and measurement-noise channels
+        (:class:`~intervalobs.systems.dimensions.ModelDimensions`; ``q`` is 0: unknown inputs enter
+        through the ``D`` of :class:`~intervalobs.observers.unknown_input.UnknownInputIntervalObserver`).
     continuous : bool
         True when ``dt`` is None.
     state_names, output_names, input_names : tuple of str
@@ -89,6 +92,7 @@ class LTISystem:
         self.B = np.zeros((n, 0)) if B is None else as_matrix("B", B, (n, None))
         self.E = np.eye(n) if E is None else as_matrix("E", E, (n, None))
         self.F = np.eye(self.C.shape[0]) if F is None else as_matrix("F", F, (self.C.shape[0], None))
+        self._set_dimensions(n=n, m=self.B.shape[1], p=self.C.shape[0], nw=self.E.shape[1], nv=self.F.shape[1])
         self.dt = None if dt is None else as_positive("dt", dt, "a positive sampling period or None")
         self.dA: BoxPair | None = None
         if dA is not None:
@@ -102,31 +106,6 @@ class LTISystem:
         self.state_names = as_names("state_names", state_names, n, "x")
         self.output_names = as_names("output_names", output_names, self.C.shape[0], "y")
         self.input_names = as_names("input_names", input_names, self.B.shape[1], "u")
-
-    @property
-    def n(self) -> int:
-        """Number of states."""
-        return int(self.A.shape[0])
-
-    @property
-    def m(self) -> int:
-        """Number of known inputs."""
-        return int(self.B.shape[1])
-
-    @property
-    def p(self) -> int:
-        """Number of outputs."""
-        return int(self.C.shape[0])
-
-    @property
-    def nw(self) -> int:
-        """Number of process-noise channels."""
-        return int(self.E.shape[1])
-
-    @property
-    def nv(self) -> int:
-        """Number of measurement-noise channels."""
-        return int(self.F.shape[1])
 
     @property
     def continuous(self) -> bool:

@@ -34,13 +34,14 @@ from ..inclusion import (
 )
 from ..interval_dual import automatic_jacobian
 from ..validation import as_matrix
+from .dimensions import ModelDimensions
 
 __all__ = ["NonlinearSystem"]
 
 FloatArray = NDArray[np.float64]
 
 
-class NonlinearSystem:
+class NonlinearSystem(ModelDimensions):
     """A nonlinear discrete-time system with unknown inputs, Khajenejad & Yong, eq. (3).
 
     Parameters
@@ -68,8 +69,9 @@ class NonlinearSystem:
     Attributes
     ----------
     n, m, p, q, nw, nv : int
-        States, known inputs, outputs, unknown inputs, process-noise (= n) and measurement-noise
-        (= p) channels.
+        States, known inputs, outputs (the paper's l), unknown inputs (the paper's p), process-noise
+        (= n) and measurement-noise (= p) channels
+        (:class:`~intervalobs.systems.dimensions.ModelDimensions`).
     f_jacobian, g_jacobian : callable
         The Jacobians used for bounds (the user's, or the automatic ones).
     jacobian_source : dict
@@ -106,6 +108,7 @@ class NonlinearSystem:
         self.B = np.zeros((n, 0)) if B is None else as_matrix("B", B, (n, None))
         m = self.B.shape[1]
         self.D = np.zeros((p, m)) if D is None else as_matrix("D", D, (p, m))
+        self._set_dimensions(n=n, m=m, p=p, q=q, nw=n, nv=p)
         self.f, self.g = f, g
         self.jacobian_source = {
             "f": "automatic" if f_jacobian is None else "user",
@@ -125,36 +128,6 @@ class NonlinearSystem:
         evaluate_matrix(self.g_jacobian, zero, (p, n), "g_jacobian")
         if check_jacobians:
             self._check_jacobians()
-
-    @property
-    def n(self) -> int:
-        """Number of states."""
-        return int(self.G.shape[0])
-
-    @property
-    def m(self) -> int:
-        """Number of known inputs."""
-        return int(self.B.shape[1])
-
-    @property
-    def p(self) -> int:
-        """Number of outputs (the paper's l)."""
-        return int(self.H.shape[0])
-
-    @property
-    def q(self) -> int:
-        """Number of unknown inputs (the paper's p)."""
-        return int(self.G.shape[1])
-
-    @property
-    def nw(self) -> int:
-        """Number of process-noise channels (``w`` enters every state)."""
-        return self.n
-
-    @property
-    def nv(self) -> int:
-        """Number of measurement-noise channels (one per output)."""
-        return self.p
 
     def evaluate_f(self, x: ArrayLike) -> FloatArray:
         """:math:`f(x)` at points.

@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError, DimensionError
 from ..validation import as_matrix
+from .dimensions import ModelDimensions
 
 __all__ = ["PhiBounds", "PhiFunction", "SampledSystem"]
 
@@ -58,7 +59,7 @@ def _as_domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[Floa
     return lo, hi
 
 
-class SampledSystem:
+class SampledSystem(ModelDimensions):
     """The continuous-discrete model of the sampled-output high-gain paper, eq. (8).
 
     Parameters
@@ -105,7 +106,7 @@ class SampledSystem:
         self.C = as_matrix("C", C, (None, n))
         if not (isinstance(m, int | np.integer) and m >= 0):
             raise DimensionError(f"m: expected a nonnegative integer, got {m!r}")
-        self._m = int(m)
+        self._set_dimensions(n=n, m=m, p=self.C.shape[0], nw=n, nv=self.C.shape[0])
         if not (np.isfinite(sample_period) and sample_period > 0):
             raise BoundsError(f"sample_period: expected a positive number, got {sample_period!r}")
         self.sample_period = float(sample_period)
@@ -119,31 +120,6 @@ class SampledSystem:
         self.phi_bounds = phi_bounds
         if phi is not None:
             self._spot_check()
-
-    @property
-    def n(self) -> int:
-        """Number of states."""
-        return int(self.A.shape[0])
-
-    @property
-    def m(self) -> int:
-        """Number of known inputs."""
-        return self._m
-
-    @property
-    def p(self) -> int:
-        """Number of outputs."""
-        return int(self.C.shape[0])
-
-    @property
-    def nw(self) -> int:
-        """Number of disturbance channels (``d`` enters every state)."""
-        return self.n
-
-    @property
-    def nv(self) -> int:
-        """Number of measurement-noise channels (one per output)."""
-        return self.p
 
     def nonlinearity(self, t: float, u: FloatArray, x: FloatArray) -> FloatArray:
         """``phi(t, u, x)``, zeros when the model has no nonlinear term.
