@@ -55,7 +55,7 @@ from ..lp.condensed import CondensedWindowLP
 from ..lp.window import SparseWindow, WindowModel
 from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
-from ..systems.lti import LTISystem
+from ..systems.lti import LTISystem, refuse_uncertain_input
 from ..systems.sampling import sampled_model
 from ..validation import as_positive
 from .base import Observer, ObserverState, _one_blas_thread, options_after_bounds
@@ -200,6 +200,7 @@ class HullEstimator(Observer):
             raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
             raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
+        refuse_uncertain_input(system, "HullEstimator")
         if system.dA is not None:
             raise AssumptionError(
                 "system.dA: the consistent set of an interval ΔA is not convex, so its hull is not an LP; "
