@@ -1,0 +1,308 @@
+"""An uncertain input matrix (``LTISystem(..., dB=(lo, hi))``): sampled model, truths, observers, front door.
+
+Every truth here comes from the test's own loop (not :func:`~intervalobs.simulate`): a constant ΔB at a
+vertex of its box, bang-bang process noise, the exact exponential of each held piece in continuous time.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.optimize import linprog
+
+from intervalobs import (
+    Bounds,
+    FiniteMemoryObserver,
+    HullEstimator,
+    IntervalObserver,
+    LTISystem,
+    RobustFiniteMemoryObserver,
+    RobustHullEstimator,
+    ZonotopicObserver,
+    observe,
+    sampled_model,
+    simulate,
+    suggest,
+)
+from intervalobs.errors import AssumptionError, BoundsError, DimensionError
+from intervalobs.observers import interval_observer
+
+MOTOR_A = np.array([[0.0, 1.0], [0.0, -8.0]])  # angle, speed; 1/τ = 8 s⁻¹
+MOTOR_B = np.array([[0.0], [40.0]])  # gain K/τ: the torque constant enters here
+MOTOR_C = np.array([[1.0, 0.0]])  # the angle is measured
+MOTOR_DB = (np.array([[0.0], [-2.0]]), np.array([[0.0], [2.0]]))  # ±5 % of the torque constant
+MOTOR_BOUNDS = Bounds(x0=([-0.1, -1.0], [0.1, 1.0]), w=([0.0, -0.5], [0.0, 0.5]), v=(-0.002, 0.002))
+H = 0.01
+
+TWO_A = np.array([[0.9, 0.2], [-0.1, 0.8]])
+TWO_B = np.array([[0.0], [1.0]])
+TWO_C = np.array([[1.0, 0.0]])
+TWO_DB = (np.array([[-0.02], [-0.1]]), np.array([[0.02], [0.1]]))
+TWO_BOUNDS = Bounds(x0=(-1, 1), w=(-0.01, 0.01), v=(-0.05, 0.05))
+
+
+def _motor(scale: float = 1.0, dA: bool = False) -> LTISystem:
+    da = (np.array([[0.0, 0.0], [0.0, -0.4]]), np.array([[0.0, 0.0], [0.0, 0.4]])) if dA else None
+    return LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B, dA=da, dB=(scale * MOTOR_DB[0], scale * MOTOR_DB[1]))
+
+
+def _two(scale: float = 1.0, dA: bool = False) -> LTISystem:
+    da = (-0.01 * np.ones((2, 2)), 0.01 * np.ones((2, 2))) if dA else None
+    return LTISystem(TWO_A, TWO_C, B=TWO_B, dt=1.0, dA=da, dB=(scale * TWO_DB[0], scale * TWO_DB[1]))
+
+
+def _vertex(box: tuple[np.ndarray, np.ndarray] | None, shape: tuple[int, ...], rng: np.random.Generator) -> np.ndarray:
+    if box is None:
+        return np.zeros(shape)
+    return np.where(rng.integers(0, 2, shape) == 1, box[1], box[0])
+
+
+def _own_truth(system: LTISystem, bounds: Bounds, u: np.ndarray, seed: int, substeps: int = 8):
+    """The test's own record: ΔA, ΔB, x0 at vertices, bang-bang w held over substeps, bang-bang v."""
+    rng = np.random.default_rng(seed)
+    full = bounds.resolve(system)
+    n, m, nw = system.n, system.m, system.nw
+    a = system.A + _vertex(system.dA, (n, n), rng)
+    b = system.B + _vertex(system.dB, (n, m), rng)
+    x = _vertex(full.x0, (n,), rng)
+    steps = u.shape[0]
+    if system.continuous:
+        block = np.zeros((n + m + nw, n + m + nw))
+        block[:n, :n], block[:n, n : n + m], block[:n, n + m :] = a, b, system.E
+        piece = expm(block * H / substeps)[:n]
+        phi, gam_u, gam_w = piece[:, :n], piece[:, n : n + m], piece[:, n + m :]
+    else:
+        phi, gam_u, gam_w, substeps = a, b, system.E, 1
+    states = []
+    for k in range(steps):
+        states.append(x)
+        for _ in range(substeps):
+            w = _vertex(full.w, (nw,), rng)
+            x = phi @ x + gam_u @ u[k] + gam_w @ w
+    xs = np.array(states)
+    v = np.array([_vertex(full.v, (system.nv,), rng) for _ in range(steps)])
+    return xs, xs @ system.C.T + v @ system.F.T
+
+
+def _input(steps: int, continuous: bool) -> np.ndarray:
+    k = np.arange(steps)
+    return (np.sin(0.05 * k) + (0.5 if continuous else 1.0) * np.sign(np.sin(0.011 * k + 0.3)))[:, None]
+
+
+def _run_both(monkeypatch, observer: IntervalObserver, t, y, u):
+    """``run`` through the compiled kernel and through the step loop."""
+    out = []
+    for threshold in (0, 10**15):
+        with monkeypatch.context() as patch:
+            patch.setattr(interval_observer, "COMPILED_MIN_SAMPLES", threshold)
+            out.append(observer.run(t, y, u))
+    return out
+
+
+# -- the model ---------------------------------------------------------------------------------------
+
+
+def test_dB_is_checked_and_shown() -> None:
+    with pytest.raises(BoundsError, match="dB: expected bounds that contain 0"):
+        LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B, dB=(np.array([[0.0], [1.0]]), np.array([[0.0], [2.0]])))
+    with pytest.raises(BoundsError, match="dB: expected lower <= upper"):
+        LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B, dB=(MOTOR_DB[1], MOTOR_DB[0]))
+    with pytest.raises(DimensionError, match="dB lower"):
+        LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B, dB=(np.zeros((2, 2)), np.zeros((2, 2))))
+    assert "interval dB" in repr(_motor())
+    assert _motor().uncertain_input and not _motor(0.0).uncertain_input
+    assert not LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B).uncertain_input
+
+
+@pytest.mark.parametrize("dA", [False, True], ids=["point-A", "dA"])
+@pytest.mark.parametrize("h", [0.01, 0.1, 1.0])
+def test_sampled_input_radius_contains_every_vertex_and_is_exact_without_dA(h: float, dA: bool) -> None:
+    system = _motor(dA=dA)
+    model = sampled_model(system, MOTOR_BOUNDS, h)
+    worst = np.zeros_like(model.Gamma)
+    da_vertices = [np.zeros((2, 2))] if not dA else [np.diag([0.0, s]) for s in (-0.4, 0.4)]
+    for da, db in itertools.product(da_vertices, MOTOR_DB):
+        block = np.zeros((3, 3))
+        block[:2, :2], block[:2, 2:] = MOTOR_A + da, MOTOR_B + db
+        worst = np.maximum(worst, np.abs(expm(block * h)[:2, 2:] - model.Gamma))
+    assert np.all(worst <= model.dGamma)
+    if not dA:  # each entry Σ_j Γ_I[i, j] ΔB[j] is reached at a vertex: exact up to the rounding margin
+        np.testing.assert_allclose(model.dGamma, worst, rtol=1e-9)
+
+
+def test_discrete_sampled_input_is_the_box_itself() -> None:
+    model = sampled_model(_two(), TWO_BOUNDS)
+    np.testing.assert_array_equal(model.Gamma, TWO_B)
+    assert np.all(model.dGamma >= TWO_DB[1]) and np.all(model.dGamma <= TWO_DB[1] * (1 + 1e-12))
+
+
+def test_simulate_draws_a_constant_dB_at_the_vertices() -> None:
+    t = np.arange(5) * H
+    sim = simulate(_motor(), MOTOR_BOUNDS, t, _input(5, True), runs=40, seed=3)
+    assert sim.dB is not None and sim.dB.shape == (40, 2, 1)
+    assert set(np.unique(sim.dB[:, 1, 0])) == {-2.0, 2.0}
+    assert np.all(sim.dB[:, 0, 0] == 0.0)
+    plain = simulate(LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B), MOTOR_BOUNDS, t, _input(5, True), seed=3)
+    assert plain.dB is not None and np.all(plain.dB == 0.0)
+
+
+# -- soundness ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dA", [False, True], ids=["point-A", "dA"])
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_interval_observer_encloses_independent_truths(monkeypatch, continuous: bool, dA: bool) -> None:
+    system, bounds = (_motor(dA=dA), MOTOR_BOUNDS) if continuous else (_two(dA=dA), TWO_BOUNDS)
+    steps = 300
+    u = _input(steps, continuous)
+    t = np.arange(steps) * (H if continuous else 1.0)
+    observer = IntervalObserver.design(system, bounds, h=H if continuous else None)
+    truths = [_own_truth(system, bounds, u, seed) for seed in range(6)]
+    xs, ys = np.stack([x for x, _ in truths]), np.stack([y for _, y in truths])
+    for estimate in _run_both(monkeypatch, observer, t, ys, u):
+        assert estimate.enclosure(xs).fraction == 1.0
+
+
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_zero_width_dB_gives_the_boxes_of_no_dB(monkeypatch, continuous: bool) -> None:
+    if continuous:
+        bounds, plain = MOTOR_BOUNDS, LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B)
+        zero, h = _motor(0.0), H
+    else:
+        bounds, plain = TWO_BOUNDS, LTISystem(TWO_A, TWO_C, B=TWO_B, dt=1.0)
+        zero, h = _two(0.0), None
+    u = _input(200, continuous)
+    t = np.arange(200) * (H if continuous else 1.0)
+    _, y = _own_truth(plain, bounds, u, 0)
+    pairs = zip(
+        _run_both(monkeypatch, IntervalObserver.design(zero, bounds, h=h), t, y, u),
+        _run_both(monkeypatch, IntervalObserver.design(plain, bounds, h=h), t, y, u),
+    )
+    for with_zero, without in pairs:
+        for got, want in ((with_zero.lower, without.lower), (with_zero.upper, without.upper)):
+            finite = np.isfinite(want)
+            assert np.array_equal(finite, np.isfinite(got))
+            np.testing.assert_allclose(got[finite], want[finite], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_a_wider_dB_gives_boxes_that_contain_the_narrower_ones(continuous: bool) -> None:
+    make, bounds, h = (_motor, MOTOR_BOUNDS, H) if continuous else (_two, TWO_BOUNDS, None)
+    u = _input(200, continuous)
+    t = np.arange(200) * (H if continuous else 1.0)
+    _, y = _own_truth(make(0.5), bounds, u, 1)
+    narrow_obs = IntervalObserver.design(make(0.5), bounds, h=h)
+    estimates = [
+        IntervalObserver(make(scale), bounds, narrow_obs.L, T=narrow_obs.T, h=h).run(t, y, u)
+        for scale in (0.0, 0.5, 1.0, 2.0)
+    ]
+    for narrow, wide in itertools.pairwise(estimates):
+        assert np.all(wide.lower <= narrow.lower) and np.all(wide.upper >= narrow.upper)
+    assert float(np.mean(estimates[-1].width()[50:])) > float(np.mean(estimates[0].width()[50:]))
+
+
+# -- refusals and the front door --------------------------------------------------------------------------
+
+
+def test_estimators_that_need_B_refuse_dB_by_name() -> None:
+    two, with_da = _two(), _two(dA=True)
+    cases = [
+        ("HullEstimator", lambda: HullEstimator.design(two, TWO_BOUNDS, horizon=10)),
+        ("RobustHullEstimator", lambda: RobustHullEstimator.design(with_da, TWO_BOUNDS, horizon=10)),
+        ("FiniteMemoryObserver", lambda: FiniteMemoryObserver.learn(two, TWO_BOUNDS, window=5)),
+        ("RobustFiniteMemoryObserver", lambda: RobustFiniteMemoryObserver.learn(with_da, TWO_BOUNDS, window=5)),
+        ("ZonotopicObserver", lambda: ZonotopicObserver(two, TWO_BOUNDS, np.array([[0.5], [0.1]]))),
+    ]
+    for name, build in cases:
+        with pytest.raises(AssumptionError, match=f"system.dB: {name} needs the input matrix B known exactly"):
+            build()
+
+
+@pytest.mark.parametrize("dA", [False, True], ids=["point-A", "dA"])
+def test_suggest_and_observe_choose_an_estimator_that_bounds_dB(dA: bool) -> None:
+    system = _motor(dA=dA)
+    assert [row["estimator"] for row in suggest(system, MOTOR_BOUNDS, h=H)] == ["IntervalObserver"]
+    steps = 250
+    u = _input(steps, True)
+    t = np.arange(steps) * H
+    for seed in range(3):
+        x, y = _own_truth(system, MOTOR_BOUNDS, u, seed)
+        estimate = observe(system, MOTOR_BOUNDS, t, y, u)
+        assert estimate.meta["estimator"] == "IntervalObserver" and "dB" in estimate.meta["why"]
+        assert estimate.meta["rows"] == "filtered"
+        assert estimate.enclosure(x).fraction == 1.0
+
+
+# -- widths against the folded disturbance and the exact hull -----------------------------------------------
+
+
+def _exact_hull(system: LTISystem, bounds: Bounds, y: np.ndarray, u: np.ndarray, k: int, constant: bool):
+    """Box of ``x_k`` given ``y_0 … y_k`` by LPs over the whole history: ΔB one constant (``constant``) or
+    free at every step (the per-step box the observers use). Discrete time, E = F = I."""
+    full = bounds.resolve(system)
+    n, m = system.n, system.m
+    nb = n * m * (1 if constant else k)
+    size = n * (k + 1) + n * k + nb  # x_0..x_k, w_0..w_{k-1}, ΔB
+    eq, rhs = np.zeros((n * k, size)), np.zeros(n * k)
+    for j in range(k):
+        rows = slice(n * j, n * (j + 1))
+        eq[rows, n * (j + 1) : n * (j + 2)] = np.eye(n)
+        eq[rows, n * j : n * (j + 1)] = -system.A
+        eq[rows, n * (k + 1) + n * j : n * (k + 1) + n * (j + 1)] = -np.eye(n)
+        first = n * (2 * k + 1) + (0 if constant else j * n * m)
+        eq[rows, first : first + n * m] = -np.kron(np.eye(n), u[j][None, :])  # ΔB row-major
+        rhs[rows] = system.B @ u[j]
+    ineq = np.zeros((2 * (k + 1), size))
+    b_ub = np.zeros(2 * (k + 1))
+    for j in range(k + 1):
+        ineq[2 * j, n * j : n * (j + 1)] = system.C[0]
+        ineq[2 * j + 1, n * j : n * (j + 1)] = -system.C[0]
+        b_ub[2 * j], b_ub[2 * j + 1] = y[j, 0] - full.v[0][0], full.v[1][0] - y[j, 0]
+    assert system.dB is not None
+    db = [(lo, hi) for lo, hi in zip(system.dB[0].ravel(), system.dB[1].ravel())]
+    box = list(zip(full.x0[0], full.x0[1])) + [(None, None)] * (n * k) + list(zip(full.w[0], full.w[1])) * k
+    box += db * (nb // (n * m))
+    out = np.zeros((2, n))
+    for i in range(n):
+        for sign in (1.0, -1.0):
+            cost = np.zeros(size)
+            cost[n * k + i] = sign
+            res = linprog(cost, A_ub=ineq, b_ub=b_ub, A_eq=eq, b_eq=rhs, bounds=box, method="highs")
+            assert res.status == 0
+            out[0 if sign > 0 else 1, i] = sign * res.fun
+    return out
+
+
+def test_widths_against_the_folded_disturbance_and_the_exact_hull() -> None:
+    """Mean widths of observe's filtered rows with dB, with ΔB·u folded into w by hand, and the exact hulls.
+
+    The numbers of docs/design.md ("uncertain input matrix") are the bounds asserted here.
+    """
+    system = _two()
+    steps = 60
+    u = _input(steps, False)
+    t = np.arange(steps, dtype=float)
+    x, y = _own_truth(system, TWO_BOUNDS, u, 2)
+    with_db = observe(system, TWO_BOUNDS, t, y, u)
+    reach = TWO_DB[1][:, 0] * np.max(np.abs(u))
+    folded_bounds = Bounds(x0=(-1, 1), w=(-0.01 - reach, 0.01 + reach), v=(-0.05, 0.05))
+    folded = observe(LTISystem(TWO_A, TWO_C, B=TWO_B, dt=1.0), folded_bounds, t, y, u, estimator="IntervalObserver")
+    assert with_db.enclosure(x).fraction == 1.0 and folded.enclosure(x).fraction == 1.0
+    times = [20, 40, 59]
+    width = {"dB": float(np.mean([with_db.width()[k].sum() for k in times]))}
+    width["folded"] = float(np.mean([folded.width()[k].sum() for k in times]))
+    for name, constant in (("hull", True), ("hull per step", False)):
+        boxes = [_exact_hull(system, TWO_BOUNDS, y, u, k, constant) for k in times]
+        for k, box in zip(times, boxes):
+            assert np.all(box[0] <= x[k] + 1e-9) and np.all(x[k] <= box[1] + 1e-9)
+            assert np.all(with_db.lower[k] <= box[0] + 1e-9) and np.all(box[1] <= with_db.upper[k] + 1e-9)
+        width[name] = float(np.mean([(box[1] - box[0]).sum() for box in boxes]))
+    # measured (seed 2): dB 1.631, folded 1.674, exact hull 0.441, per-step hull 0.968 (dB/folded 0.974,
+    # dB/hull 3.70): the error tube pays for its one fixed gain, and every per-step box for forgetting that ΔB is
+    # constant (hull per step / hull 2.19)
+    assert width["dB"] < width["folded"]
+    assert width["hull"] <= width["hull per step"] * (1 + 1e-9)
+    assert width["hull"] <= width["dB"] <= 4.0 * width["hull"]
