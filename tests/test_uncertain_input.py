@@ -29,6 +29,8 @@ from intervalobs import (
 )
 from intervalobs.errors import AssumptionError, BoundsError, DimensionError
 from intervalobs.observers import interval_observer
+from intervalobs.records import read_model, write_model
+from intervalobs.simulate import Simulation
 
 MOTOR_A = np.array([[0.0, 1.0], [0.0, -8.0]])  # angle, speed; 1/τ = 8 s⁻¹
 MOTOR_B = np.array([[0.0], [40.0]])  # gain K/τ: the torque constant enters here
@@ -147,6 +149,18 @@ def test_simulate_draws_a_constant_dB_at_the_vertices() -> None:
     assert np.all(sim.dB[:, 0, 0] == 0.0)
     plain = simulate(LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B), MOTOR_BOUNDS, t, _input(5, True), seed=3)
     assert plain.dB is not None and np.all(plain.dB == 0.0)
+
+
+def test_dB_survives_a_model_file_and_a_table(tmp_path) -> None:
+    path = write_model(tmp_path / "motor.toml", _motor(), MOTOR_BOUNDS, h=H)
+    read = read_model(path).system
+    assert read.dB is not None
+    np.testing.assert_array_equal(read.dB[0], MOTOR_DB[0])
+    np.testing.assert_array_equal(read.dB[1], MOTOR_DB[1])
+    sim = simulate(_motor(), MOTOR_BOUNDS, np.arange(4) * H, _input(4, True), seed=1)
+    back = Simulation.from_pandas(sim.to_pandas())
+    assert back.dB is not None and sim.dB is not None
+    np.testing.assert_array_equal(back.dB, sim.dB)
 
 
 # -- soundness ---------------------------------------------------------------------------------------

@@ -174,8 +174,19 @@ class Simulation:
         d_a = np.asarray(attrs.get("dA", np.full((*lead[:-1], n, n), np.nan)), dtype=float)
         d_b = None if "dB" not in attrs else np.asarray(attrs["dB"], dtype=float)
         empty = np.zeros((*lead, 0))
-        names = (chosen["state"], chosen["output"], chosen["input"])
-        return cls(t, x, y, u[0] if u.ndim == 3 else u, empty, empty, d_a, *names, dB=d_b)
+        return cls(
+            t,
+            x,
+            y,
+            u[0] if u.ndim == 3 else u,
+            empty,
+            empty,
+            d_a,
+            state_names=chosen["state"],
+            output_names=chosen["output"],
+            input_names=chosen["input"],
+            dB=d_b,
+        )
 
     def _columns(self) -> list[tuple[str, FloatArray]]:
         """Named (T,) or (M, T) columns: states, outputs, then known inputs (broadcast over runs)."""
