@@ -234,7 +234,7 @@ def _reaction_invariant(problem: Problem) -> Observer:
 
 
 ESTIMATORS: tuple[Suitable, ...] = (
-    Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull),
+    Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull, True),
     Suitable("FiniteMemoryObserver", "lti", "near the hull (a learned bank of filters)", "filters; learning", _bank),
     Suitable("IntervalObserver", "lti", "the error tube of one fixed gain (widest)", "a few products", _tube, True),
     Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull),
@@ -380,7 +380,7 @@ def observe(
     if cost > budget:
         why = f"the only or last estimator for this model ({problem.kind}), over the budget: {row.width}"
     if isinstance(system, LTISystem) and system.uncertain_input:
-        why += "; the input matrix is uncertain (dB), which only the error tube bounds (the window estimators need B)"
+        why += "; the input matrix is uncertain (dB): ΔB·u is bounded at every step as if ΔB could change between steps"
     meta = {"estimator": row.name, "why": why, "considered": considered, "ms_per_sample": cost, "budget_ms": budget}
     estimate.meta.update(meta)
     if filtered and estimate.meta.get("rows") == "predicted" and isinstance(system, LTISystem):

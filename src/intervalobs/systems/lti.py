@@ -231,5 +231,5 @@ def refuse_uncertain_input(system: LTISystem, estimator: str) -> None:
     if system.uncertain_input:
         raise AssumptionError(
             f"system.dB: {estimator} needs the input matrix B known exactly, got an interval ΔB; "
-            "IntervalObserver handles an uncertain B (or fold ΔB·u into the process-noise box w yourself)"
+            "HullEstimator (without ΔA) and IntervalObserver handle an uncertain B"
         )
