@@ -180,16 +180,29 @@ def test_interval_observer_encloses_independent_truths(monkeypatch, continuous: 
         assert estimate.enclosure(xs).fraction == 1.0
 
 
+@pytest.mark.parametrize("sparse", [False, True], ids=["condensed", "sparse"])
 @pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
-def test_hull_estimator_encloses_independent_truths(continuous: bool) -> None:
+def test_hull_estimator_encloses_independent_truths(continuous: bool, sparse: bool) -> None:
     system, bounds = (_motor(), MOTOR_BOUNDS) if continuous else (_two(), TWO_BOUNDS)
     steps = 150
     u = _input(steps, continuous)
     t = np.arange(steps) * (H if continuous else 1.0)
-    hull = HullEstimator.design(system, bounds, h=H if continuous else None, horizon=20, filtered=True)
+    options = {"h": H if continuous else None, "horizon": 20, "filtered": True, "window_boxes": sparse}
+    hull = HullEstimator.design(system, bounds, **options)
+    assert hull.condensed_allowed() is not sparse  # both window LPs widen the noise by δΓ|u_j|
     for seed in range(4):
         x, y = _own_truth(system, bounds, u, seed)
         assert hull.run(t, y, u).enclosure(x).fraction == 1.0
+
+
+def test_hull_estimator_with_dense_noise_map_encloses_independent_truths() -> None:
+    """A noise channel driving both states: with dB the window takes E[w] as a box of the states (sound)."""
+    system = LTISystem(TWO_A, TWO_C, B=TWO_B, E=[[1.0, 0.5], [0.2, 1.0]], dt=1.0, dB=TWO_DB)
+    u = _input(100, False)
+    hull = HullEstimator.design(system, TWO_BOUNDS, horizon=15, filtered=True)
+    for seed in range(4):
+        x, y = _own_truth(system, TWO_BOUNDS, u, seed)
+        assert hull.run(np.arange(100.0), y, u).enclosure(x).fraction == 1.0
 
 
 def test_hull_estimator_is_the_hull_with_dB_free_at_every_step() -> None:
