@@ -237,9 +237,14 @@ ESTIMATORS: tuple[Suitable, ...] = (
     Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull, True),
     Suitable("FiniteMemoryObserver", "lti", "near the hull (a learned bank of filters)", "filters; learning", _bank),
     Suitable("IntervalObserver", "lti", "the error tube of one fixed gain (widest)", "a few products", _tube, True),
-    Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull),
+    Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull, True),
     Suitable(
-        "RobustFiniteMemoryObserver", "lti-dA", "near that hull (learned bank)", "filters; learning", _robust_bank
+        "RobustFiniteMemoryObserver",
+        "lti-dA",
+        "near that hull (learned bank)",
+        "filters; learning",
+        _robust_bank,
+        True,
     ),
     Suitable("IntervalObserver", "lti-dA", "the error tube of one fixed gain (widest)", "a few products", _tube, True),
     Suitable(

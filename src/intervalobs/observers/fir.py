@@ -133,7 +133,8 @@ class FiniteMemoryObserver(Observer):
         filtered: bool = False,
         first: Sequence[ArrayLike] = (),
     ) -> None:
-        refuse_uncertain_input(system, type(self).__name__)
+        if not self.covers_dA:  # the ΔA bank bounds ΔB with ΔA (delta_linearisation's R_u)
+            refuse_uncertain_input(system, type(self).__name__)
         if system.dA is not None and not self.covers_dA:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
         self.system = system

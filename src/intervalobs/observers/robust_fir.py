@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..design.fir_bank import _worst_case_gains
 from ..errors import AssumptionError, DataError
 from ..systems.bounds import Bounds, ResolvedBounds
-from ..systems.lti import LTISystem, refuse_uncertain_input
+from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation
 from .base import Observer, options_after_bounds
 from .fir import FiniteMemoryObserver
@@ -110,7 +110,6 @@ class RobustFiniteMemoryObserver(FiniteMemoryObserver):
         lp_seconds: float = 0.0,
         filtered: bool = False,
     ) -> None:
-        refuse_uncertain_input(system, "RobustFiniteMemoryObserver")
         if system.dA is None:
             raise AssumptionError("system.dA: expected an interval ΔA (without it, use FiniteMemoryObserver)")
         super().__init__(system, bounds, gains, fallback, h=h, lp_seconds=lp_seconds, filtered=filtered)

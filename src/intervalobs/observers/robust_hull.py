@@ -82,7 +82,7 @@ from ..lp.chain import Solver, SolverPath, as_solver
 from ..lp.envelope import EnvelopeLP
 from ..lp.window import window_state_maps
 from ..systems.bounds import Bounds
-from ..systems.lti import LTISystem, refuse_uncertain_input
+from ..systems.lti import LTISystem
 from ..systems.sampling import delta_linearisation, sampled_model
 from ..validation import as_positive
 from .base import Observer, ObserverState, options_after_bounds
@@ -149,7 +149,6 @@ class RobustHullEstimator(Observer):
             raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
         if not isinstance(bounds, Bounds):
             raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
-        refuse_uncertain_input(system, "RobustHullEstimator")
         if system.dA is None:
             raise AssumptionError("system.dA: expected an interval ΔA (without it, use HullEstimator: exact)")
         if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:

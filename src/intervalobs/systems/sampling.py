@@ -664,7 +664,8 @@ class DeltaLinearisation:
         x_{k+1} = \Phi_c x_k + \Gamma_c u_k + \sum_{l} \delta_{a_lb_l}(M_l x_k + N_l u_k) + \varrho_k + q_k,
         \qquad |\varrho_k| \le R_x|x_k| + R_u|u_k|,\qquad q_k \in [\text{noise\_lo}, \text{noise\_hi}],
 
-    for every :math:`\delta` with :math:`|\delta| \le` ``radius`` and every noise signal in its box;
+    for every :math:`\delta` with :math:`|\delta| \le` ``radius``, every ``ΔB`` in its box and every noise signal in
+    its box;
     the measurement is :math:`y_k = Cx_k + \nu_k` with :math:`\nu_k \in [v_{lo}, v_{hi}]`.
 
     Attributes
@@ -773,6 +774,11 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
       exponential for the rounding of ``expm``.
 
     The noise box is the sound sampled model's (:func:`sampled_model`, valid for every ``ΔA`` of the box).
+    An interval ``dB`` (centre :math:`\Delta B_c`, radius :math:`B_r`): :math:`\Gamma_c, N` are those of
+    :math:`B_c = B + \Delta B_c`, and :math:`\Gamma_I(\Delta A)(\Delta B - \Delta B_c)u_k`, with
+    :math:`\Gamma_I(\Delta A) = \int_0^h e^{(A+\Delta A)s}ds` (the identity in discrete time), joins the
+    remainder: :math:`R_u` grows by :math:`(|\Gamma_I| + \delta\Gamma_I)B_r` (module docstring, section 7),
+    i.e. ``ΔB`` is treated as free at every step.
 
     Parameters
     ----------
@@ -795,8 +801,11 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
     if system.dA is None:
         raise AssumptionError("system.dA: expected an interval ΔA (a point model needs no linearisation in ΔA)")
     full = bounds.resolve(system)
-    sampled = sampled_model(system, full, h)
     n, m = system.n, system.m
+    b_c, b_r = system.B, np.zeros((n, m))
+    if system.dB is not None:
+        b_c, b_r = system.B + 0.5 * (system.dB[0] + system.dB[1]), 0.5 * (system.dB[1] - system.dB[0])
+    sampled = sampled_model(_with_inputs(system, b_c), full, h)  # centre B_c: ΔB - ΔB_c enters R_u below
     center = 0.5 * (system.dA[0] + system.dA[1])
     radius = 0.5 * (system.dA[1] - system.dA[0])
     entries = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(radius > 0), strict=True))
@@ -807,7 +816,7 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
         step = sampled.h
         size = n + m
         aug = np.zeros((size, size))
-        aug[:n, :n], aug[:n, n:] = system.A + center, system.B
+        aug[:n, :n], aug[:n, n:] = system.A + center, b_c
         rad = np.zeros((size, size))
         rad[:n, :n] = radius
         base = expm(aug * step)
@@ -820,12 +829,21 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
         weights = np.array([radius[a, b] for a, b in entries], dtype=float)  # |δ_l| ≤ radius of entry l
         R_x, R_u = _delta_remainder(aug * step, rad * step, base, M, N, weights, sampled)
     else:
-        phi, gamma = system.A + center, system.B.copy()
+        phi, gamma = system.A + center, b_c.copy()
         for index, (a, b) in enumerate(entries):
             M[index, a, b] = 1.0
         R_x = _MODEL_PAD * np.abs(phi)
         R_u = np.zeros((n, m))
+    if np.any(b_r > 0):  # |Γ_I(ΔA)(ΔB - ΔB_c)u| <= (|Γ_I| + δΓ_I) B_r |u|: a further remainder term
+        unit = sampled_model(_with_inputs(system, np.eye(n)), full, h)
+        spread = (np.abs(unit.Gamma) + unit.dGamma) @ b_r
+        R_u = R_u + inflate(-spread, spread, floor=0.0)[1]
     lo = sampled.noise_center - sampled.noise_radius
     hi = sampled.noise_center + sampled.noise_radius
     v_lo, v_hi = matvec_bounds(system.F, full.v[0], full.v[1])
     return DeltaLinearisation(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
+
+
+def _with_inputs(system: LTISystem, B: FloatArray) -> LTISystem:
+    """The model with input matrix ``B`` and no ``dB`` (same ``A``, ``dA``, noises and sampling)."""
+    return LTISystem(system.A, system.C, B=B, E=system.E, F=system.F, dt=system.dt, dA=system.dA)
