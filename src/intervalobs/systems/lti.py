@@ -231,5 +231,6 @@ def refuse_uncertain_input(system: LTISystem, estimator: str) -> None:
     if system.uncertain_input:
         raise AssumptionError(
             f"system.dB: {estimator} needs the input matrix B known exactly, got an interval ΔB; "
-            "HullEstimator (without ΔA) and IntervalObserver handle an uncertain B"
+            "HullEstimator, RobustHullEstimator (with dA), RobustFiniteMemoryObserver (with dA) and "
+            "IntervalObserver bound an uncertain B"
         )
