@@ -21,6 +21,7 @@ from intervalobs import (
     LTISystem,
     RobustFiniteMemoryObserver,
     RobustHullEstimator,
+    UnknownInputIntervalObserver,
     ZonotopicObserver,
     observe,
     sampled_model,
@@ -118,6 +119,13 @@ def test_dB_is_checked_and_shown() -> None:
     assert "interval dB" in repr(_motor())
     assert _motor().uncertain_input and not _motor(0.0).uncertain_input
     assert not LTISystem(MOTOR_A, MOTOR_C, B=MOTOR_B).uncertain_input
+
+
+def test_from_control_takes_dB() -> None:
+    control = pytest.importorskip("control")
+    system = LTISystem.from_control(control.ss(MOTOR_A, MOTOR_B, MOTOR_C, 0), dB=MOTOR_DB)
+    assert system.dB is not None and system.uncertain_input
+    np.testing.assert_array_equal(system.dB[1], MOTOR_DB[1])
 
 
 @pytest.mark.parametrize("dA", [False, True], ids=["point-A", "dA"])
@@ -317,6 +325,12 @@ def test_estimators_that_need_B_refuse_dB_by_name() -> None:
     cases = [
         ("FiniteMemoryObserver", lambda: FiniteMemoryObserver.learn(two, TWO_BOUNDS, window=5)),
         ("ZonotopicObserver", lambda: ZonotopicObserver(two, TWO_BOUNDS, np.array([[0.5], [0.1]]))),
+        (
+            "UnknownInputIntervalObserver",
+            lambda: UnknownInputIntervalObserver.design(
+                _motor(), MOTOR_BOUNDS, D=[[1.0], [0.0]], h=H, noise_rate=1.0, output_accel=10.0
+            ),
+        ),
     ]
     for name, build in cases:
         with pytest.raises(AssumptionError, match=f"system.dB: {name} needs the input matrix B known exactly"):

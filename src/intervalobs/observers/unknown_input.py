@@ -326,6 +326,7 @@ class UnknownInputIntervalObserver(Observer):
         DesignError
             No suitable gain/coordinates.
         """
+        refuse_uncertain_input(system, "UnknownInputIntervalObserver")
         full = bounds.resolve(system)
         d = as_matrix("D", D, (system.n, None))
         decoupling = uio_decoupling(system.A, system.C, d, W)
