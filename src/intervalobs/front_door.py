@@ -120,6 +120,9 @@ class Suitable:
         Expected cost per sample and at design time, in words.
     build : callable
         ``build(problem) -> Observer``: the design.
+    uncertain_input : bool
+        Whether it bounds an uncertain input matrix (``dB``) soundly; a row without it does not fit a model
+        with one.
     """
 
     name: str
@@ -127,6 +130,7 @@ class Suitable:
     width: str
     cost: str
     build: Callable[[Problem], Observer]
+    uncertain_input: bool = False
 
     def fits(self, problem: Problem) -> bool:
         """Whether this estimator applies to the problem's model.
@@ -140,6 +144,8 @@ class Suitable:
         bool
         """
         if self.kind != problem.kind:
+            return False
+        if isinstance(problem.system, LTISystem) and problem.system.uncertain_input and not self.uncertain_input:
             return False
         continuous = problem.h is not None
         return not (self.name == "UnknownInputIntervalObserver" and not continuous)
@@ -228,14 +234,19 @@ def _reaction_invariant(problem: Problem) -> Observer:
 
 
 ESTIMATORS: tuple[Suitable, ...] = (
-    Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull),
+    Suitable("HullEstimator", "lti", "the exact hull of a window as long as the model's memory", "LPs", _hull, True),
     Suitable("FiniteMemoryObserver", "lti", "near the hull (a learned bank of filters)", "filters; learning", _bank),
-    Suitable("IntervalObserver", "lti", "the error tube of one fixed gain (widest)", "a few products", _tube),
-    Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull),
+    Suitable("IntervalObserver", "lti", "the error tube of one fixed gain (widest)", "a few products", _tube, True),
+    Suitable("RobustHullEstimator", "lti-dA", "the hull of a window over the ΔA box", "LPs", _robust_hull, True),
     Suitable(
-        "RobustFiniteMemoryObserver", "lti-dA", "near that hull (learned bank)", "filters; learning", _robust_bank
+        "RobustFiniteMemoryObserver",
+        "lti-dA",
+        "near that hull (learned bank)",
+        "filters; learning",
+        _robust_bank,
+        True,
     ),
-    Suitable("IntervalObserver", "lti-dA", "the error tube of one fixed gain (widest)", "a few products", _tube),
+    Suitable("IntervalObserver", "lti-dA", "the error tube of one fixed gain (widest)", "a few products", _tube, True),
     Suitable(
         "UnknownInputIntervalObserver",
         "lti-unknown-input",
@@ -266,7 +277,8 @@ ESTIMATORS: tuple[Suitable, ...] = (
         _reaction_invariant,
     ),
 )
-"""Every estimator :func:`observe` can choose, tightest first within each kind of model."""
+"""Every estimator :func:`observe` can choose, tightest first within each kind of model; for a model with an
+uncertain input matrix (``dB``) only the rows marked ``uncertain_input`` fit."""
 
 
 def suggest(
@@ -373,6 +385,8 @@ def observe(
     why = f"the tightest estimator for this model ({problem.kind}) within {budget:g} ms a sample: {row.width}"
     if cost > budget:
         why = f"the only or last estimator for this model ({problem.kind}), over the budget: {row.width}"
+    if isinstance(system, LTISystem) and system.uncertain_input:
+        why += "; the input matrix is uncertain (dB): ΔB·u is bounded at every step as if ΔB could change between steps"
     meta = {"estimator": row.name, "why": why, "considered": considered, "ms_per_sample": cost, "budget_ms": budget}
     estimate.meta.update(meta)
     if filtered and estimate.meta.get("rows") == "predicted" and isinstance(system, LTISystem):

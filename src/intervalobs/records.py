@@ -3,9 +3,9 @@
 A *model file* is TOML (``.toml``) or Python (``.py``). The TOML form holds the matrices of
 :class:`~intervalobs.systems.lti.LTISystem` and the boxes of :class:`~intervalobs.systems.bounds.Bounds`::
 
-    [model]                      # dx/dt = (A + dA) x + B u + E w,  y = C x + F v
+    [model]                      # dx/dt = (A + dA) x + (B + dB) u + E w,  y = C x + F v
     A = [[0.0, 1.0], [0.0, -8.0]]
-    B = [[0.0], [40.0]]          # optional, like E, F, dA = [lower, upper] and dt (discrete time)
+    B = [[0.0], [40.0]]          # optional, like E, F, dA and dB = [lower, upper] and dt (discrete time)
     C = [[1.0, 0.0]]
     state_names = ["angle", "speed"]
     output_names = ["encoder"]
@@ -75,7 +75,7 @@ OBSERVERS = {
 }
 """Observers ``intervalobs estimate --observer NAME`` can design from a model file."""
 
-_MODEL_KEYS = {"A", "B", "C", "E", "F", "dA", "dt", "h", "state_names", "output_names", "input_names"}
+_MODEL_KEYS = {"A", "B", "C", "E", "F", "dA", "dB", "dt", "h", "state_names", "output_names", "input_names"}
 _TIME_COLUMNS = ("t", "time")
 _SHOWN_LINES = 8
 
@@ -168,8 +168,9 @@ def read_model(path: str | Path) -> ModelFile:
     if "x0" not in boxes:
         raise DataError(f"{file}: expected the key 'x0' in [bounds], got {sorted(boxes)}")
     options = {k: v for k, v in model.items() if k != "h"}
-    if "dA" in options:
-        options["dA"] = _pair(file, "dA", options["dA"])
+    for key in ("dA", "dB"):
+        if key in options:
+            options[key] = _pair(file, key, options[key])
     try:
         system = LTISystem(**options)
         bounds = Bounds(**{k: _pair(file, k, v) for k, v in boxes.items()})
@@ -578,7 +579,7 @@ def write_model(path: str | Path, system: LTISystem, bounds: Bounds, h: float | 
         return f"{key} = {json.dumps(value, default=_tables.jsonable)}"
 
     model = [
-        "[model]  # dx/dt = (A + dA) x + B u + E w,  y = C x + F v  (x[k+1] = ... with dt)",
+        "[model]  # dx/dt = (A + dA) x + (B + dB) u + E w,  y = C x + F v  (x[k+1] = ... with dt)",
         line("A", system.A),
         line("C", system.C),
     ]
@@ -588,8 +589,9 @@ def write_model(path: str | Path, system: LTISystem, bounds: Bounds, h: float | 
         model.append(line("E", system.E))
     if not np.array_equal(system.F, np.eye(system.p)):
         model.append(line("F", system.F))
-    if system.dA is not None:
-        model.append(line("dA", list(system.dA)))
+    for key in ("dA", "dB"):
+        if getattr(system, key) is not None:
+            model.append(line(key, list(getattr(system, key))))
     if system.dt is not None:
         model.append(line("dt", system.dt))
     if h is not None:

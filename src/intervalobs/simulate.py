@@ -76,10 +76,13 @@ class Simulation:
     v : numpy.ndarray, shape (..., T, nv)
         Measurement noise.
     dA : numpy.ndarray, shape (..., n, n)
-        The constant uncertainty drawn for each run.
+        The constant uncertainty of ``A`` drawn for each run.
     state_names, output_names, input_names : sequence of str, optional
         Names of the states, outputs and known inputs (default ``x1 …``, ``y1 …``, ``u1 …``;
         :func:`simulate` gives the model's names).
+    dB : numpy.ndarray, shape (..., n, m), optional
+        The constant uncertainty of ``B`` drawn for each run (zeros for a model without ``dB``; None when
+        unknown, e.g. read from a table).
     """
 
     t: FloatArray
@@ -92,6 +95,7 @@ class Simulation:
     state_names: Sequence[str] = ()
     output_names: Sequence[str] = ()
     input_names: Sequence[str] = ()
+    dB: FloatArray | None = None
 
     def __post_init__(self) -> None:
         for kind, signal, prefix in (("state", self.x, "x"), ("output", self.y, "y"), ("input", self.u, "u")):
@@ -104,7 +108,7 @@ class Simulation:
         Indexed by time ``t`` (by ``run`` and ``t`` for several runs), one column per state, output
         and known input, named by the names (the known input, shared by the runs, is repeated in
         each run). The noise, on its own finer grid in continuous time, is not part of the table; ``attrs``
-        holds ``dA`` and the names. :meth:`from_pandas` reads it back.
+        holds ``dA`` (``dB``) and the names. :meth:`from_pandas` reads it back.
 
         Returns
         -------
@@ -116,7 +120,7 @@ class Simulation:
         """The record as an xarray ``Dataset`` (needs the ``data`` extra).
 
         Variables ``x``, ``y``, ``u`` over ``t`` and the dimensions ``state``, ``output``, ``input``
-        (``run`` first for several runs), with the names as coordinates; ``attrs`` holds ``dA``.
+        (``run`` first for several runs), with the names as coordinates; ``attrs`` holds ``dA`` (``dB``).
 
         Returns
         -------
@@ -128,7 +132,7 @@ class Simulation:
             "y": (self.y, "output", tuple(self.output_names)),
             "u": (u, "input", tuple(self.input_names)),
         }
-        return _tables.to_dataset(self.t, variables, {"dA": self.dA.tolist()}, "Simulation.to_xarray")
+        return _tables.to_dataset(self.t, variables, self._uncertainty(), "Simulation.to_xarray")
 
     @classmethod
     def from_pandas(
@@ -150,8 +154,8 @@ class Simulation:
         Returns
         -------
         Simulation
-            The noise arrays ``w`` and ``v`` are empty (no columns); ``dA`` comes from ``attrs`` (NaN
-            when it is not there).
+            The noise arrays ``w`` and ``v`` are empty (no columns); ``dA`` and ``dB`` come from ``attrs``
+            (NaN, and None, when they are not there).
         """
         t, columns, attrs = _tables.from_frame(frame, "Simulation.from_pandas")
         chosen = {}
@@ -168,9 +172,20 @@ class Simulation:
         )
         n = x.shape[-1]
         d_a = np.asarray(attrs.get("dA", np.full((*lead[:-1], n, n), np.nan)), dtype=float)
+        d_b = None if "dB" not in attrs else np.asarray(attrs["dB"], dtype=float)
         empty = np.zeros((*lead, 0))
         return cls(
-            t, x, y, u[0] if u.ndim == 3 else u, empty, empty, d_a, chosen["state"], chosen["output"], chosen["input"]
+            t,
+            x,
+            y,
+            u[0] if u.ndim == 3 else u,
+            empty,
+            empty,
+            d_a,
+            state_names=chosen["state"],
+            output_names=chosen["output"],
+            input_names=chosen["input"],
+            dB=d_b,
         )
 
     def _columns(self) -> list[tuple[str, FloatArray]]:
@@ -183,7 +198,11 @@ class Simulation:
 
     def _attrs(self) -> dict[str, Any]:
         names = {f"{kind}_names": list(getattr(self, f"{kind}_names")) for kind in ("state", "output", "input")}
-        return {"dA": self.dA.tolist(), **names}
+        return {**self._uncertainty(), **names}
+
+    def _uncertainty(self) -> dict[str, Any]:
+        """The drawn ``dA`` (and ``dB`` when known) as nested lists, for a table's ``attrs``."""
+        return {"dA": self.dA.tolist(), **({} if self.dB is None else {"dB": self.dB.tolist()})}
 
     def __repr__(self) -> str:
         """Runs, samples, time span and the dimensions of x, y and u."""
@@ -330,15 +349,15 @@ def simulate(
     runs: int | None = None,
     substeps: int = 10,
 ) -> Simulation:
-    """Simulate the true system with admissible noise, initial state and ``ΔA``.
+    """Simulate the true system with admissible noise, initial state, ``ΔA`` and ``ΔB``.
 
     Parameters
     ----------
     system : LTISystem
         The model.
     bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``; each run draws ``x0`` and a constant ``ΔA`` in their boxes
-        (vertices for ``"extreme"`` noise).
+        Boxes of ``x0``, ``w``, ``v``; each run draws ``x0`` and a constant ``ΔA`` and ``ΔB`` in their
+        boxes (vertices for ``"extreme"`` noise).
     t : array_like, shape (T,)
         Sample times; uniformly spaced for continuous time. For discrete time only the length counts.
     u : array_like, shape (T, m), optional
@@ -395,18 +414,19 @@ def simulate(
         d_a = np.zeros((count, system.n, system.n))
     else:
         d_a = draw_box(kind, *system.dA, rng, count)
+    d_b = np.zeros((count, system.n, system.m)) if system.dB is None else draw_box(kind, *system.dB, rng, count)
     n, m, nw = system.n, system.m, system.nw
-    a_true = system.A + d_a
+    a_true, b_true = system.A + d_a, system.B + d_b
     if system.continuous:
         size = n + m + nw
         aug = np.zeros((count, size, size))
-        aug[:, :n, :n], aug[:, :n, n : n + m], aug[:, :n, n + m :] = a_true, system.B, system.E
+        aug[:, :n, :n], aug[:, :n, n : n + m], aug[:, :n, n + m :] = a_true, b_true, system.E
         exact = np.stack([expm(a * (h / fine)) for a in aug])
         phi, gamma_u, gamma_w = exact[:, :n, :n], exact[:, :n, n : n + m], exact[:, :n, n + m :]
     else:
         phi, gamma_u, gamma_w = (
             a_true,
-            np.broadcast_to(system.B, (count, n, m)),
+            b_true,
             np.broadcast_to(system.E, (count, n, nw)),
         )
     x = np.empty((count, steps, n))
@@ -424,8 +444,8 @@ def simulate(
     y = x @ system.C.T + v @ system.F.T
     names = (system.state_names, system.output_names, system.input_names)
     if runs is None:
-        return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0], *names)
-    return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a, *names)
+        return Simulation(times, x[0], y[0], us, w[0], v[0], d_a[0], *names, dB=d_b[0])
+    return Simulation(times, x, y, us, np.asarray(w), np.asarray(v), d_a, *names, dB=d_b)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from scipy.optimize import linprog
 from ..errors import AssumptionError, DataError, DesignError
 from ..lp.certified import LP_OPTIONS
 from ..systems.bounds import ResolvedBounds
-from ..systems.lti import LTISystem
+from ..systems.lti import LTISystem, refuse_uncertain_input
 from ..systems.sampling import SampledModel, sampled_model
 
 FloatArray = NDArray[np.float64]
@@ -220,6 +220,7 @@ def _worst_case_gains(
     ``extra`` (n,) is charged like a further noise channel of radius ``extra`` on every state (a per-step
     error such as ``ΔA x``).
     """
+    refuse_uncertain_input(system, "FiniteMemoryObserver")
     if system.dA is not None:
         raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
     if isinstance(window, bool) or not isinstance(window, (int, np.integer)) or window < 1:

@@ -284,7 +284,9 @@ class CondensedWindowLP(RecordsPath):
         drives[:L] = u[:L] @ m.Gamma.T
         q = (self.transfer @ drives.ravel()).reshape(H + 1, n)
         growth = np.zeros((H, n))
-        growth[:L] = self.e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1])
+        w_lo, w_hi = m.noise_box(u[:L])  # per step: wider by δΓ|u_j| for an interval input matrix
+        e_max = self.e_max if m.dGamma is None else np.maximum(np.abs(w_lo), np.abs(w_hi))
+        growth[:L] = e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1])
         # x_s = mid + z, z in the centred prior box: the LP works with deviations from the prior's centre
         mid = 0.5 * (prior_lo + prior_hi)
         q += self.objectives[:, :, :n] @ mid
@@ -303,8 +305,8 @@ class CondensedWindowLP(RecordsPath):
         hi = np.where(measured[:, None], yt - m.v_lo - centre + row_pad, self.inf)
         idle = np.zeros((H - L) * self.nw)
         z_lo, z_hi = round_outward(prior_lo - mid, prior_hi - mid)
-        self.col_lo = np.concatenate([z_lo, np.tile(m.w_lo, L), idle])
-        self.col_hi = np.concatenate([z_hi, np.tile(m.w_hi, L), idle])
+        self.col_lo = np.concatenate([z_lo, w_lo.ravel(), idle])
+        self.col_hi = np.concatenate([z_hi, w_hi.ravel(), idle])
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()  # exact: what the certificates are evaluated on
         self.row_scale = 1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi))  # of the relative widenings
         relax = MEASUREMENT_RELAX * self.row_scale

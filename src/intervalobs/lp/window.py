@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import sparse
 
+from ..errors import AssumptionError
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from .certified import centred_bounds, dual_bounds, highs_model, new_highs, run_highs
 from .chain import RecordsPath, SolverPath
@@ -47,6 +48,10 @@ class WindowModel:
         Map of the measurement-noise variables to the outputs (None: a box of the outputs).
     v_lo, v_hi : numpy.ndarray
         Box of the measurement noise.
+    dGamma : numpy.ndarray, optional
+        Elementwise radius of an interval input matrix ``Γ ± δΓ`` (an uncertain ``B``): step ``j``'s noise box
+        is widened by ``δΓ|u_j|`` (:meth:`noise_box`), i.e. ``ΔΓ`` is free at every step. Box noise only
+        (``G`` None).
     """
 
     Phi: FloatArray
@@ -58,6 +63,30 @@ class WindowModel:
     F: FloatArray | None
     v_lo: FloatArray
     v_hi: FloatArray
+    dGamma: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.dGamma is not None and self.G is not None:
+            raise AssumptionError("WindowModel: an interval input matrix (dGamma) needs box process noise (G None)")
+
+    def noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Box of ``x+ - Φx - Γu`` (``G`` None) or of ``w`` for the inputs ``u`` (shape (..., m)).
+
+        Parameters
+        ----------
+        u : numpy.ndarray, shape (..., m)
+            The known inputs of the steps.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+            ``[w_lo - δΓ|u|, w_hi + δΓ|u|]`` rounded outward; ``[w_lo, w_hi]`` broadcast without ``dGamma``.
+        """
+        shape = (*np.shape(u)[:-1], self.w_lo.shape[0])
+        if self.dGamma is None:
+            return np.broadcast_to(self.w_lo, shape).copy(), np.broadcast_to(self.w_hi, shape).copy()
+        spread = np.abs(u) @ self.dGamma.T
+        return inflate(self.w_lo - spread, self.w_hi + spread, scale=np.abs(self.w_lo) + np.abs(self.w_hi) + spread)
 
     def propagate(self, lower: FloatArray, upper: FloatArray, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Sound interval image of a box through one step (no measurement), inflated for rounding.
@@ -75,7 +104,8 @@ class WindowModel:
         """
         lo, hi = matvec_bounds(self.Phi, lower, upper)
         if self.G is None:
-            lo, hi = lo + self.w_lo, hi + self.w_hi
+            w_lo, w_hi = self.noise_box(u)
+            lo, hi = lo + w_lo, hi + w_hi
         else:
             wl, wh = matvec_bounds(self.G, self.w_lo, self.w_hi)
             lo, hi = lo + wl, hi + wh
@@ -388,7 +418,8 @@ class SparseWindow:
             col_lo[lp.w0 : lp.v0], col_hi[lp.w0 : lp.v0] = wl.ravel(), wh.ravel()
             d_lo, d_hi = drive, drive.copy()
         else:
-            d_lo, d_hi = drive + m.w_lo, drive + m.w_hi
+            w_lo, w_hi = m.noise_box(ut)
+            d_lo, d_hi = drive + w_lo, drive + w_hi
         d_lo = np.where(step_valid[:, None], d_lo, -inf)
         d_hi = np.where(step_valid[:, None], d_hi, inf)
         measured = valid & ((times < k) | use_current)

@@ -68,7 +68,7 @@ from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from ..simulate import noise_signal, simulate
 from ..systems.bounds import Bounds, ResolvedBounds
-from ..systems.lti import LTISystem
+from ..systems.lti import LTISystem, refuse_uncertain_input
 from ..systems.sampling import sampled_model
 from ..validation import as_box, as_choice
 from .base import Observer, ObserverState, options_after_bounds
@@ -133,6 +133,8 @@ class FiniteMemoryObserver(Observer):
         filtered: bool = False,
         first: Sequence[ArrayLike] = (),
     ) -> None:
+        if not self.covers_dA:  # the ΔA bank bounds ΔB with ΔA (delta_linearisation's R_u)
+            refuse_uncertain_input(system, type(self).__name__)
         if system.dA is not None and not self.covers_dA:
             raise AssumptionError("FiniteMemoryObserver: point models only (system.dA must be None)")
         self.system = system

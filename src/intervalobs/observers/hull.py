@@ -30,6 +30,13 @@ is exact for that model (whose per-step noise set is a box around the true, non-
 sound for the continuous system and slightly wider than its true hull.
 :func:`~intervalobs.tightness.hull_lower_bound` gives the matching inner value.
 
+**Interval** :math:`\Delta B` (an uncertain input matrix, ``dB``): with :math:`u` known,
+:math:`\Delta\Gamma u_j` is an additive term of step :math:`j` in the box :math:`\pm\delta\Gamma|u_j|`
+(:mod:`intervalobs.systems.sampling`, section 7), which widens that step's noise box (the process noise is
+then taken as a box of the states, :math:`E[\underline w, \overline w]` in discrete time). The hull is exact
+for :math:`\Delta B` free at every step; the true :math:`\Delta B` is constant, so the hull of that smaller
+set can be narrower (``tests/test_uncertain_input.py`` measures both).
+
 **Interval** :math:`\Delta A` makes :math:`S_k` non-convex. :class:`HullEstimator` refuses it;
 :func:`~intervalobs.tightness.hull_lower_bound` computes, for a few fixed samples of :math:`\Delta A`,
 inner hulls of the consistent sets and reports the hull of their union: a **lower bound on the box of any
@@ -71,14 +78,16 @@ def _single_support(matrix: FloatArray) -> bool:
 
 
 def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> WindowModel:
-    """The exact (discrete) or sound sampled (continuous) model of a system without ``ΔA``."""
+    """The exact (discrete) or sound sampled (continuous) model of a system without ``ΔA``; with an interval
+    ``ΔB`` its ``ΔΓ u_j`` widens each step's noise box (the noise then a box of the states)."""
     model = sampled_model(system, full, h)
-    if system.continuous or _single_support(system.E):
+    d_gamma = model.dGamma if system.uncertain_input else None
+    if system.continuous or _single_support(system.E) or d_gamma is not None:
         G, w_lo, w_hi = None, model.noise_center - model.noise_radius, model.noise_center + model.noise_radius
     else:
         G, w_lo, w_hi = system.E, full.w[0], full.w[1]
     F, v_lo, v_hi = _measurement_noise(system, full)
-    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi)
+    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi, d_gamma)
 
 
 def inner_model(
@@ -134,7 +143,7 @@ class HullEstimator(Observer):
     ----------
     system : LTISystem
         Discrete- or continuous-time model without ``dA`` (for interval ``ΔA`` see
-        :func:`~intervalobs.tightness.hull_lower_bound`).
+        :func:`~intervalobs.tightness.hull_lower_bound`); an interval ``dB`` is bounded at every step.
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
     horizon : int or None

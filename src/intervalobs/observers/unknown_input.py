@@ -109,7 +109,7 @@ from ..estimate import Estimate
 from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
-from ..systems.lti import LTISystem
+from ..systems.lti import LTISystem, refuse_uncertain_input
 from ..validation import as_array, as_box, as_matrix, as_positive, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState, options_after_bounds
 
@@ -207,6 +207,7 @@ class UnknownInputIntervalObserver(Observer):
             raise DimensionError("system: expected a continuous-time LTISystem (dt=None), got a discrete-time one")
         if system.dA is not None:
             raise DimensionError("system: UnknownInputIntervalObserver supports a point matrix A only (dA=None)")
+        refuse_uncertain_input(system, "UnknownInputIntervalObserver")
         self.system = system
         self.bounds = bounds.resolve(system)
         n, p = system.n, system.p
@@ -325,6 +326,7 @@ class UnknownInputIntervalObserver(Observer):
         DesignError
             No suitable gain/coordinates.
         """
+        refuse_uncertain_input(system, "UnknownInputIntervalObserver")
         full = bounds.resolve(system)
         d = as_matrix("D", D, (system.n, None))
         decoupling = uio_decoupling(system.A, system.C, d, W)

@@ -39,7 +39,7 @@ from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import ArgumentTypeError, AssumptionError, DesignError
 from ..interval import inflate
 from ..systems.bounds import Bounds
-from ..systems.lti import LTISystem
+from ..systems.lti import LTISystem, refuse_uncertain_input
 from ..systems.sampling import sampled_model
 from ..validation import as_matrix, check_no_kwargs
 from ..zonotope import hull_radius, interval_matrix_image, reduce_order
@@ -117,6 +117,7 @@ class ZonotopicObserver(Observer):
             raise ArgumentTypeError(f"bounds: expected a Bounds, got {type(bounds).__name__}")
         if system.continuous:
             raise AssumptionError("system: the zonotopic observer is for discrete time only (give dt), got dt=None")
+        refuse_uncertain_input(system, "ZonotopicObserver")
         self.system = system
         self.bounds = bounds.resolve(system)
         self.n, self.p, self.m = system.n, system.p, system.m

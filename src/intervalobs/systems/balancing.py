@@ -106,6 +106,7 @@ def balanced(system: LTISystem, bounds: ResolvedBounds, scales: FloatArray) -> t
     """
     s = scales[:, None]
     dA = None if system.dA is None else (s * system.dA[0] / scales, s * system.dA[1] / scales)
+    dB = None if system.dB is None else (s * system.dB[0], s * system.dB[1])
     model = LTISystem(
         s * system.A / scales,
         system.C / scales,
@@ -114,6 +115,7 @@ def balanced(system: LTISystem, bounds: ResolvedBounds, scales: FloatArray) -> t
         F=system.F,
         dt=system.dt,
         dA=dA,
+        dB=dB,
         state_names=system.state_names,
         output_names=system.output_names,
         input_names=system.input_names,

@@ -2,11 +2,13 @@ r"""Linear time-invariant models with interval uncertainty.
 
 .. math::
 
-    \dot x = (A + \Delta A)x + Bu + Ew,\qquad y = Cx + Fv \qquad (\text{continuous time, } dt = None)
+    \dot x = (A + \Delta A)x + (B + \Delta B)u + Ew,\qquad y = Cx + Fv \qquad (\text{continuous time, } dt = None)
 
-    x_{k+1} = (A + \Delta A)x_k + Bu_k + Ew_k,\qquad y_k = Cx_k + Fv_k \qquad (\text{discrete time})
+    x_{k+1} = (A + \Delta A)x_k + (B + \Delta B)u_k + Ew_k,\qquad y_k = Cx_k + Fv_k \qquad (\text{discrete time})
 
-with :math:`\underline{\Delta A} \le \Delta A \le \overline{\Delta A}` constant and unknown,
+with :math:`\underline{\Delta A} \le \Delta A \le \overline{\Delta A}` and
+:math:`\underline{\Delta B} \le \Delta B \le \overline{\Delta B}` constant and unknown (e.g. a motor's
+torque constant known to a few per cent),
 :math:`w`, :math:`v` unknown signals in boxes and :math:`x(0)` in a box (the boxes are
 :class:`~intervalobs.systems.bounds.Bounds`).
 """
@@ -19,18 +21,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import ArgumentTypeError, BoundsError, DimensionError
+from ..errors import ArgumentTypeError, AssumptionError, BoundsError, DimensionError
 from ..validation import as_matrix, as_names, as_positive
 from .dimensions import ModelDimensions
 
-__all__ = ["LTISystem"]
+__all__ = ["LTISystem", "refuse_uncertain_input"]
 
 FloatArray = NDArray[np.float64]
 BoxPair = tuple[FloatArray, FloatArray]
 
 
 class LTISystem(ModelDimensions):
-    """A linear time-invariant system with optional elementwise interval uncertainty on ``A``.
+    """A linear time-invariant system with optional elementwise interval uncertainty on ``A`` and ``B``.
 
     Parameters
     ----------
@@ -49,6 +51,9 @@ class LTISystem(ModelDimensions):
     dA : tuple of array_like, optional
         ``(lower, upper)`` elementwise bounds of the unknown constant ``ΔA``, each (n, n); must
         contain zero (``A`` is the nominal matrix).
+    dB : tuple of array_like, optional
+        ``(lower, upper)`` elementwise bounds of the unknown constant ``ΔB``, each (n, m); must contain
+        zero (``B`` is the nominal matrix). A gain known to ±5 % is ``dB=(-0.05 * abs(B), 0.05 * abs(B))``.
     state_names, output_names, input_names : sequence of str, optional
         Names of the states, outputs and known inputs (default ``x1 …``, ``y1 …``, ``u1 …``): they
         label plots and exported tables, and a labelled record (a pandas ``DataFrame``, an xarray
@@ -75,6 +80,7 @@ class LTISystem(ModelDimensions):
         F: ArrayLike | None = None,
         dt: float | None = None,
         dA: tuple[ArrayLike, ArrayLike] | None = None,
+        dB: tuple[ArrayLike, ArrayLike] | None = None,
         state_names: Sequence[str] | None = None,
         output_names: Sequence[str] | None = None,
         input_names: Sequence[str] | None = None,
@@ -94,18 +100,16 @@ class LTISystem(ModelDimensions):
         self.F = np.eye(self.C.shape[0]) if F is None else as_matrix("F", F, (self.C.shape[0], None))
         self._set_dimensions(n=n, m=self.B.shape[1], p=self.C.shape[0], nw=self.E.shape[1], nv=self.F.shape[1])
         self.dt = None if dt is None else as_positive("dt", dt, "a positive sampling period or None")
-        self.dA: BoxPair | None = None
-        if dA is not None:
-            lo = as_matrix("dA lower", dA[0], (n, n))
-            hi = as_matrix("dA upper", dA[1], (n, n))
-            if np.any(lo > hi):
-                raise BoundsError("dA: expected lower <= upper elementwise, got lower > upper")
-            if np.any(lo > 0) or np.any(hi < 0):
-                raise BoundsError("dA: expected bounds that contain 0 (A is the nominal matrix)")
-            self.dA = (lo, hi)
+        self.dA = _nominal_box("dA", "A", dA, (n, n))
+        self.dB = _nominal_box("dB", "B", dB, self.B.shape)
         self.state_names = as_names("state_names", state_names, n, "x")
         self.output_names = as_names("output_names", output_names, self.C.shape[0], "y")
         self.input_names = as_names("input_names", input_names, self.B.shape[1], "u")
+
+    @property
+    def uncertain_input(self) -> bool:
+        """True when ``dB`` is an interval of nonzero width (``B`` not known exactly)."""
+        return self.dB is not None and bool(np.any(self.dB[1] > self.dB[0]))
 
     @property
     def continuous(self) -> bool:
@@ -145,13 +149,13 @@ class LTISystem(ModelDimensions):
         sys : control.StateSpace
             The model; ``sys.dt`` of 0 or None means continuous time.
         **kwargs
-            ``E``, ``F``, ``dA`` and names (``state_names``, …, replacing the labels) as in the constructor.
+            ``E``, ``F``, ``dA``, ``dB`` and names (``state_names``, …, replacing the labels) as in the constructor.
 
         Returns
         -------
         LTISystem
         """
-        unknown = set(kwargs) - {"E", "F", "dA", "state_names", "output_names", "input_names"}
+        unknown = set(kwargs) - {"E", "F", "dA", "dB", "state_names", "output_names", "input_names"}
         if unknown:
             raise ArgumentTypeError(f"LTISystem.from_control: unexpected keyword argument {sorted(unknown)[0]!r}")
         for attr in ("A", "B", "C", "D"):
@@ -169,5 +173,43 @@ class LTISystem(ModelDimensions):
 
     def __repr__(self) -> str:
         kind = "continuous" if self.continuous else f"discrete, dt={self.dt:g}"
-        extra = ", interval dA" if self.dA is not None else ""
+        extra = (", interval dA" if self.dA is not None else "") + (", interval dB" if self.dB is not None else "")
         return f"LTISystem(n={self.n}, m={self.m}, p={self.p}, {kind}{extra})"
+
+
+def _nominal_box(
+    name: str, nominal: str, box: tuple[ArrayLike, ArrayLike] | None, shape: tuple[int, int]
+) -> BoxPair | None:
+    """The checked ``(lower, upper)`` of an uncertainty around a nominal matrix, or None."""
+    if box is None:
+        return None
+    lo = as_matrix(f"{name} lower", box[0], shape)
+    hi = as_matrix(f"{name} upper", box[1], shape)
+    if np.any(lo > hi):
+        raise BoundsError(f"{name}: expected lower <= upper elementwise, got lower > upper")
+    if np.any(lo > 0) or np.any(hi < 0):
+        raise BoundsError(f"{name}: expected bounds that contain 0 ({nominal} is the nominal matrix)")
+    return (lo, hi)
+
+
+def refuse_uncertain_input(system: LTISystem, estimator: str) -> None:
+    """Refuse a model whose input matrix is uncertain, for an estimator that needs ``B`` exactly.
+
+    Parameters
+    ----------
+    system : LTISystem
+        The model.
+    estimator : str
+        The estimator that refuses, named in the message.
+
+    Raises
+    ------
+    AssumptionError
+        When ``system.dB`` has a nonzero width.
+    """
+    if system.uncertain_input:
+        raise AssumptionError(
+            f"system.dB: {estimator} needs the input matrix B known exactly, got an interval ΔB; "
+            "HullEstimator, RobustHullEstimator (with dA), RobustFiniteMemoryObserver (with dA) and "
+            "IntervalObserver bound an uncertain B"
+        )

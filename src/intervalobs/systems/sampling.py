@@ -1,6 +1,6 @@
 r"""The sound sampled model of a continuous-time interval system, tight for stiff dynamics.
 
-For :math:`\dot x = (A + \Delta A)x + Bu + Ew` with :math:`|\Delta A| \le D` (elementwise), :math:`u`
+For :math:`\dot x = (A + \Delta A)x + (B + \Delta B)u + Ew` with :math:`|\Delta A| \le D` (elementwise), :math:`u`
 held over each step of length :math:`h` (zero-order hold of the known input) and :math:`w(t)` *any*
 measurable signal in its box :math:`[w_c - w_r, w_c + w_r]`, the state at the sample times obeys
 
@@ -144,6 +144,25 @@ covers the rounding of the products and of the :math:`N + 1`-term sums (each com
 is returned. In discrete time :math:`\Delta\Phi = \Delta A` and the box
 :math:`\{T\Delta AT^{-1}\}` has radius exactly :math:`|T|\,D\,|T^{-1}|`.
 
+**7. The interval** :math:`\Delta B`. With :math:`B + \Delta B`, :math:`\Delta B \in [\Delta B_c - B_r,
+\Delta B_c + B_r]` (a motor's torque constant known to a few per cent), the input matrix of one step is
+:math:`\Gamma(\Delta A, \Delta B) = \Gamma_I(\Delta A)(B_c + \beta)` with :math:`\Gamma_I(\Delta A) =
+\int_0^h e^{(A+\Delta A)s}ds`, :math:`B_c = B + \Delta B_c` and :math:`|\beta| \le B_r`. The block
+exponential is taken with the input columns :math:`[B_c, I]` (:math:`n` more unit columns), which gives
+:math:`\Gamma_I(\Delta A) \in \Gamma_I \pm \delta\Gamma_I` and :math:`\Gamma_I(\Delta A)B_c \in \Gamma \pm
+\delta\Gamma_{B_c}` by sections 1-4 applied to each column. Then
+
+.. math:: |\Gamma(\Delta A, \Delta B) - \Gamma| \le \delta\Gamma_{B_c} + |\Gamma_I(\Delta A)|\,B_r
+          \le \delta\Gamma_{B_c} + (|\Gamma_I| + \delta\Gamma_I)\,B_r,
+
+which is the ``dGamma`` returned. Without :math:`\Delta A` (:math:`\delta\Gamma_I = 0`) each entry
+:math:`\sum_j (\Gamma_I)_{ij}\beta_{jk}` reaches :math:`\pm(|\Gamma_I|B_r)_{ik}` at a vertex of the
+:math:`\Delta B` box, so the radius is exact entry by entry. In discrete time :math:`\Gamma = B_c` and
+:math:`\delta\Gamma = B_r` exactly. The observers use :math:`(\Gamma \pm \delta\Gamma)u_k` at every
+step as a box for that step alone, i.e. as if :math:`\Delta B` could change from one step to the next:
+sound, but it forgets that the true :math:`\Delta B` is constant (a window estimator that kept one
+:math:`\Delta B` for the whole window could be narrower).
+
 **Why not interval scaling and squaring.** The verified exponentials of interval matrices
 (Oppenheimer & Michel 1988: Taylor series with a norm remainder; Goldsztejn & Neumaier 2014: scaling
 and squaring of an interval Taylor enclosure; Althoff, Stursberg & Buss 2007 and CORA:
@@ -208,8 +227,8 @@ class SampledModel:
 
     .. math:: x_{k+1} \in (\Phi \pm \delta\Phi)x_k + (\Gamma \pm \delta\Gamma)u_k + [c \pm r]
 
-    for every :math:`\Delta A` in its box and every noise signal in its box, switching anywhere inside
-    the step (see :mod:`intervalobs.systems.sampling` for the bounds and their proofs).
+    for every :math:`\Delta A` and :math:`\Delta B` in their boxes and every noise signal in its box,
+    switching anywhere inside the step (see :mod:`intervalobs.systems.sampling` for the bounds and their proofs).
 
     Parameters
     ----------
@@ -217,7 +236,8 @@ class SampledModel:
         Midpoint transition matrix :math:`e^{Ah}` and its elementwise radius under
         :math:`\Delta A` (``dPhi >= 0``).
     Gamma, dGamma : numpy.ndarray, shape (n, m)
-        Midpoint input matrix :math:`\int_0^h e^{As}ds\,B` and its elementwise radius.
+        Midpoint input matrix :math:`\int_0^h e^{As}ds\,(B + \Delta B_c)` and its elementwise radius under
+        :math:`\Delta A` and :math:`\Delta B` (section 7 of the module docstring).
     noise_center, noise_radius : numpy.ndarray, shape (n,)
         Centre and radius of the box that holds the process-noise contribution of one step.
     h : float
@@ -542,7 +562,8 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     Parameters
     ----------
     system : LTISystem
-        Continuous- or discrete-time model; its interval ``dA`` (if any) is the box of ``ΔA``.
+        Continuous- or discrete-time model; its interval ``dA`` and ``dB`` (if any) are the boxes of ``ΔA``
+        and ``ΔB``.
     bounds : Bounds
         Noise boxes (``w`` is used; ``x0`` and ``v`` are not).
     h : float, optional
@@ -579,18 +600,27 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     else:
         a_mid = system.A + 0.5 * (system.dA[0] + system.dA[1])
         a_rad = 0.5 * (system.dA[1] - system.dA[0])
+    if system.dB is None:
+        b_mid, b_rad = system.B, np.zeros((n, m))
+    else:
+        b_mid = system.B + 0.5 * (system.dB[0] + system.dB[1])
+        b_rad = 0.5 * (system.dB[1] - system.dB[0])
+    # Section 7: with an interval ΔB, the unit columns [B_c, I] give ∫e^{(A+ΔA)s}ds as well.
+    unit = n if np.any(b_rad > 0) and system.continuous else 0
     if not system.continuous:
         system.sampling_period(h)  # refuses an h other than dt
         first_order: _FirstOrder | None = None
-        phi, gamma, d_phi, d_gamma = a_mid, system.B, a_rad, np.zeros((n, m))
+        phi, gamma, d_phi, d_gamma = a_mid, b_mid, a_rad, b_rad
         center = system.E @ w_center
         radius = np.abs(system.E) @ w_radius
         step = 1.0
     else:
         step = as_positive("h", h, "a positive step for a continuous-time system")
+        inputs = np.hstack([b_mid, np.eye(n)[:, :unit]])
+        m = m + unit
         size = n + m + nw
         aug = np.zeros((size, size))
-        aug[:n, :n], aug[:n, n : n + m], aug[:n, n + m :] = a_mid, system.B, system.E
+        aug[:n, :n], aug[:n, n : n + m], aug[:n, n + m :] = a_mid, inputs, system.E
         rad = np.zeros((size, size))
         rad[:n, :n] = a_rad
         with np.errstate(over="ignore", invalid="ignore"):
@@ -610,6 +640,10 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         d_phi, d_gamma, d_gamma_e = spread[:, :n], spread[:, n : n + m], spread[:, n + m :]
         center = gamma_e @ w_center
         radius = (noise_integral + spread_integral @ np.abs(system.E)) @ w_radius + d_gamma_e @ np.abs(w_center)
+        if unit:  # Γ(ΔA, ΔB) = Γ_I(ΔA)B_c + Γ_I(ΔA)(ΔB - ΔB_c), |Γ_I(ΔA)| <= |Γ_I| + δΓ_I (section 7)
+            m = m - unit
+            gamma_i, d_gamma_i = gamma[:, m:], d_gamma[:, m:]
+            gamma, d_gamma = gamma[:, :m], d_gamma[:, :m] + (np.abs(gamma_i) + d_gamma_i) @ b_rad
         _check_finite("dPhi", d_phi, step, a_mid)
         _check_finite("dGamma", d_gamma, step, a_mid)
         _check_finite("noise_radius", radius, step, a_mid)
@@ -630,7 +664,8 @@ class DeltaLinearisation:
         x_{k+1} = \Phi_c x_k + \Gamma_c u_k + \sum_{l} \delta_{a_lb_l}(M_l x_k + N_l u_k) + \varrho_k + q_k,
         \qquad |\varrho_k| \le R_x|x_k| + R_u|u_k|,\qquad q_k \in [\text{noise\_lo}, \text{noise\_hi}],
 
-    for every :math:`\delta` with :math:`|\delta| \le` ``radius`` and every noise signal in its box;
+    for every :math:`\delta` with :math:`|\delta| \le` ``radius``, every ``ΔB`` in its box and every noise signal in
+    its box;
     the measurement is :math:`y_k = Cx_k + \nu_k` with :math:`\nu_k \in [v_{lo}, v_{hi}]`.
 
     Attributes
@@ -739,6 +774,11 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
       exponential for the rounding of ``expm``.
 
     The noise box is the sound sampled model's (:func:`sampled_model`, valid for every ``ΔA`` of the box).
+    An interval ``dB`` (centre :math:`\Delta B_c`, radius :math:`B_r`): :math:`\Gamma_c, N` are those of
+    :math:`B_c = B + \Delta B_c`, and :math:`\Gamma_I(\Delta A)(\Delta B - \Delta B_c)u_k`, with
+    :math:`\Gamma_I(\Delta A) = \int_0^h e^{(A+\Delta A)s}ds` (the identity in discrete time), joins the
+    remainder: :math:`R_u` grows by :math:`(|\Gamma_I| + \delta\Gamma_I)B_r` (module docstring, section 7),
+    i.e. ``ΔB`` is treated as free at every step.
 
     Parameters
     ----------
@@ -761,8 +801,11 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
     if system.dA is None:
         raise AssumptionError("system.dA: expected an interval ΔA (a point model needs no linearisation in ΔA)")
     full = bounds.resolve(system)
-    sampled = sampled_model(system, full, h)
     n, m = system.n, system.m
+    b_c, b_r = system.B, np.zeros((n, m))
+    if system.dB is not None:
+        b_c, b_r = system.B + 0.5 * (system.dB[0] + system.dB[1]), 0.5 * (system.dB[1] - system.dB[0])
+    sampled = sampled_model(_with_inputs(system, b_c), full, h)  # centre B_c: ΔB - ΔB_c enters R_u below
     center = 0.5 * (system.dA[0] + system.dA[1])
     radius = 0.5 * (system.dA[1] - system.dA[0])
     entries = tuple((int(a), int(b)) for a, b in zip(*np.nonzero(radius > 0), strict=True))
@@ -773,7 +816,7 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
         step = sampled.h
         size = n + m
         aug = np.zeros((size, size))
-        aug[:n, :n], aug[:n, n:] = system.A + center, system.B
+        aug[:n, :n], aug[:n, n:] = system.A + center, b_c
         rad = np.zeros((size, size))
         rad[:n, :n] = radius
         base = expm(aug * step)
@@ -786,12 +829,21 @@ def delta_linearisation(system: LTISystem, bounds: Bounds, h: float | None = Non
         weights = np.array([radius[a, b] for a, b in entries], dtype=float)  # |δ_l| ≤ radius of entry l
         R_x, R_u = _delta_remainder(aug * step, rad * step, base, M, N, weights, sampled)
     else:
-        phi, gamma = system.A + center, system.B.copy()
+        phi, gamma = system.A + center, b_c.copy()
         for index, (a, b) in enumerate(entries):
             M[index, a, b] = 1.0
         R_x = _MODEL_PAD * np.abs(phi)
         R_u = np.zeros((n, m))
+    if np.any(b_r > 0):  # |Γ_I(ΔA)(ΔB - ΔB_c)u| <= (|Γ_I| + δΓ_I) B_r |u|: a further remainder term
+        unit = sampled_model(_with_inputs(system, np.eye(n)), full, h)
+        spread = (np.abs(unit.Gamma) + unit.dGamma) @ b_r
+        R_u = R_u + inflate(-spread, spread, floor=0.0)[1]
     lo = sampled.noise_center - sampled.noise_radius
     hi = sampled.noise_center + sampled.noise_radius
     v_lo, v_hi = matvec_bounds(system.F, full.v[0], full.v[1])
     return DeltaLinearisation(phi, gamma, M, N, R_x, R_u, entries, center, radius, lo, hi, system.C, v_lo, v_hi)
+
+
+def _with_inputs(system: LTISystem, B: FloatArray) -> LTISystem:
+    """The model with input matrix ``B`` and no ``dB`` (same ``A``, ``dA``, noises and sampling)."""
+    return LTISystem(system.A, system.C, B=B, E=system.E, F=system.F, dt=system.dt, dA=system.dA)
