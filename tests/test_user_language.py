@@ -18,6 +18,7 @@ Allow-list (the only exceptions):
 from __future__ import annotations
 
 import ast
+import inspect
 import json
 import re
 from pathlib import Path
@@ -246,3 +247,239 @@ def test_the_docs_index_opens_with_pip_install_and_observe() -> None:
     readme_blocks = _fenced_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
     assert readme_blocks[0].strip().startswith("pip install")
     assert "observe(" in readme_blocks[1] and "make" not in readme_blocks[1]
+
+
+# -- public docstrings: what a condition means in the body, the paper's numbers in References ----------
+DOCSTRING_REFERENCE = re.compile(
+    r"\b(?:Theorem|Thm|Lemma|Hypothes[ie]s|Assumption|Proposition|Prop|Corollary|Algorithm)s?\.? \d"
+    r"|(?<![\w\])\[\"'`.])\(\d{1,3}[a-z]?\)"
+    r"|\b[Ee]qs?\. ?\(?\d"
+    r"|(?i:\bseeds? 00\d)|\bH-matrix\b|U2'g"
+)
+"""A paper-internal reference in a docstring: a numbered theorem, lemma, hypothesis, assumption,
+proposition, corollary or algorithm, an equation number ("(68)", "eq. (39)"; not a call such as
+``x(0)`` nor a quoted option value such as ``"(26)"``), a paper's file number, or a paper's symbol."""
+SECTION_RULE = re.compile(r"^-{3,}$")
+CITATION_PARAGRAPH = re.compile(r"^\s*\*\*References?\.\*\*")
+DOCSTRING_ALLOWED_PREFIXES = {
+    "intervalobs.reproduce.": "the reproductions of the papers' examples: each maps a paper's printed "
+    "design and numbers to the code, as docs/paper-notes.md does",
+}
+"""Public objects whose docstrings may keep paper-internal references in their body, and why."""
+DOCSTRING_TO_CONVERT = frozenset(
+    {
+        "intervalobs.complex_interval.ctimes",
+        "intervalobs.complex_interval.delta_operator",
+        "intervalobs.complex_interval.linear_image",
+        "intervalobs.complex_interval.real_part_bounds",
+        "intervalobs.complex_interval.real_part_radius",
+        "intervalobs.design.abstraction.AffineAbstraction",
+        "intervalobs.design.abstraction.AffineAbstraction.range_bounds",
+        "intervalobs.design.abstraction.abstraction_sigma",
+        "intervalobs.design.abstraction.affine_abstraction",
+        "intervalobs.design.abstraction.corollary1_bounds",
+        "intervalobs.design.differentiator.hosm_error_bound",
+        "intervalobs.design.gsisio.GSISIODesign",
+        "intervalobs.design.gsisio.GSISIODesign.condition_8",
+        "intervalobs.design.gsisio.GSISIODesign.delta_d",
+        "intervalobs.design.gsisio.GSISIODesign.delta_x",
+        "intervalobs.design.gsisio.gsisio_design",
+        "intervalobs.design.high_gain.ThetaDesign",
+        "intervalobs.design.high_gain.mat_matrix",
+        "intervalobs.design.high_gain.theta_design",
+        "intervalobs.design.hinf.GainDesign",
+        "intervalobs.design.hinf.hinf_gain",
+        "intervalobs.design.hinf.zonotope_size_gain",
+        "intervalobs.design.lpv.BoundednessCertificate",
+        "intervalobs.design.lpv.BoundednessCertificate.feasible",
+        "intervalobs.design.lpv.boundedness_lmi",
+        "intervalobs.design.lpv.certify_vertex_extremes",
+        "intervalobs.design.lpv.eta_and_generator",
+        "intervalobs.design.lpv.uio_observer_matrix",
+        "intervalobs.design.lpv.verify_boundedness",
+        "intervalobs.design.lpv_gains.LPVObserverDesign",
+        "intervalobs.design.lpv_gains.LPVObserverDesign.f_matrices",
+        "intervalobs.design.lpv_gains.LPVObserverDesign.s_matrices",
+        "intervalobs.design.lpv_gains.design_lpv_observer",
+        "intervalobs.design.lpv_gains.rotate_bounds",
+        "intervalobs.design.mixed_monotone.JacobianDecomposition",
+        "intervalobs.design.mixed_monotone.JacobianDecomposition.C",
+        "intervalobs.design.mixed_monotone.decomposition_bounds",
+        "intervalobs.design.mixed_monotone.jacobian_decomposition_parts",
+        "intervalobs.design.mixed_monotone.paper_lipschitz_constant",
+        "intervalobs.design.regions.Disk",
+        "intervalobs.design.regions.Disk.R",
+        "intervalobs.design.regions.ModalDecomposition",
+        "intervalobs.design.regions.RegionPlacement",
+        "intervalobs.design.regions.canonical_eigenvectors",
+        "intervalobs.design.regions.in_region",
+        "intervalobs.design.regions.modal_decomposition",
+        "intervalobs.design.regions.place_in_disks",
+        "intervalobs.design.regions.radius_matrix",
+        "intervalobs.design.uio.UIOCoordinates",
+        "intervalobs.design.uio.UIODecoupling",
+        "intervalobs.design.uio.check_cooperative",
+        "intervalobs.design.uio.design_uio_coordinates",
+        "intervalobs.design.uio.metzler_block_form",
+        "intervalobs.design.uio.uio_constraint_matrices",
+        "intervalobs.design.uio.uio_decoupling",
+        "intervalobs.design.uio_step.UIOStepConstants",
+        "intervalobs.design.uio_step.uio_step_constants",
+        "intervalobs.design.width.WidthDesign",
+        "intervalobs.design.width.design_for_width",
+        "intervalobs.design.width.modal_width_bound",
+        "intervalobs.diagnosis.IsolationRecord",
+        "intervalobs.diagnosis.fault_signals",
+        "intervalobs.diagnosis.isolate",
+        "intervalobs.diagnosis.isolation_outcome",
+        "intervalobs.diagnosis.psi_hat",
+        "intervalobs.diagnosis.runs_for_sigma",
+        "intervalobs.diagnosis.scenario_success",
+        "intervalobs.examples.gsisio.fullrank_system",
+        "intervalobs.examples.hgio.input_signal",
+        "intervalobs.examples.manipulator.ManipulatorModel.da_bounds",
+        "intervalobs.examples.manipulator.ManipulatorModel.db_bounds",
+        "intervalobs.examples.manipulator.ManipulatorModel.rotated_bounds_at",
+        "intervalobs.examples.numerical3.bounds",
+        "intervalobs.examples.numerical3.system",
+        "intervalobs.examples.two_tank.system",
+        "intervalobs.interval.matvec_bounds",
+        "intervalobs.lp.envelope.EnvelopeLP",
+        "intervalobs.observers.gsisio.GSISIO",
+        "intervalobs.observers.gsisio.GSISIO.current_input_bounds",
+        "intervalobs.observers.gsisio.GSISIO.design",
+        "intervalobs.observers.hgio.HighGainIntervalObserver",
+        "intervalobs.observers.hgio.HighGainIntervalObserver.design",
+        "intervalobs.observers.hgio.HighGainIntervalObserver.design_for_width",
+        "intervalobs.observers.hgio.HighGainIntervalObserver.init",
+        "intervalobs.observers.hgio.HighGainIntervalObserver.run",
+        "intervalobs.observers.hull.HullEstimator",
+        "intervalobs.observers.lpv.LPVIntervalObserver",
+        "intervalobs.observers.lpv.LPVIntervalObserver.design",
+        "intervalobs.observers.lpv.LPVIntervalObserver.run_with_signals",
+        "intervalobs.observers.lpv.LPVIntervalUIO",
+        "intervalobs.observers.lpv.LPVIntervalUIO.design",
+        "intervalobs.observers.null_space_gsisio.NullSpaceGSISIO",
+        "intervalobs.observers.null_space_gsisio.NullSpaceGSISIO.design",
+        "intervalobs.observers.null_space_gsisio.NullSpaceGSISIO.width_certificate",
+        "intervalobs.observers.unknown_input.UnknownInputIntervalObserver",
+        "intervalobs.observers.unknown_input.UnknownInputIntervalObserver.design",
+        "intervalobs.observers.unknown_input.UnknownInputIntervalObserver.paper_rho",
+        "intervalobs.observers.zonotopic.IntegratedObserver",
+        "intervalobs.observers.zonotopic.IntegratedObserver.design",
+        "intervalobs.observers.zonotopic.ZonotopicObserver",
+        "intervalobs.observers.zonotopic.ZonotopicObserver.design",
+        "intervalobs.observers.zonotopic.ZonotopicObserver.init",
+        "intervalobs.plotting.plot_psi",
+        "intervalobs.simulate.simulate_nonlinear",
+        "intervalobs.simulate.simulate_sampled",
+        "intervalobs.systems.lpv.LPVSystem",
+        "intervalobs.systems.lpv.SampledLPVModel",
+        "intervalobs.systems.lpv.StepEnclosure",
+        "intervalobs.systems.nonlinear.NonlinearSystem",
+        "intervalobs.systems.sampled.SampledSystem",
+        "intervalobs.zonotope.Zonotope.interval_hull",
+        "intervalobs.zonotope.Zonotope.w_radius",
+        "intervalobs.zonotope.hull_radius",
+    }
+)
+"""Public objects whose docstrings still speak the paper's language in their body: the list may only
+shrink (a converted docstring must leave it, see the test below)."""
+
+
+def _citing_sections(doc: str) -> str:
+    """A docstring without its ``References`` section, a ``Notes`` section that cites one of the five
+    papers by its short name, and any paragraph opened by ``**Reference.**``: the text to scan."""
+    from intervalobs.references import PAPERS
+
+    shorts = [paper.short for paper in PAPERS.values()]
+    sections: list[tuple[str, list[str]]] = [("", [])]
+    lines = doc.splitlines()
+    for index, line in enumerate(lines):
+        if line.strip() and index + 1 < len(lines) and SECTION_RULE.match(lines[index + 1].strip()):
+            sections.append((line.strip(), []))
+        sections[-1][1].append(line)
+    kept = []
+    for name, body in sections:
+        text = "\n".join(body)
+        if name == "References" or (name == "Notes" and any(short in text for short in shorts)):
+            continue
+        kept.append(text)
+    paragraphs = re.split(r"\n\s*\n", "\n".join(kept))
+    return "\n\n".join(p for p in paragraphs if not CITATION_PARAGRAPH.match(p))
+
+
+def docstring_references(doc: str) -> list[str]:
+    """The paper-internal references in a docstring's body (outside its citing sections).
+
+    Parameters
+    ----------
+    doc : str
+        A cleaned docstring (:func:`inspect.getdoc`).
+
+    Returns
+    -------
+    list of str
+        Each offending reference, in order.
+    """
+    return [m.group(0) for m in DOCSTRING_REFERENCE.finditer(_citing_sections(doc))]
+
+
+def _public_docstrings() -> dict[str, str]:
+    """The docstring of every public class, function, method and property, by dotted name."""
+    from public_api import public_objects
+
+    found = {}
+    for name, obj in public_objects().items():
+        target = obj.fget if isinstance(obj, property) else obj
+        found[name] = inspect.getdoc(target) or ""
+    return found
+
+
+def _allowed(name: str) -> bool:
+    return name in DOCSTRING_TO_CONVERT or any(name.startswith(p) for p in DOCSTRING_ALLOWED_PREFIXES)
+
+
+def test_public_docstrings_keep_the_paper_in_their_references() -> None:
+    offending = {
+        name: refs
+        for name, doc in _public_docstrings().items()
+        if not _allowed(name) and (refs := docstring_references(doc))
+    }
+    lines = [f"{name}: {refs}" for name, refs in sorted(offending.items())]
+    assert not offending, (
+        "say what the condition means for the user's system; move the paper's numbers into a "
+        "References section:\n  " + "\n  ".join(lines)
+    )
+
+
+def test_the_docstrings_left_to_convert_still_need_it() -> None:
+    docs = _public_docstrings()
+    stale = sorted(name for name in DOCSTRING_TO_CONVERT if name not in docs or not docstring_references(docs[name]))
+    assert not stale, f"converted (or gone): remove from DOCSTRING_TO_CONVERT: {stale}"
+
+
+@pytest.mark.parametrize(
+    ("doc", "expected"),
+    [
+        ("Gain of Theorem 4.2 and (34).\n\nNotes\n-----\nA plain note.", ["Theorem 4", "(34)"]),
+        ('The observer of eqs. (39)-(40); x(0) and ``"(26)"`` are fine.', ["eqs. (3", "(40)"]),
+        ("Bounds that hold for every noise.\n\nReferences\n----------\nThe paper, Lemma 3 and (8).", []),
+        ("Bounds.\n\nNotes\n-----\nRotondo et al., (63)-(66).", []),
+        ("Bounds.\n\nNotes\n-----\nFrom (63)-(66).", ["(63)", "(66)"]),
+        ("Bounds.\n\n**Reference.** Khajenejad & Yong, Lemma 4.\n\nMore.", []),
+        ("Uses the H-matrix of seed 003.", ["H-matrix", "seed 003"]),
+    ],
+    ids=["body", "equations", "references", "notes-citing", "notes-not-citing", "paragraph", "symbols"],
+)
+def test_the_docstring_scan_finds_a_paper_reference(doc: str, expected: list[str]) -> None:
+    assert docstring_references(doc) == expected
+
+
+def test_every_citation_is_complete_or_says_what_is_unverified() -> None:
+    from intervalobs.references import PAPERS
+
+    for paper in PAPERS.values():
+        assert set(paper.unverified) <= {"authors", "title", "venue", "year", "DOI"}, paper.short
+        given = "doi:" in paper.citation
+        assert given != ("DOI" in paper.unverified), f"{paper.short}: give the DOI or declare it unverified"
