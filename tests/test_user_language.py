@@ -377,7 +377,8 @@ def _citing_sections(doc: str) -> str:
     kept = []
     for name, body in sections:
         text = "\n".join(body)
-        if name == "References" or (name == "Notes" and any(short in text for short in shorts)):
+        cites = any(short in " ".join(text.split()) for short in shorts)
+        if name == "References" or (name == "Notes" and cites):
             continue
         kept.append(text)
     paragraphs = re.split(r"\n\s*\n", "\n".join(kept))
