@@ -343,19 +343,7 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.examples.numerical3.bounds",
         "intervalobs.examples.numerical3.system",
         "intervalobs.examples.two_tank.system",
-        "intervalobs.interval.matvec_bounds",
         "intervalobs.lp.envelope.EnvelopeLP",
-        "intervalobs.plotting.plot_psi",
-        "intervalobs.simulate.simulate_nonlinear",
-        "intervalobs.simulate.simulate_sampled",
-        "intervalobs.systems.lpv.LPVSystem",
-        "intervalobs.systems.lpv.SampledLPVModel",
-        "intervalobs.systems.lpv.StepEnclosure",
-        "intervalobs.systems.nonlinear.NonlinearSystem",
-        "intervalobs.systems.sampled.SampledSystem",
-        "intervalobs.zonotope.Zonotope.interval_hull",
-        "intervalobs.zonotope.Zonotope.w_radius",
-        "intervalobs.zonotope.hull_radius",
     }
 )
 """Public objects whose docstrings still speak the paper's language in their body: the list may only

@@ -59,7 +59,7 @@ def _as_domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[Floa
 
 
 class SampledSystem:
-    """The continuous-discrete model of the sampled-output high-gain paper, eq. (8).
+    """A continuous-time partially linear model whose outputs are measured only at sample times.
 
     Parameters
     ----------
@@ -86,6 +86,10 @@ class SampledSystem:
     ----------
     n, m, p, nw, nv : int
         States, known inputs, outputs, disturbance channels (= n) and noise channels (= p).
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (8).
     """
 
     def __init__(
