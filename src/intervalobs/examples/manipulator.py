@@ -464,7 +464,7 @@ class ManipulatorModel(SampledLPVModel):
         return np.minimum(f * g_lo, f * g_hi), np.maximum(f * g_lo, f * g_hi)
 
     def rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` at points (14)–(15).
+        """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` (uncertainty in observer coordinates) at points.
 
         Parameters
         ----------
@@ -475,6 +475,10 @@ class ManipulatorModel(SampledLPVModel):
         -------
         da_lower, da_upper : numpy.ndarray, shape (..., 4, 4)
         db_lower, db_upper : numpy.ndarray, shape (..., 4, 2)
+
+        References
+        ----------
+        Rotondo et al., (14)–(15).
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
         shape = f3.shape
@@ -487,7 +491,7 @@ class ManipulatorModel(SampledLPVModel):
         return al, ah, bl, bh
 
     def da_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` (11).
+        """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` over the parameter box.
 
         Parameters
         ----------
@@ -497,6 +501,10 @@ class ManipulatorModel(SampledLPVModel):
         Returns
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 4)
+
+        References
+        ----------
+        Rotondo et al. (:mod:`intervalobs.references`), (11).
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
         al, ah = np.zeros((*f3.shape, 4, 4)), np.zeros((*f3.shape, 4, 4))
@@ -505,7 +513,7 @@ class ManipulatorModel(SampledLPVModel):
         return al, ah
 
     def db_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` (12), (23).
+        """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` on the box.
 
         Parameters
         ----------
@@ -515,6 +523,10 @@ class ManipulatorModel(SampledLPVModel):
         Returns
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 2)
+
+        References
+        ----------
+        Rotondo et al., (12) and (23).
         """
         lo, hi, f3, _ = self._entry_bounds(theta)
         bl, bh = np.zeros((*f3.shape, 4, 2)), np.zeros((*f3.shape, 4, 2))
