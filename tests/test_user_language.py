@@ -273,7 +273,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.abstraction.abstraction_sigma",
         "intervalobs.design.abstraction.affine_abstraction",
         "intervalobs.design.abstraction.corollary1_bounds",
-        "intervalobs.design.differentiator.hosm_error_bound",
         "intervalobs.design.gsisio.GSISIODesign",
         "intervalobs.design.gsisio.GSISIODesign.condition_8",
         "intervalobs.design.gsisio.GSISIODesign.delta_d",
@@ -282,9 +281,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.high_gain.ThetaDesign",
         "intervalobs.design.high_gain.mat_matrix",
         "intervalobs.design.high_gain.theta_design",
-        "intervalobs.design.hinf.GainDesign",
-        "intervalobs.design.hinf.hinf_gain",
-        "intervalobs.design.hinf.zonotope_size_gain",
         "intervalobs.design.lpv.BoundednessCertificate",
         "intervalobs.design.lpv.BoundednessCertificate.feasible",
         "intervalobs.design.lpv.boundedness_lmi",
@@ -302,10 +298,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.mixed_monotone.decomposition_bounds",
         "intervalobs.design.mixed_monotone.jacobian_decomposition_parts",
         "intervalobs.design.mixed_monotone.paper_lipschitz_constant",
-        "intervalobs.design.width.WidthDesign",
-        "intervalobs.design.width.design_for_width",
-        "intervalobs.design.width.modal_width_bound",
-        "intervalobs.lp.envelope.EnvelopeLP",
     }
 )
 """Public objects whose docstrings still speak the paper's language in their body: the list may only
