@@ -273,11 +273,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.abstraction.abstraction_sigma",
         "intervalobs.design.abstraction.affine_abstraction",
         "intervalobs.design.abstraction.corollary1_bounds",
-        "intervalobs.design.gsisio.GSISIODesign",
-        "intervalobs.design.gsisio.GSISIODesign.condition_8",
-        "intervalobs.design.gsisio.GSISIODesign.delta_d",
-        "intervalobs.design.gsisio.GSISIODesign.delta_x",
-        "intervalobs.design.gsisio.gsisio_design",
         "intervalobs.design.high_gain.ThetaDesign",
         "intervalobs.design.high_gain.mat_matrix",
         "intervalobs.design.high_gain.theta_design",
@@ -293,11 +288,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.lpv_gains.LPVObserverDesign.s_matrices",
         "intervalobs.design.lpv_gains.design_lpv_observer",
         "intervalobs.design.lpv_gains.rotate_bounds",
-        "intervalobs.design.mixed_monotone.JacobianDecomposition",
-        "intervalobs.design.mixed_monotone.JacobianDecomposition.C",
-        "intervalobs.design.mixed_monotone.decomposition_bounds",
-        "intervalobs.design.mixed_monotone.jacobian_decomposition_parts",
-        "intervalobs.design.mixed_monotone.paper_lipschitz_constant",
     }
 )
 """Public objects whose docstrings still speak the paper's language in their body: the list may only
