@@ -268,11 +268,6 @@ DOCSTRING_ALLOWED_PREFIXES = {
 """Public objects whose docstrings may keep paper-internal references in their body, and why."""
 DOCSTRING_TO_CONVERT = frozenset(
     {
-        "intervalobs.design.abstraction.AffineAbstraction",
-        "intervalobs.design.abstraction.AffineAbstraction.range_bounds",
-        "intervalobs.design.abstraction.abstraction_sigma",
-        "intervalobs.design.abstraction.affine_abstraction",
-        "intervalobs.design.abstraction.corollary1_bounds",
         "intervalobs.design.high_gain.ThetaDesign",
         "intervalobs.design.high_gain.mat_matrix",
         "intervalobs.design.high_gain.theta_design",
@@ -283,11 +278,6 @@ DOCSTRING_TO_CONVERT = frozenset(
         "intervalobs.design.lpv.eta_and_generator",
         "intervalobs.design.lpv.uio_observer_matrix",
         "intervalobs.design.lpv.verify_boundedness",
-        "intervalobs.design.lpv_gains.LPVObserverDesign",
-        "intervalobs.design.lpv_gains.LPVObserverDesign.f_matrices",
-        "intervalobs.design.lpv_gains.LPVObserverDesign.s_matrices",
-        "intervalobs.design.lpv_gains.design_lpv_observer",
-        "intervalobs.design.lpv_gains.rotate_bounds",
     }
 )
 """Public objects whose docstrings still speak the paper's language in their body: the list may only
