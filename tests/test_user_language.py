@@ -268,9 +268,6 @@ DOCSTRING_ALLOWED_PREFIXES = {
 """Public objects whose docstrings may keep paper-internal references in their body, and why."""
 DOCSTRING_TO_CONVERT = frozenset(
     {
-        "intervalobs.design.high_gain.ThetaDesign",
-        "intervalobs.design.high_gain.mat_matrix",
-        "intervalobs.design.high_gain.theta_design",
         "intervalobs.design.lpv.BoundednessCertificate",
         "intervalobs.design.lpv.BoundednessCertificate.feasible",
         "intervalobs.design.lpv.boundedness_lmi",
