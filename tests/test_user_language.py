@@ -1,18 +1,24 @@
 """The user's language: no paper-internal references in error messages, warnings or the user pages.
 
-Error messages and warnings (the strings of every ``raise`` and ``warnings.warn`` in the package) and
-the user pages (README.md, docs/*.md except docs/paper-notes.md, which maps the papers to the code, and
-the markdown cells of the notebooks) say what a condition means for the user's system; the paper and
-its theorem, hypothesis and equation numbers belong in a docstring or in the References block of
-:mod:`intervalobs.references`. The papers' file numbers ("seed 00N") appear nowhere in the package, not
-even in a docstring: only docs/paper-notes.md names them.
+Error messages and warnings (the strings of every ``raise`` and ``warnings.warn`` in the package) and the user pages
+(README.md, docs/*.md except docs/paper-notes.md, which maps the papers to the code, and the markdown cells of the
+notebooks) say what a condition means for the user's system; the paper and its theorem, hypothesis and equation
+numbers belong in a docstring's ``References`` section or in the References block of :mod:`intervalobs.references`.
+The bodies of public docstrings (every public class, function, method and property, :mod:`public_api`) are scanned
+too: outside a ``References`` section, a ``Notes`` section that cites one of the five papers by its short name, and
+a paragraph opened by ``**Reference.**``, they name no numbered theorem, lemma, hypothesis, assumption, proposition,
+corollary or algorithm, no equation number and no paper symbol. The papers' file numbers ("seed 00N") appear nowhere
+in the package, not even in a docstring: only docs/paper-notes.md names them.
 
 Allow-list (the only exceptions):
 
 - ``seed`` as a random-number seed: the argument (``seed=``, ``seed:``, ``--seed``, in a code span),
   seeds numbered 0, 1, 2 … (never 00N), and "per seed", "the seeds", "three seeds" and the like;
 - ``MESSAGE_ALLOWED``: the option values of ``ZonotopicObserver.design(lmi=...)``, which are the
-  paper's equation labels by design.
+  paper's equation labels by design (in a docstring, a quoted ``"(26)"`` is not an equation reference);
+- ``DOCSTRING_ALLOWED_PREFIXES``: the docstrings of :mod:`intervalobs.reproduce`, which map each
+  paper's printed design and numbers to the code. Module docstrings are not scanned: they are the
+  developer's map of a module to its paper.
 """
 
 from __future__ import annotations
@@ -266,19 +272,6 @@ DOCSTRING_ALLOWED_PREFIXES = {
     "design and numbers to the code, as docs/paper-notes.md does",
 }
 """Public objects whose docstrings may keep paper-internal references in their body, and why."""
-DOCSTRING_TO_CONVERT = frozenset(
-    {
-        "intervalobs.design.lpv.BoundednessCertificate",
-        "intervalobs.design.lpv.BoundednessCertificate.feasible",
-        "intervalobs.design.lpv.boundedness_lmi",
-        "intervalobs.design.lpv.certify_vertex_extremes",
-        "intervalobs.design.lpv.eta_and_generator",
-        "intervalobs.design.lpv.uio_observer_matrix",
-        "intervalobs.design.lpv.verify_boundedness",
-    }
-)
-"""Public objects whose docstrings still speak the paper's language in their body: the list may only
-shrink (a converted docstring must leave it, see the test below)."""
 
 
 def _citing_sections(doc: str) -> str:
@@ -332,7 +325,7 @@ def _public_docstrings() -> dict[str, str]:
 
 
 def _allowed(name: str) -> bool:
-    return name in DOCSTRING_TO_CONVERT or any(name.startswith(p) for p in DOCSTRING_ALLOWED_PREFIXES)
+    return any(name.startswith(p) for p in DOCSTRING_ALLOWED_PREFIXES)
 
 
 def test_public_docstrings_keep_the_paper_in_their_references() -> None:
@@ -346,12 +339,6 @@ def test_public_docstrings_keep_the_paper_in_their_references() -> None:
         "say what the condition means for the user's system; move the paper's numbers into a "
         "References section:\n  " + "\n  ".join(lines)
     )
-
-
-def test_the_docstrings_left_to_convert_still_need_it() -> None:
-    docs = _public_docstrings()
-    stale = sorted(name for name in DOCSTRING_TO_CONVERT if name not in docs or not docstring_references(docs[name]))
-    assert not stale, f"converted (or gone): remove from DOCSTRING_TO_CONVERT: {stale}"
 
 
 @pytest.mark.parametrize(
