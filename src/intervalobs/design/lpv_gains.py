@@ -330,11 +330,9 @@ def design_lpv_observer(
     Raises
     ------
     AssumptionError
-        If the outputs are not the first states (up to ``C̃``), R is not block triangular as in the module docstring, or
-        B_un is missing / not constant (UIO).
+        Outputs not the first states, R not block triangular (module docstring), B_un missing/not constant (UIO).
     DesignError
-        Naming the failed condition: the coordinate conditions, the boundedness LMI, or its
-        verification (Metzler, Hurwitz, the LMI blocks) on the fine grid.
+        Naming the failed condition (coordinates, boundedness LMI, or its check on the fine grid).
 
     References
     ----------
