@@ -153,7 +153,17 @@ class _AnyOptions(dict):
 _AnyDirective.option_spec = _AnyOptions()
 for _role in ("class", "func", "meth", "mod", "attr", "data", "exc", "obj", "ref", "doc", "term", "any", "math"):
     roles.register_generic_role(_role, docutils.nodes.literal)
-for _directive in ("math", "seealso", "autosummary", "index", "versionadded", "versionchanged", "deprecated", "plot"):
+for _directive in (
+    "math",
+    "seealso",
+    "autosummary",
+    "index",
+    "versionadded",
+    "versionchanged",
+    "deprecated",
+    "plot",
+    "only",
+):
     directives.register_directive(_directive, _AnyDirective)
 
 

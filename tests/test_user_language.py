@@ -1,23 +1,30 @@
 """The user's language: no paper-internal references in error messages, warnings or the user pages.
 
-Error messages and warnings (the strings of every ``raise`` and ``warnings.warn`` in the package) and
-the user pages (README.md, docs/*.md except docs/paper-notes.md, which maps the papers to the code, and
-the markdown cells of the notebooks) say what a condition means for the user's system; the paper and
-its theorem, hypothesis and equation numbers belong in a docstring or in the References block of
-:mod:`intervalobs.references`. The papers' file numbers ("seed 00N") appear nowhere in the package, not
-even in a docstring: only docs/paper-notes.md names them.
+Error messages and warnings (the strings of every ``raise`` and ``warnings.warn`` in the package) and the user pages
+(README.md, docs/*.md except docs/paper-notes.md, which maps the papers to the code, and the markdown cells of the
+notebooks) say what a condition means for the user's system; the paper and its theorem, hypothesis and equation
+numbers belong in a docstring's ``References`` section or in the References block of :mod:`intervalobs.references`.
+The bodies of public docstrings (every public class, function, method and property, :mod:`public_api`) are scanned
+too: outside a ``References`` section, a ``Notes`` section that cites one of the five papers by its short name, and
+a paragraph opened by ``**Reference.**``, they name no numbered theorem, lemma, hypothesis, assumption, proposition,
+corollary or algorithm, no equation number and no paper symbol. The papers' file numbers ("seed 00N") appear nowhere
+in the package, not even in a docstring: only docs/paper-notes.md names them.
 
 Allow-list (the only exceptions):
 
 - ``seed`` as a random-number seed: the argument (``seed=``, ``seed:``, ``--seed``, in a code span),
   seeds numbered 0, 1, 2 … (never 00N), and "per seed", "the seeds", "three seeds" and the like;
 - ``MESSAGE_ALLOWED``: the option values of ``ZonotopicObserver.design(lmi=...)``, which are the
-  paper's equation labels by design.
+  paper's equation labels by design (in a docstring, a quoted ``"(26)"`` is not an equation reference);
+- ``DOCSTRING_ALLOWED_PREFIXES``: the docstrings of :mod:`intervalobs.reproduce`, which map each
+  paper's printed design and numbers to the code. Module docstrings are not scanned: they are the
+  developer's map of a module to its paper.
 """
 
 from __future__ import annotations
 
 import ast
+import inspect
 import json
 import re
 from pathlib import Path
@@ -246,3 +253,115 @@ def test_the_docs_index_opens_with_pip_install_and_observe() -> None:
     readme_blocks = _fenced_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
     assert readme_blocks[0].strip().startswith("pip install")
     assert "observe(" in readme_blocks[1] and "make" not in readme_blocks[1]
+
+
+# -- public docstrings: what a condition means in the body, the paper's numbers in References ----------
+DOCSTRING_REFERENCE = re.compile(
+    r"\b(?:Theorem|Thm|Lemma|Hypothes[ie]s|Assumption|Proposition|Prop|Corollary|Algorithm)s?\.? \d"
+    r"|(?<![\w\])\[\"'`.])\(\d{1,3}[a-z]?\)"
+    r"|\b[Ee]qs?\. ?\(?\d"
+    r"|(?i:\bseeds? 00\d)|\bH-matrix\b|U2'g"
+)
+"""A paper-internal reference in a docstring: a numbered theorem, lemma, hypothesis, assumption,
+proposition, corollary or algorithm, an equation number ("(68)", "eq. (39)"; not a call such as
+``x(0)`` nor a quoted option value such as ``"(26)"``), a paper's file number, or a paper's symbol."""
+SECTION_RULE = re.compile(r"^-{3,}$")
+CITATION_PARAGRAPH = re.compile(r"^\s*\*\*References?\.\*\*")
+DOCSTRING_ALLOWED_PREFIXES = {
+    "intervalobs.reproduce.": "the reproductions of the papers' examples: each maps a paper's printed "
+    "design and numbers to the code, as docs/paper-notes.md does",
+}
+"""Public objects whose docstrings may keep paper-internal references in their body, and why."""
+
+
+def _citing_sections(doc: str) -> str:
+    """A docstring without its ``References`` section, a ``Notes`` section that cites one of the five
+    papers by its short name, and any paragraph opened by ``**Reference.**``: the text to scan."""
+    from intervalobs.references import PAPERS
+
+    shorts = [paper.short for paper in PAPERS.values()]
+    sections: list[tuple[str, list[str]]] = [("", [])]
+    lines = doc.splitlines()
+    for index, line in enumerate(lines):
+        if line.strip() and index + 1 < len(lines) and SECTION_RULE.match(lines[index + 1].strip()):
+            sections.append((line.strip(), []))
+        sections[-1][1].append(line)
+    kept = []
+    for name, body in sections:
+        text = "\n".join(body)
+        cites = any(short in " ".join(text.split()) for short in shorts)
+        if name == "References" or (name == "Notes" and cites):
+            continue
+        kept.append(text)
+    paragraphs = re.split(r"\n\s*\n", "\n".join(kept))
+    return "\n\n".join(p for p in paragraphs if not CITATION_PARAGRAPH.match(p))
+
+
+def docstring_references(doc: str) -> list[str]:
+    """The paper-internal references in a docstring's body (outside its citing sections).
+
+    Parameters
+    ----------
+    doc : str
+        A cleaned docstring (:func:`inspect.getdoc`).
+
+    Returns
+    -------
+    list of str
+        Each offending reference, in order.
+    """
+    return [m.group(0) for m in DOCSTRING_REFERENCE.finditer(_citing_sections(doc))]
+
+
+def _public_docstrings() -> dict[str, str]:
+    """The docstring of every public class, function, method and property, by dotted name."""
+    from public_api import public_objects
+
+    found = {}
+    for name, obj in public_objects().items():
+        target = obj.fget if isinstance(obj, property) else obj
+        found[name] = inspect.getdoc(target) or ""
+    return found
+
+
+def _allowed(name: str) -> bool:
+    return any(name.startswith(p) for p in DOCSTRING_ALLOWED_PREFIXES)
+
+
+def test_public_docstrings_keep_the_paper_in_their_references() -> None:
+    offending = {
+        name: refs
+        for name, doc in _public_docstrings().items()
+        if not _allowed(name) and (refs := docstring_references(doc))
+    }
+    lines = [f"{name}: {refs}" for name, refs in sorted(offending.items())]
+    assert not offending, (
+        "say what the condition means for the user's system; move the paper's numbers into a "
+        "References section:\n  " + "\n  ".join(lines)
+    )
+
+
+@pytest.mark.parametrize(
+    ("doc", "expected"),
+    [
+        ("Gain of Theorem 4.2 and (34).\n\nNotes\n-----\nA plain note.", ["Theorem 4", "(34)"]),
+        ('The observer of eqs. (39)-(40); x(0) and ``"(26)"`` are fine.', ["eqs. (3", "(40)"]),
+        ("Bounds that hold for every noise.\n\nReferences\n----------\nThe paper, Lemma 3 and (8).", []),
+        ("Bounds.\n\nNotes\n-----\nRotondo et al., (63)-(66).", []),
+        ("Bounds.\n\nNotes\n-----\nFrom (63)-(66).", ["(63)", "(66)"]),
+        ("Bounds.\n\n**Reference.** Khajenejad & Yong, Lemma 4.\n\nMore.", []),
+        ("Uses the H-matrix of seed 003.", ["H-matrix", "seed 003"]),
+    ],
+    ids=["body", "equations", "references", "notes-citing", "notes-not-citing", "paragraph", "symbols"],
+)
+def test_the_docstring_scan_finds_a_paper_reference(doc: str, expected: list[str]) -> None:
+    assert docstring_references(doc) == expected
+
+
+def test_every_citation_is_complete_or_says_what_is_unverified() -> None:
+    from intervalobs.references import PAPERS
+
+    for paper in PAPERS.values():
+        assert set(paper.unverified) <= {"authors", "title", "venue", "year", "DOI"}, paper.short
+        given = "doi:" in paper.citation
+        assert given != ("DOI" in paper.unverified), f"{paper.short}: give the DOI or declare it unverified"

@@ -64,8 +64,7 @@ def cabs(a: ArrayLike) -> ComplexArray:
 def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
     r"""Radius of :math:`M(0 \pm R)`: :math:`M \circ R = \operatorname{cabs}(M)\operatorname{cabs}(R) + 2|M^I||R^I|`.
 
-    Its real part is :math:`|M^R|R^R + |M^I|R^I` and its imaginary part :math:`|M^I|R^R + |M^R|R^I`
-    (the sampled-output high-gain paper, Theorem 2.1).
+    Its real part is :math:`|M^R|R^R + |M^I|R^I` and its imaginary part :math:`|M^I|R^R + |M^R|R^I`.
 
     Parameters
     ----------
@@ -78,6 +77,10 @@ def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
     -------
     numpy.ndarray, shape (..., k)
         Radius of the image, with nonnegative real and imaginary parts.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Theorem 2.1.
     """
     mat = np.asarray(m, dtype=complex)
     rad = _radius("r", r)
@@ -90,7 +93,7 @@ def ctimes(m: ArrayLike, r: ArrayLike) -> ComplexArray:
 def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: ArrayLike, r_imag: ArrayLike) -> FloatArray:
     r"""Real part of :math:`M \circ R`, :math:`|M^R|R^R + |M^I|R^I`, from precomputed magnitudes.
 
-    The sampled-output high-gain paper, Theorem 2.1: the real radius of :math:`M(c \pm R)`. (Its imaginary part is the
+    The real radius of :math:`M(c \pm R)`. (Its imaginary part is the
     same expression with :math:`|M^R|` and :math:`|M^I|` swapped.) No validation: for hot loops whose
     magnitudes are computed once.
 
@@ -104,6 +107,10 @@ def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: Array
     Returns
     -------
     numpy.ndarray, shape (..., k)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Theorem 2.1.
     """
     mr, mi = np.asarray(m_real_abs, dtype=float), np.asarray(m_imag_abs, dtype=float)
     return np.asarray(r_real, dtype=float) @ mr.T + np.asarray(r_imag, dtype=float) @ mi.T
@@ -112,7 +119,7 @@ def real_part_radius(m_real_abs: ArrayLike, m_imag_abs: ArrayLike, r_real: Array
 def linear_image(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[ComplexArray, ComplexArray]:
     r"""Linear image of a centred complex interval, :math:`M(c \pm R) \subseteq Mc \pm M \circ R`.
 
-    The sampled-output high-gain paper, Theorem 2.1. Each component of the image is a sum of terms involving distinct
+    Each component of the image is a sum of terms involving distinct
     real variables, so the rectangle is the exact hull of :math:`\{Mz : z \in c \pm R\}`.
 
     Parameters
@@ -127,6 +134,10 @@ def linear_image(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[ComplexArray
     Returns
     -------
     centre, radius : numpy.ndarray, shape (..., k)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Theorem 2.1.
     """
     mat = np.asarray(m, dtype=complex)
     cen = np.asarray(c, dtype=complex)
@@ -138,9 +149,8 @@ def linear_image(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[ComplexArray
 def real_part_bounds(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[FloatArray, FloatArray]:
     r"""Lower and upper bounds of :math:`\operatorname{Re}(Mz)` for :math:`z \in c \pm R`.
 
-    The real part of Theorem 2.1: :math:`\operatorname{Re}(Mc) \mp (|M^R|R^R + |M^I|R^I)`. This is how
-    the bounds of a real state are recovered from complex observer coordinates (the sampled-output high-gain paper,
-    (25), (51)).
+    The real part of the linear image: :math:`\operatorname{Re}(Mc) \mp (|M^R|R^R + |M^I|R^I)`. This is
+    how the bounds of a real state are recovered from complex observer coordinates.
 
     Parameters
     ----------
@@ -152,6 +162,10 @@ def real_part_bounds(m: ArrayLike, c: ArrayLike, r: ArrayLike) -> tuple[FloatArr
     Returns
     -------
     lower, upper : numpy.ndarray, shape (..., k)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Theorem 2.1; (25), (51).
     """
     centre, radius = linear_image(m, c, r)
     return centre.real - radius.real, centre.real + radius.real
@@ -161,7 +175,7 @@ def delta_operator(eta: ArrayLike) -> ComplexArray:
     r"""The matrix :math:`\Delta(\eta) = [\operatorname{diag}(\eta^R),\; i\operatorname{diag}(\eta^I)]`.
 
     With it a point of :math:`z^c \pm z^r` is :math:`z^c + \Delta(z^r)\sigma` for some
-    :math:`\sigma \in [-1, 1]^{2n}` (the sampled-output high-gain paper, Proposition 2.2, eqs. (3)–(4)).
+    :math:`\sigma \in [-1, 1]^{2n}`.
 
     Parameters
     ----------
@@ -171,6 +185,10 @@ def delta_operator(eta: ArrayLike) -> ComplexArray:
     Returns
     -------
     numpy.ndarray, shape (n, 2n)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Proposition 2.2, eqs. (3)–(4).
     """
     rad = _radius("eta", eta)
     if rad.ndim != 1:

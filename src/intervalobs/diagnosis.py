@@ -69,10 +69,15 @@ class IsolationRecord:
     ----------
     t : numpy.ndarray, shape (T,)
     eps_lower, eps_upper : numpy.ndarray, shape (..., T, n)
-        :math:`\underline\varepsilon, \overline\varepsilon` (29)–(30).
+        :math:`\underline\varepsilon, \overline\varepsilon`: how far the measured outputs lie inside
+        the bounds, from below and from above (negative: outside).
     signal_lower, signal_upper : numpy.ndarray, shape (..., T, q)
         Their coordinates along the columns of H, :math:`H_j^T\varepsilon/\|H_j\|^2` (the scalar of
-        the projection :math:`\Pi(H^{(j)})\varepsilon` of (27)–(28)).
+        the projection :math:`\Pi(H^{(j)})\varepsilon` on the fault's direction).
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): the signals (29)–(30) and their projections (27)–(28).
     """
 
     t: FloatArray
@@ -88,13 +93,17 @@ def fault_signals(h_matrix: ArrayLike, eps: ArrayLike) -> FloatArray:
     Parameters
     ----------
     h_matrix : array_like, shape (n, q)
-        The unknown-input directions :math:`H = RB_{un}` (26) of an :class:`~intervalobs.observers.lpv.LPVIntervalUIO`.
+        The unknown-input directions :math:`H = RB_{un}` of an :class:`~intervalobs.observers.lpv.LPVIntervalUIO`.
     eps : array_like, shape (..., n)
-        Isolation signals :math:`\underline\varepsilon` or :math:`\overline\varepsilon` (29)–(30).
+        Isolation signals :math:`\underline\varepsilon` or :math:`\overline\varepsilon`.
 
     Returns
     -------
     numpy.ndarray, shape (..., q)
+
+    References
+    ----------
+    Rotondo et al.: H of (26), the signals (29)–(30).
     """
     h = np.asarray(h_matrix, dtype=float)
     projector = (h / np.sum(h**2, axis=0)).T  # rows: H_j^T / |H_j|^2
@@ -113,7 +122,7 @@ def isolate(
     Parameters
     ----------
     observer : LPVIntervalUIO
-        The unknown-input observer whose signals (29)–(30) are projected on its H's columns.
+        The unknown-input observer whose signals are projected on its H's columns.
     t : array_like, shape (T,)
         Uniform sample times.
     y : array_like, shape (T, p) or (M, T, p)
@@ -127,6 +136,10 @@ def isolate(
     -------
     estimate : Estimate
     record : IsolationRecord
+
+    References
+    ----------
+    Rotondo et al.: the signals (29)–(30).
     """
     est, el, eh = observer.run_with_signals(t, y, u, theta=theta)
     return est, IsolationRecord(est.t, el, eh, fault_signals(observer.H, el), fault_signals(observer.H, eh))
@@ -160,7 +173,7 @@ def first_negative_time(t: ArrayLike, signal: ArrayLike, tol: float = 0.0) -> Fl
 def isolation_outcome(
     t: ArrayLike, signal_lower: ArrayLike, signal_upper: ArrayLike, onset: float, tol: float = 0.0
 ) -> dict[str, Any]:
-    r"""Decisions of the isolation logic (27)–(28) for one run.
+    r"""Decisions of the isolation logic for one run: a fault is flagged when its signal goes negative.
 
     Parameters
     ----------
@@ -178,6 +191,10 @@ def isolation_outcome(
         ``false_alarm`` (bool), ``isolated`` (1-based indices of faults whose signal went negative
         after the onset), ``detection_time_s`` (first negative time per isolated fault),
         ``first_negative_s`` (per fault, None if never).
+
+    References
+    ----------
+    Rotondo et al.: the isolation logic (27)–(28).
     """
     tt = np.asarray(t, dtype=float)
     first = np.fmin(first_negative_time(tt, signal_lower, tol), first_negative_time(tt, signal_upper, tol))
@@ -196,7 +213,7 @@ def isolation_outcome(
 
 
 def scenario_success(first_negative: ArrayLike, active: Sequence[int], onset: float) -> NDArray[np.bool_]:
-    """Indicator I of (118): exactly the active faults flagged, none before the onset.
+    """Indicator I of a run: exactly the active faults flagged, none before the onset.
 
     Parameters
     ----------
@@ -210,6 +227,10 @@ def scenario_success(first_negative: ArrayLike, active: Sequence[int], onset: fl
     Returns
     -------
     numpy.ndarray of bool, shape (...)
+
+    References
+    ----------
+    Rotondo et al.: the indicator of (118).
     """
     fn = np.asarray(first_negative, dtype=float)
     flagged = np.isfinite(fn)
@@ -221,7 +242,7 @@ def scenario_success(first_negative: ArrayLike, active: Sequence[int], onset: fl
 
 
 def psi_hat(indicators: ArrayLike) -> float:
-    r"""Monte Carlo estimate :math:`\hat\Psi = \frac1M\sum_i I_i` (119).
+    r"""Monte Carlo estimate :math:`\hat\Psi = \frac1M\sum_i I_i`: the share of runs isolated correctly.
 
     Parameters
     ----------
@@ -230,6 +251,10 @@ def psi_hat(indicators: ArrayLike) -> float:
     Returns
     -------
     float
+
+    References
+    ----------
+    Rotondo et al.: Ψ̂ of (119).
     """
     ind = np.asarray(indicators, dtype=float).ravel()
     if ind.size == 0:
@@ -238,7 +263,7 @@ def psi_hat(indicators: ArrayLike) -> float:
 
 
 def runs_for_sigma(sigma: float) -> int:
-    r"""Runs M with :math:`\sigma_{\hat\Psi} \le \sigma`: :math:`M \ge \lceil \sigma^{-2}/4 \rceil` (120).
+    r"""Runs M with :math:`\sigma_{\hat\Psi} \le \sigma`: :math:`M \ge \lceil \sigma^{-2}/4 \rceil`.
 
     Parameters
     ----------
@@ -247,6 +272,10 @@ def runs_for_sigma(sigma: float) -> int:
     Returns
     -------
     int
+
+    References
+    ----------
+    Rotondo et al.: the run count (120).
     """
     if not sigma > 0:
         raise BoundsError(f"sigma: expected a positive standard deviation, got {sigma!r}")

@@ -230,7 +230,7 @@ def matvec_bounds(a: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
 
     .. math:: A^+\underline{x} - A^-\overline{x} \le Ax \le A^+\overline{x} - A^-\underline{x}
 
-    (Khajenejad & Yong, Proposition 2 / Lemma 1). The bounds are attained at vertices of the box, so they are
+    The bounds are attained at vertices of the box, so they are
     the interval hull of :math:`\{Ax : \underline{x} \le x \le \overline{x}\}`. Computed in
     round-to-nearest for the hot loops, whose outputs :func:`inflate` widens; ``a @ Interval(lower,
     upper)`` is the outward-rounded form.
@@ -245,6 +245,10 @@ def matvec_bounds(a: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
     Returns
     -------
     lower, upper : numpy.ndarray, shape (..., m)
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`), Proposition 2 / Lemma 1.
     """
     a = np.asarray(a, dtype=float)
     lo = np.asarray(lower, dtype=float)

@@ -226,7 +226,7 @@ def plot_psi(
     level_label: str = "uncertainty level",
     magnitude_label: str = "fault magnitude",
 ) -> Figure:
-    """Heat map of a campaign's Ψ̂ (Rotondo et al., (119)) over uncertainty levels × fault magnitudes.
+    """Heat map of a campaign's Ψ̂ (share of runs isolated correctly) over uncertainty levels × fault magnitudes.
 
     Parameters
     ----------
@@ -242,6 +242,10 @@ def plot_psi(
     Returns
     -------
     matplotlib.figure.Figure
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): Ψ̂ of (119).
     """
     import matplotlib.pyplot as plt
 

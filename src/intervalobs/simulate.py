@@ -489,7 +489,7 @@ def simulate_sampled(
     runs: int | None = None,
     substeps: int = 4,
 ) -> SampledSimulation:
-    """Simulate the sampled-output high-gain paper's eq. (8) with admissible disturbance, noise and initial state.
+    """Simulate a partially linear model with sampled outputs: admissible disturbance, noise and initial state.
 
     Classical Runge–Kutta (:func:`runge_kutta_step`) on a grid ``substeps`` times finer than the
     observer's, the disturbance switching on that finer grid (inside the observer's steps), the known
@@ -524,6 +524,10 @@ def simulate_sampled(
     ------
     DataError
         A bad grid, or ``runs``, ``substeps``, ``seed`` or ``noise`` out of its range.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), model (8).
     """
     times = as_time("t", t)
     steps = times.size
@@ -616,7 +620,7 @@ def simulate_nonlinear(
     seed: int = 0,
     runs: int | None = None,
 ) -> NonlinearSimulation:
-    """Iterate Khajenejad & Yong's eq. (3) with admissible noise.
+    """Iterate a nonlinear discrete-time system with unknown inputs, with admissible noise.
 
     Parameters
     ----------
@@ -644,6 +648,10 @@ def simulate_nonlinear(
     ------
     DataError
         ``d`` of the wrong shape or not finite, or ``runs``, ``seed`` or ``noise`` out of its range.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`), model (3).
     """
     dd = np.asarray(d, dtype=float)
     if dd.ndim not in (2, 3) or dd.shape[-1] != system.q:

@@ -36,7 +36,7 @@ _MAX_EXACT_GENERATORS = 20
 
 
 def hull_radius(generators: ArrayLike) -> FloatArray:
-    r"""Radius of the interval hull: the row sums :math:`\|R_i\|_1` (the integrated-observer paper, (A2), (57)).
+    r"""Radius of the interval hull: the row sums :math:`\|R_i\|_1`.
 
     Parameters
     ----------
@@ -45,6 +45,10 @@ def hull_radius(generators: ArrayLike) -> FloatArray:
     Returns
     -------
     numpy.ndarray, shape (..., n)
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`), (A2) and (57).
     """
     return np.abs(np.asarray(generators, dtype=float)).sum(axis=-1)
 
@@ -241,12 +245,15 @@ class Zonotope:
         return Zonotope(self.center, reduce_order(self.generators, int(order)))
 
     def interval_hull(self) -> tuple[FloatArray, FloatArray]:
-        r"""Smallest box containing the zonotope, :math:`c \pm |R|\mathbf 1` (the integrated-observer paper, (A2),
-        (57)).
+        r"""Smallest box containing the zonotope, :math:`c \pm |R|\mathbf 1`.
 
         Returns
         -------
         lower, upper : numpy.ndarray, shape (n,)
+
+        References
+        ----------
+        The integrated-observer paper, (A2) and (57).
         """
         r = hull_radius(self.generators)
         return self.center - r, self.center + r
@@ -267,7 +274,7 @@ class Zonotope:
         return float(np.sqrt(max(np.trace(self.generators.T @ w @ self.generators), 0.0)))
 
     def w_radius(self, weight: ArrayLike | None = None) -> float:
-        r"""W-radius :math:`\max_{s \in [-1,1]^m} s^\top R^\top W R s` (Definition A.4, (24)).
+        r"""W-radius :math:`\max_{s \in [-1,1]^m} s^\top R^\top W R s`: the zonotope's size in the weight ``W``.
 
         The maximum of a convex quadratic over a box is attained at a vertex; the vertices are
         enumerated, so this is exact and limited to 20 generators (reduce first).
@@ -280,6 +287,10 @@ class Zonotope:
         Returns
         -------
         float
+
+        References
+        ----------
+        The integrated-observer paper, Definition A.4 and (24).
         """
         w = self._weight(weight)
         m = self.order

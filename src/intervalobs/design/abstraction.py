@@ -63,13 +63,17 @@ class AffineAbstraction:
     e_lower, e_upper : numpy.ndarray, shape (m,)
         Offsets (recomputed from the vertex values and rounded outward after the LP).
     theta : float
-        Optimal value of LP (1) as reported by the solver.
+        Optimal value of the abstraction LP as reported by the solver.
     sigma : numpy.ndarray, shape (m,)
         The margin used for each component.
     domain : Interval
         The box on which the bounds hold.
     status : str
         Solver message.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): LP (1).
     """
 
     A_lower: FloatArray
@@ -82,7 +86,7 @@ class AffineAbstraction:
     status: str
 
     def range_bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        r"""Bounds of :math:`q` over sub-boxes of the domain (Corollary 1's :math:`\hat q` terms).
+        r"""Bounds of :math:`q` over sub-boxes of the domain (the range of the affine bounds).
 
         Rows whose box is not inside the domain get :math:`(-\infty, +\infty)` (no information).
 
@@ -93,6 +97,10 @@ class AffineAbstraction:
         Returns
         -------
         lower, upper : numpy.ndarray, shape (..., m)
+
+        References
+        ----------
+        Khajenejad & Yong (:mod:`intervalobs.references`): the :math:`\hat q` terms of Corollary 1.
         """
         lo = np.asarray(lower, dtype=float)
         hi = np.asarray(upper, dtype=float)
@@ -110,7 +118,7 @@ def abstraction_sigma(
     j_upper: ArrayLike | None = None,
     hessian_diag_bound: ArrayLike | None = None,
 ) -> FloatArray:
-    r"""Sound :math:`\sigma` of LP (1) for a box, from Jacobian bounds and/or second-derivative bounds.
+    r"""Sound :math:`\sigma` of the abstraction LP for a box, from Jacobian bounds and/or second-derivative bounds.
 
     Parameters
     ----------
@@ -125,6 +133,10 @@ def abstraction_sigma(
     -------
     numpy.ndarray, shape (m,)
         The smaller of the available bounds, rounded up.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): LP (1).
     """
     h = np.asarray(upper, dtype=float) - np.asarray(lower, dtype=float)
     candidates = []
@@ -150,7 +162,7 @@ def affine_abstraction(
     sigma: ArrayLike,
     m: int | None = None,
 ) -> AffineAbstraction:
-    r"""Solve LP (1) of Khajenejad & Yong on a box with HiGHS and return sound affine bounds.
+    r"""Solve the abstraction LP on a box with HiGHS and return sound affine bounds.
 
     Parameters
     ----------
@@ -159,7 +171,7 @@ def affine_abstraction(
     lower, upper : array_like, shape (n,)
         The box :math:`\mathcal B` (finite).
     sigma : array_like, shape (m,) or scalar
-        Margin of (1) for the function class (see :func:`abstraction_sigma`).
+        Margin σ of the LP for the function class (see :func:`abstraction_sigma`).
     m : int, optional
         Expected number of components of ``func``.
 
@@ -171,6 +183,10 @@ def affine_abstraction(
     ------
     DesignError
         If HiGHS does not return an optimal solution.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): LP (1); its margin σ.
     """
     box = Interval(lower, upper)
     if box.lower.ndim != 1:
@@ -227,7 +243,9 @@ def affine_abstraction(
 def corollary1_bounds(
     decomposition: tuple[ArrayLike, ArrayLike], abstraction: tuple[ArrayLike, ArrayLike]
 ) -> tuple[FloatArray, FloatArray]:
-    r"""Corollary 1: :math:`\underline q = \max(q_d(\underline x,\overline x), \hat{\underline q})`, same for the upper.
+    r"""The intersection of the decomposition and the affine bounds.
+
+    :math:`\underline q = \max(q_d(\underline x,\overline x), \hat{\underline q})`, same for the upper.
 
     Parameters
     ----------
@@ -239,6 +257,10 @@ def corollary1_bounds(
     Returns
     -------
     lower, upper : numpy.ndarray
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): Corollary 1.
     """
     return (
         np.maximum(np.asarray(decomposition[0], dtype=float), np.asarray(abstraction[0], dtype=float)),

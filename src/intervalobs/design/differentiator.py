@@ -73,18 +73,23 @@ def levant_gains(order: int, lipschitz: float) -> FloatArray:
 
 
 def hosm_error_bound(delta_bar: ArrayLike, delta_dot_bar: ArrayLike, mu1: float) -> FloatArray:
-    r"""The paper's derivative-error bound :math:`\beta = \bar{\dot\delta} + \mu_1\bar\delta^{1/2}` (eq. (8)).
+    r"""The differentiator's derivative-error bound :math:`\beta = \bar{\dot\delta} + \mu_1\bar\delta^{1/2}`.
 
     Parameters
     ----------
     delta_bar, delta_dot_bar : array_like, shape (p,)
         Bounds of the measurement noise and of its derivative.
     mu1 : float
-        Constant of Theorem 3 (eq. (4)) for ``j = 1``, ``s = 1``.
+        Gain of the differentiator's error bound for the first derivative.
 
     Returns
     -------
     numpy.ndarray, shape (p,)
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): β of eq. (8); ``mu1`` of Theorem 3, eq. (4), for ``j =
+    1``, ``s = 1``.
     """
     d = as_vector("delta_bar", delta_bar)
     dd = as_vector("delta_dot_bar", delta_dot_bar, d.size)

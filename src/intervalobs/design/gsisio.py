@@ -40,22 +40,23 @@ BoxPair = tuple[FloatArray, FloatArray]
 
 @dataclass(frozen=True)
 class GSISIODesign:
-    r"""Everything Theorems 1–2 and Lemmas 2–5 of Khajenejad & Yong compute, recomputed (no check raises here).
+    r"""Every design quantity of the simultaneous input and state observer, recomputed (no check raises here).
 
     Attributes
     ----------
     J, K, L : numpy.ndarray
-        :math:`J = [G; H]^\dagger` and the gains of Theorem 1.
+        :math:`J = [G; H]^\dagger` and the observer gains.
     K1, K2, L1, L2 : numpy.ndarray
         Column blocks (first n columns: state part).
     rank_condition_8 : tuple of int
-        :math:`(\mathrm{rk}(I - K_1 - L_1), \mathrm{rk}(I - K_1 + L_1))`; (8) needs both equal to n.
+        :math:`(\mathrm{rk}(I - K_1 - L_1), \mathrm{rk}(I - K_1 + L_1))`; both must equal n for the state and input
+        to be recoverable.
     correctness_radius : float
-        :math:`\rho(K_1 + L_1)`; the framers of (9) are correct iff it is < 1 (our addition).
+        :math:`\rho(K_1 + L_1)`; the bounds are correct iff it is < 1 (our addition).
     jacobian_f, jacobian_g : tuple of numpy.ndarray
         Jacobian bounds on the Jacobian domain (interval evaluation).
     C_f, C_g, W_f, W_g : numpy.ndarray
-        Matrices of the decomposition (2) and the width matrices.
+        Matrices of the decomposition and the width matrices.
     L_f, L_g : float
         Lipschitz bounds :math:`\sup\|Df\|`, :math:`\sup\|Dg\|` on the domain.
     L_fd, L_gd : float
@@ -73,6 +74,11 @@ class GSISIODesign:
         :math:`\|T_f\Delta w + T_g\Delta v\|`.
     conditions : dict
         Which of (i), (ii), (iii), (iv) hold, with the numbers behind them.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): Theorems 1–2 (gains, stability), Lemmas 2–5 (constants and
+    width bounds), the existence condition (8), the framers (9), the decomposition (2).
     """
 
     J: FloatArray
@@ -106,7 +112,12 @@ class GSISIODesign:
 
     @property
     def condition_8(self) -> bool:
-        """Whether the existence condition (8) holds."""
+        """Whether the state and the unknown input can both be recovered (the existence condition).
+
+        References
+        ----------
+        Khajenejad & Yong (:mod:`intervalobs.references`): the existence condition (8).
+        """
         n = self.K1.shape[0]
         return self.rank_condition_8 == (n, n)
 
@@ -119,7 +130,9 @@ class GSISIODesign:
         return None
 
     def delta_x(self, delta0: float, steps: int) -> FloatArray:
-        r"""Lemma 5: :math:`\delta^x_k = \mathcal L^k\delta_0 + \|\Delta z\|(1 - \mathcal L^k)/(1 - \mathcal L)`.
+        r"""The state-width bound of the paper, in closed form.
+
+        .. math:: \delta^x_k = \mathcal L^k\delta_0 + \|\Delta z\|\frac{1 - \mathcal L^k}{1 - \mathcal L}
 
         Uses the sound :math:`\mathcal L`; NaN everywhere unless :math:`\mathcal L < 1` (condition (i)).
         The steady state is :math:`\|\Delta z\|/(1 - \mathcal L)` (the paper prints
@@ -135,6 +148,10 @@ class GSISIODesign:
         Returns
         -------
         numpy.ndarray, shape (steps,)
+
+        References
+        ----------
+        Khajenejad & Yong (:mod:`intervalobs.references`): Lemma 5.
         """
         ell = self.script_L
         if not ell < 1.0:
@@ -144,7 +161,7 @@ class GSISIODesign:
         return inflate(0.0, sequence, CERTIFICATE_MARGIN, floor=CERTIFICATE_FLOOR)[1]
 
     def delta_d(self, delta_x: FloatArray, dw: FloatArray, dv: FloatArray) -> FloatArray:
-        r"""Lemma 5's input-width bound, corrected to use :math:`\delta^x_k` and :math:`\delta^x_{k-1}`.
+        r"""The paper's input-width bound, corrected to use :math:`\delta^x_k` and :math:`\delta^x_{k-1}`.
 
         :math:`\|\Delta^d_{k-1}\| \le \|\hat J_1\|\delta^x_k + (L_{f_d}\|\hat J_1\| + L_{g_d}\|\hat J_2\|)\delta^x_{k-1}
         + \|\hat J_1\Delta w + \hat J_2\Delta v\|`, :math:`\hat J = |J|`. Row k bounds the width of
@@ -160,6 +177,10 @@ class GSISIODesign:
         Returns
         -------
         numpy.ndarray, shape (T,)
+
+        References
+        ----------
+        Khajenejad & Yong (:mod:`intervalobs.references`): Lemma 5.
         """
         n = self.K1.shape[0]
         jh = np.abs(self.J)
@@ -250,14 +271,14 @@ def _condition_iii(script_l: float, n: int) -> dict[str, Any]:
 def gsisio_design(
     system: NonlinearSystem, bounds: Bounds, jacobian_domain: tuple[ArrayLike, ArrayLike] | None = None
 ) -> GSISIODesign:
-    r"""Recompute every design quantity of Khajenejad & Yong's Theorems 1–2 and Lemmas 2, 5 for a system.
+    r"""Recompute every design quantity of the simultaneous input and state observer for a system.
 
     Parameters
     ----------
     system : NonlinearSystem
         With both Jacobians.
     bounds : Bounds
-        Boxes of the noises ``w``, ``v`` (their widths enter Lemma 5's :math:`\delta_z`).
+        Boxes of the noises ``w``, ``v`` (their widths enter the width bounds).
     jacobian_domain : tuple of array_like, optional
         Box on which the Jacobian bounds (and so :math:`C_f, C_g`, the Lipschitz constants) hold;
         default the whole space (the bounds must then be finite, as for the paper's example).
@@ -265,6 +286,10 @@ def gsisio_design(
     Returns
     -------
     GSISIODesign
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): Theorems 1–2 and Lemmas 2, 5; :math:`\delta_z` of Lemma 5.
     """
     n, p = system.n, system.p
     full = bounds.resolve(system)

@@ -50,25 +50,32 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class ThetaDesign:
-    """Both readings of Theorem 4.4 (see the module docstring).
+    """The high gain θ and its margin α, in the paper's reading and in a sound one (module docstring).
 
     Attributes
     ----------
     lambda_min_M2 : float
-        :math:`\\lambda_{\\min}(DQ^{-1})` from LMI (32).
+        :math:`\\lambda_{\\min}(DQ^{-1})` from the paper's LMI.
     alpha_paper, theta_paper : float
-        (43) with the modulus of the complex logarithm, and (33).
+        α with the modulus of the complex logarithm (the paper's reading), and θ from it.
     alpha_sound, theta_sound : float
-        The real-valued solution of (42) at ``t = 1`` and (33).
+        The real-valued α at ``t = 1`` (sound reading), and θ from it.
     t_star_paper, t_star_sound : float
-        Time from which conditions (34) hold with ``theta_paper`` / ``theta_sound``.
+        Time from which the margin conditions on the disturbance and the noise hold with ``theta_paper`` /
+        ``theta_sound``.
     condition34_at_0 : numpy.ndarray
-        ``|v1 d^r|`` (must be <= alpha_d at t = 0, eq. (34)); the values do not depend on theta.
+        ``|v1 d^r|`` (must be <= alpha_d at t = 0 for the margin condition); the values do not depend on theta.
     mat_abscissa_paper, mat_abscissa_sound : float
-        Largest real eigenvalue of (35) with each (alpha, theta); >= 0 means not Hurwitz.
+        Largest real eigenvalue of the radius matrix (:func:`mat_matrix`) with each (alpha, theta); >= 0 means not
+        Hurwitz.
     radius_abscissa : float
         Largest real eigenvalue of M1 (the matrix that really decides the radius stability when
         phi is bounded by its range, alpha = 0, in coordinates where theta cancels).
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): Theorem 4.4: LMI (32), α from (43) (paper)
+    or (42) (sound), θ from (33), conditions (34), matrix (35).
     """
 
     lambda_min_M2: float
@@ -85,8 +92,10 @@ class ThetaDesign:
 
 
 def mat_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike, alpha: float, theta: float) -> FloatArray:
-    r"""Matrix (35)/(36): :math:`M_1 + [\operatorname{diag}(-\Theta) + \alpha I,\, \alpha I;\; \alpha I,\,
-    \operatorname{diag}(-\Theta) + \alpha I]`.
+    r"""The radius matrix of the θ-shifted observer.
+
+    .. math:: M_1 + [\operatorname{diag}(-\Theta) + \alpha I,\, \alpha I;\; \alpha I,\,
+              \operatorname{diag}(-\Theta) + \alpha I]
 
     Parameters
     ----------
@@ -97,11 +106,16 @@ def mat_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike, alpha: flo
     C : array_like, shape (p, n)
         Output matrix.
     alpha, theta : float
-        The scalars of Theorem 4.4.
+        The margin α and the high gain θ.
 
     Returns
     -------
     numpy.ndarray, shape (2n, 2n)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): matrices (35)/(36), the scalars of Theorem
+    4.4.
     """
     n = modal.eigenvalues.size
     eye = np.eye(n)
@@ -136,12 +150,12 @@ def theta_design(
     lambda_min: float | None = None,
     paper_v1: ArrayLike | None = None,
 ) -> ThetaDesign:
-    r"""Theorem 4.4: :math:`\lambda_{\min}(M_2)`, :math:`\alpha` and :math:`\theta`, as printed and as sound.
+    r"""The high gain θ with its margin α, as printed and as sound (with :math:`\lambda_{\min}(M_2)`).
 
     Parameters
     ----------
     modal : ModalDecomposition
-        Decomposition of ``A - L C`` (eq. (13)).
+        Decomposition of ``A - L C``.
     L : array_like, shape (n, p)
         Gain :math:`L_1`.
     C : array_like, shape (p, n)
@@ -151,12 +165,12 @@ def theta_design(
     v_radius : array_like, shape (p,)
         :math:`\delta`, bound of the measurement noise.
     alpha_d, alpha_n : float
-        The scalars of (34) (printed: 0.08 and 0.03).
+        The margins θ must leave for the disturbance and the noise (printed: 0.08 and 0.03).
     lambda_min : float, optional
-        Use this :math:`\lambda_{\min}(M_2)` instead of solving LMI (32) (its value depends only on
+        Use this :math:`\lambda_{\min}(M_2)` instead of solving the paper's LMI (its value depends only on
         the LMI's normalisation; the paper's numbers imply -1).
     paper_v1 : array_like, shape (n, n), optional
-        The :math:`v_1` to use in the paper's reading of (43) only, e.g. the paper's printed one. That
+        The :math:`v_1` to use in the paper's reading of α only, e.g. the paper's printed one. That
         reading takes the complex logarithm of :math:`(v_1d^r)_j`, which depends on the arbitrary phase of
         row :math:`j` of :math:`v_1`; the sound reading uses moduli only and always takes ``modal.v1``.
         Default: ``modal.v1`` (canonical phase, :func:`~intervalobs.design.regions.canonical_eigenvectors`).
@@ -164,6 +178,11 @@ def theta_design(
     Returns
     -------
     ThetaDesign
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): Theorem 4.4: LMI (32), conditions (34) with
+    the scalars α_d, α_n, the complex logarithm of (43); the decomposition (13).
     """
     n = modal.eigenvalues.size
     gain = as_matrix("L", L, (n, None))

@@ -77,9 +77,9 @@ class GainDesign:
     gain : numpy.ndarray, shape (n, p)
         Observer gain ``L``.
     lmi : str
-        Which LMIs were solved, e.g. ``"(19)"``, ``"(54)-(55)"``, ``"(26)"``.
+        Which LMIs were solved, by the paper's equation labels (``"(19)"``: H∞, ``"(26)"``: zonotope size, ...).
     gamma : float or None
-        Optimal γ of the H∞ LMI (None for (26)).
+        Optimal γ of the H∞ LMI (None for the zonotope-size LMI).
     hinf_norm : float
         H∞ norm of :math:`(A_0 - LC, E_d)` computed on a frequency grid (a lower bound of the true norm,
         checked against γ).
@@ -94,7 +94,12 @@ class GainDesign:
     status : str
         Solver status.
     extra : dict
-        Method-specific numbers (e.g. the objective of (26)).
+        Method-specific numbers (e.g. the objective of the zonotope-size LMI).
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`): LMIs (19), (54)–(55), (26); the ``method`` values
+    are those equation labels.
     """
 
     gain: FloatArray
@@ -197,8 +202,7 @@ def hinf_gain(
     p_structure: Literal["diagonal", "full"] = "diagonal",
     solver: str = "CLARABEL",
 ) -> GainDesign:
-    r"""Gain minimising γ in the H∞ LMI (19) (the integrated-observer paper, Theorem 3.4), optionally monotone
-    ((54)–(55), (65)).
+    r"""Gain minimising γ, the bound of the noise-to-error gain, optionally with a monotone error ``A0 - LC ≥ 0``.
 
     Solves, for :math:`P = P^\top \succ 0`, ``M`` and γ (``-γI`` blocks: the printed ``+γI`` is an error)
 
@@ -208,8 +212,8 @@ def hinf_gain(
         * & -P & 0 & 0 & 0 & I\\ * & * & -\gamma I & 0 & 0 & 0\\ * & * & * & -\gamma I & 0 & 0\\
         * & * & * & * & -\gamma I & 0\\ * & * & * & * & * & -\gamma I\end{bmatrix} \prec 0,
 
-    and :math:`L = P^{-1}M` (20). With ``monotone=True`` adds :math:`PA_0 - MC \ge 0` elementwise
-    ((54b), (55b), (65)) with ``P`` diagonal, so that :math:`A_0 - LC \ge 0` follows.
+    and :math:`L = P^{-1}M`. With ``monotone=True`` adds :math:`PA_0 - MC \ge 0` elementwise with
+    ``P`` diagonal, so that :math:`A_0 - LC \ge 0` follows.
 
     Parameters
     ----------
@@ -223,9 +227,9 @@ def hinf_gain(
     E_theta : array_like, shape (n, ntheta), optional
         Direction of the parameter disturbance of Lemma A.2 (default :math:`I_n`).
     monotone : bool
-        Add the monotonicity constraint (54b)/(55b)/(65).
+        Add the monotonicity constraint (the error matrix stays nonnegative).
     p_structure : {"diagonal", "full"}
-        Structure of ``P`` when ``monotone``; ``"full"`` is the printed (54b), which does not imply
+        Structure of ``P`` when ``monotone``; ``"full"`` is the paper's printed form, which does not imply
         :math:`A_0 - LC \ge 0` (the result's ``monotone`` flag says whether it holds).
     solver : str
         CVXPY solver (Clarabel by default, SCS as fallback on failure).
@@ -240,6 +244,11 @@ def hinf_gain(
         ``monotone`` and no gain can make :math:`A_0 - LC \ge 0`.
     DesignError
         The LMI is infeasible or its solution fails verification.
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`): H∞ LMI (19), Theorem 3.4, :math:`L = P^{-1}M`
+    (20); monotonicity (54)–(55), (65), with the printed (54b) for ``p_structure="full"``.
     """
     a, c, ew, ev, et = _matrices(A, C, E_w, E_v, E_theta)
     n, p = c.shape[1], c.shape[0]
@@ -288,10 +297,9 @@ def zonotope_size_gain(
     rho: float = 0.9,
     solver: str = "CLARABEL",
 ) -> GainDesign:
-    r"""Gain of the zonotope-size LMI (26) (the integrated-observer paper, Theorem 3.5), normalised by :math:`W \succeq
-    I`.
+    r"""Gain that keeps the zonotope of the error small (the zonotope-size LMI), normalised by :math:`W \succeq I`.
 
-    Minimises :math:`\mathrm{tr}\,\Gamma + \mathrm{tr}\,\Upsilon + \mathrm{tr}\,\Omega` (the ε of (26c))
+    Minimises :math:`\mathrm{tr}\,\Gamma + \mathrm{tr}\,\Upsilon + \mathrm{tr}\,\Omega` (the error zonotope's size)
     subject to
 
     .. math::
@@ -309,13 +317,18 @@ def zonotope_size_gain(
     A, C, E_w, E_v, E_theta : array_like
         As in :func:`hinf_gain`.
     rho : float
-        Contraction factor ρ of (25), in (0, 1).
+        Contraction factor ρ asked of the error, in (0, 1).
     solver : str
         CVXPY solver.
 
     Returns
     -------
     GainDesign
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`): zonotope-size LMI (26), Theorem 3.5; ε of (26c);
+    ρ of (25).
     """
     a, c, ew, ev, et = _matrices(A, C, E_w, E_v, E_theta)
     if not 0.0 < rho < 1.0:

@@ -313,8 +313,8 @@ def certify_vertex_extremes(
       docstring, steps 1–2) give the slack (0 where the sign is certified).
 
     Coordinate ascent (step 3) then bounds the range over the box by the vertex range ± the summed
-    slacks. Rotondo et al. needs this for :math:`\Delta A_R = R\Delta A`, :math:`\Delta B_R`,
-    :math:`\Delta B_{un,R}` ((14), (15), (24)).
+    slacks. The LPV observer needs this for the uncertainties in its coordinates,
+    :math:`\Delta A_R = R\Delta A`, :math:`\Delta B_R`, :math:`\Delta B_{un,R}`.
 
     Parameters
     ----------
@@ -343,6 +343,11 @@ def certify_vertex_extremes(
     ------
     AssumptionError
         If a denominator may vanish on the box.
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): :math:`\Delta A_R`, :math:`\Delta B_R`, :math:`\Delta B_{un,R}`
+    of (14), (15), (24).
     """
     plo, phi = as_box("parameter box", (p_lower, p_upper))
     n_p = plo.size
@@ -482,20 +487,20 @@ def _line_slacks(
 
 
 def uio_observer_matrix(r: ArrayLike, h: ArrayLike, b_un: ArrayLike, gamma: ArrayLike, h_star: ArrayLike) -> FloatArray:
-    r"""The observer matrix of Theorem 4.1, (101)–(102), vectorised over grid points.
+    r"""The observer matrix of the interval UIO, vectorised over grid points.
 
     .. math:: F(\vartheta) = R(\vartheta)^{-1}\big[H\Gamma B_{un}(\vartheta)^\dagger
               + H^*(\vartheta)\,(I - B_{un}(\vartheta)B_{un}(\vartheta)^\dagger)\big],
 
-    which makes the columns of H eigenvectors of F, :math:`FH = H\Gamma` ((103)–(104)), whenever
-    :math:`RB_{un} = H` (26).
+    which makes the columns of H eigenvectors of F, :math:`FH = H\Gamma` (each unknown input moves the error along
+    its own direction), whenever :math:`RB_{un} = H`.
 
     Parameters
     ----------
     r : array_like, shape (..., n, n)
         :math:`R(\vartheta)` at grid points (invertible).
     h : array_like, shape (n, q)
-        H of (26).
+        H, the unknown inputs' directions in the observer's coordinates.
     b_un : array_like, shape (..., n, q)
         :math:`B_{un}(\vartheta)` at the same points.
     gamma : array_like, shape (q, q)
@@ -506,6 +511,11 @@ def uio_observer_matrix(r: ArrayLike, h: ArrayLike, b_un: ArrayLike, gamma: Arra
     Returns
     -------
     numpy.ndarray, shape (..., n, n)
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): Theorem 4.1, (101)–(102); the eigenvector condition (103)–(104);
+    H of (26).
     """
     rr = np.asarray(r, dtype=float)
     bu = np.asarray(b_un, dtype=float)
@@ -529,9 +539,9 @@ def eta_and_generator(
     s1: FloatArray,
     s2: FloatArray,
 ) -> tuple[FloatArray, FloatArray]:
-    r"""The matrix :math:`G` and scalar :math:`\eta` of (74) for given column sets (vectorised).
+    r"""The matrix :math:`G` and scalar :math:`\eta` of the switching boundedness LMI per column set (vectorised).
 
-    Read with the proof's (95)–(100) (the printed (79) swaps :math:`S_1` and :math:`S_2`):
+    As the paper's proof reads them (the printed form swaps :math:`S_1` and :math:`S_2`):
 
     .. math::
         G = \operatorname{diag}\big(\underline F + \underline{\Delta A_R^{(S_1\cup S_3)}}^{+},\;
@@ -542,7 +552,7 @@ def eta_and_generator(
              + \|\overline{\Delta A_R^{(S_2)}}^{+} - \underline{\Delta A_R^{(S_2)}}^{+}\|_2
              + \|\overline{\Delta A_R^{(S_1)}}^{-}\|_2 + \|\underline{\Delta A_R^{(S_1)}}^{-}\|_2 .
 
-    With :math:`S_1 = S_2 =` all columns this is (44)–(45) of Theorem 3.1 (η with its factor 2).
+    With :math:`S_1 = S_2 =` all columns this is the observer's (non-switching) form (η with its factor 2).
 
     Parameters
     ----------
@@ -557,6 +567,11 @@ def eta_and_generator(
     -------
     G : numpy.ndarray, shape (..., 2n, 2n)
     eta : numpy.ndarray, shape (...)
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): (74) read with the proof's (95)–(100) (the printed (79) swaps
+    :math:`S_1` and :math:`S_2`); (44)–(45) of Theorem 3.1.
     """
     l1, u1 = _masked(da_lower, s1), _masked(da_upper, s1)
     l2, u2 = _masked(da_lower, s2), _masked(da_upper, s2)
@@ -598,18 +613,18 @@ def _subset_masks(n: int, switchable: Sequence[int]) -> FloatArray:
 
 @dataclass(frozen=True)
 class BoundednessCertificate:
-    r"""Solution of the boundedness LMI (43)/(74) and its verification.
+    r"""Solution of the boundedness LMI and its verification: a certificate that the bounds stay bounded.
 
     Attributes
     ----------
     P, Q : numpy.ndarray, shape (2n, 2n)
-        Lyapunov matrix and the decay matrix of (43).
+        Lyapunov matrix and the decay matrix of the LMI.
     gamma, eps1, eps2 : float
-        Scalars of (43).
+        Scalars of the LMI.
     solver_status : str
         CVXPY status of the coarse-grid solve.
     coarse_margin : float
-        Largest eigenvalue of the (1,1) block of (43) over the coarse grid (negative = satisfied;
+        Largest eigenvalue of the LMI's (1,1) block over the coarse grid (negative = satisfied;
         :math:`\operatorname{tr}P = 2n`, so it is comparable with a decay rate).
     second_block_margin : float
         Largest eigenvalue of :math:`\varepsilon_1^{-1}P - \gamma I` (must be ≤ 0).
@@ -619,6 +634,10 @@ class BoundednessCertificate:
         Points of the fine grid.
     subsets : int
         Pairs :math:`(S_1, S_2)` checked.
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): the boundedness LMI (43) (observer) and (74) (UIO).
     """
 
     P: FloatArray
@@ -635,7 +654,12 @@ class BoundednessCertificate:
 
     @property
     def feasible(self) -> bool:
-        """True when both blocks of (43)/(74) are negative semidefinite on the verified grid."""
+        """True when both blocks of the boundedness LMI are negative semidefinite on the verified grid.
+
+        References
+        ----------
+        Rotondo et al. (:mod:`intervalobs.references`): (43)/(74).
+        """
         margin = self.coarse_margin if self.fine_margin is None else self.fine_margin
         return bool(margin < 0 and self.second_block_margin <= 1e-9)
 
@@ -679,9 +703,9 @@ def boundedness_lmi(
     eps2: float = 0.01,
     q_scale: float = 1e-3,
 ) -> BoundednessCertificate:
-    r"""Solve the boundedness LMI (43) (``switchable=()``) or (74) on a grid of :math:`\Theta`.
+    r"""Solve the boundedness LMI on a grid of :math:`\Theta` (observer, or UIO with ``switchable``).
 
-    For fixed :math:`\varepsilon_1, \varepsilon_2` (43) is an LMI in :math:`P, Q, \gamma`. We fix
+    For fixed :math:`\varepsilon_1, \varepsilon_2` it is an LMI in :math:`P, Q, \gamma`. We fix
     :math:`Q = q I`, normalise :math:`\operatorname{tr} P = 2n`, :math:`P \succeq 10^{-3} I`, and
     minimise :math:`t` subject to
     the (1,1) block :math:`\preceq tI` at every grid point and subset pair, and
@@ -696,7 +720,7 @@ def boundedness_lmi(
         Bounds of :math:`\Delta A_R` at the N coarse grid points.
     switchable : sequence of int
         Columns whose terms switch with the isolation signals (the measured columns
-        :math:`1..n_y` of (74)); empty for Theorem 3.1's (43).
+        :math:`1..n_y` for the UIO); empty for the observer.
     eps1_candidates : sequence of float
         Values of :math:`\varepsilon_1` tried.
     eps2 : float
@@ -712,6 +736,10 @@ def boundedness_lmi(
     ------
     DesignError
         If no candidate has a verified solution (:func:`~intervalobs.design.lmi.solve_lmi`).
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): (43) (Theorem 3.1, ``switchable=()``) and (74) (the UIO).
     """
     fl = as_matrix("f_lower", f_lower)
     n = fl.shape[0]
@@ -785,7 +813,7 @@ def verify_boundedness(
     switchable: Sequence[int] = (),
     chunk: int = 2000,
 ) -> BoundednessCertificate:
-    r"""Check (43)/(74) with a solved :math:`P, Q, \gamma` at many grid points (vectorised eigenvalues).
+    r"""Check the boundedness LMI with a solved :math:`P, Q, \gamma` at many grid points (vectorised eigenvalues).
 
     Parameters
     ----------
@@ -806,6 +834,10 @@ def verify_boundedness(
     BoundednessCertificate
         ``cert`` with ``fine_margin`` (largest eigenvalue of the (1,1) block over all points and
         subset pairs) and ``fine_points`` filled in.
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): (43)/(74).
     """
     fl = np.asarray(f_lower, dtype=float)
     n = fl.shape[-1]

@@ -63,7 +63,7 @@ structure is used, not a rounding pad (the design is verified afterwards)."""
 
 
 def rotate_bounds(r: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    r"""Bounds of :math:`R M` for a point matrix :math:`R` and an interval matrix :math:`[M]` ((14), (15), (24)).
+    r"""Bounds of :math:`R M` for a point matrix :math:`R` and an interval matrix :math:`[M]`.
 
     .. math:: R^+\underline M - R^-\overline M \le RM \le R^+\overline M - R^-\underline M
 
@@ -79,6 +79,10 @@ def rotate_bounds(r: ArrayLike, lower: ArrayLike, upper: ArrayLike) -> tuple[Flo
     Returns
     -------
     lower, upper : numpy.ndarray, shape (..., n, k)
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): (14), (15), (24).
     """
     rr = np.asarray(r, dtype=float)
     rp, rn = np.maximum(rr, 0.0), np.maximum(-rr, 0.0)
@@ -113,22 +117,27 @@ class LPVObserverDesign:
     Attributes
     ----------
     R, T : numpy.ndarray, shapes (n, n), (n, p)
-        Coordinates :math:`v = Rx` and :math:`TC = I - R` (36).
+        Coordinates :math:`v = Rx` and :math:`TC = I - R`.
     C_tilde_inv : numpy.ndarray, shape (p, p)
         :math:`\tilde C^{-1}`.
     f_left_lower, f_left_upper : numpy.ndarray, shape (n, p)
-        Designed left block columns of :math:`\underline F, \overline F` (66)/(101).
+        Designed left block columns of :math:`\underline F, \overline F`.
     H : numpy.ndarray or None, shape (n, q)
-        :math:`RB_{un}` (26), UIO only.
+        :math:`RB_{un}`, the unknown inputs' directions (UIO only).
     gamma_lower, gamma_upper : numpy.ndarray or None, shape (q,)
         Diagonals of :math:`\underline\Gamma, \overline\Gamma` (UIO only).
     certificate : BoundednessCertificate
-        The solved (63)/(109) with its fine-grid verification.
+        The solved boundedness LMI with its fine-grid verification.
     hurwitz_margin : float
         Largest real part of the eigenvalues of :math:`\underline F(\vartheta), \overline F(\vartheta)`
         on the fine grid (negative).
     coarse_points, fine_points : int
         Grid sizes of the solve and of the verification.
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): R, T of (36); F of (66)/(101); H of (26); the boundedness LMI
+    (63)/(109).
     """
 
     R: FloatArray
@@ -150,7 +159,7 @@ class LPVObserverDesign:
         return int(self.T.shape[1])
 
     def f_matrices(self, a_r: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        r""":math:`\underline F, \overline F` given :math:`A_R = RA` at points ((35), (67)).
+        r""":math:`\underline F, \overline F` given :math:`A_R = RA` at points.
 
         Parameters
         ----------
@@ -160,6 +169,10 @@ class LPVObserverDesign:
         Returns
         -------
         F_lower, F_upper : numpy.ndarray, shape (..., n, n)
+
+        References
+        ----------
+        Rotondo et al. (:mod:`intervalobs.references`): (35), (67).
         """
         ar = np.asarray(a_r, dtype=float)
         p = self.p
@@ -169,7 +182,7 @@ class LPVObserverDesign:
         return fl, fu
 
     def s_matrices(self, system: LPVSystem, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        r""":math:`\underline S, \overline S` of (37)–(42) at scheduling points (for reporting; the sampled
+        r""":math:`\underline S, \overline S` at scheduling points (for reporting; the sampled
         observer uses the equivalent rate of :math:`v = Rx` directly).
 
         Parameters
@@ -182,6 +195,10 @@ class LPVObserverDesign:
         Returns
         -------
         S_lower, S_upper : numpy.ndarray, shape (N, n, p)
+
+        References
+        ----------
+        Rotondo et al. (:mod:`intervalobs.references`): (37)–(42).
         """
         ar = self.R @ system.matrix_at("A", theta)
         out = []
@@ -279,15 +296,15 @@ def design_lpv_observer(
 ) -> LPVObserverDesign:
     r"""Design :math:`R, T, \underline F, \overline F` (and :math:`H, \Gamma` for the UIO) from the LMIs.
 
-    Observer: Corollary 3.1, (61)–(66). UIO: Corollary 4.1, (107)–(117), with
-    :math:`\underline\Gamma = \overline\Gamma = -\lambda I` (``decay``) as in Section 5. See the module
+    The gains make the error system cooperative and its bounds bounded on the whole scheduling box (for
+    the UIO with :math:`\underline\Gamma = \overline\Gamma = -\lambda I`, ``decay``). See the module
     docstring for the parametrisation. :math:`\varepsilon_1` is searched over multiples of the
     largest :math:`\eta` on the grid; the candidate with the most negative (1,1) block wins.
 
     Parameters
     ----------
     system : LPVSystem
-        Model with :math:`C = (\tilde C\ 0)` (9).
+        Model with :math:`C = (\tilde C\ 0)` (measured states first).
     uio : bool
         Design the interval UIO (needs ``B_un``, constant).
     R : array_like, shape (n, n), optional
@@ -300,7 +317,7 @@ def design_lpv_observer(
     fine_grid : int
         Values per scheduling axis of the verification grid.
     eps2 : float
-        :math:`\varepsilon_2` of (63).
+        :math:`\varepsilon_2`, a margin of the boundedness LMI.
     q_scale : float
         :math:`Q = qI`.
     gain_bound : float, optional
@@ -313,10 +330,15 @@ def design_lpv_observer(
     Raises
     ------
     AssumptionError
-        If C is not of the form (9), R not of the form (16), or B_un missing / not constant (UIO).
+        Outputs not the first states, R not block triangular (module docstring), B_un missing/not constant (UIO).
     DesignError
-        Naming the failed condition: (17), (18), the LMI (63)/(109), or its verification (Metzler,
-        Hurwitz, the blocks of (63)/(74)) on the fine grid.
+        Naming the failed condition (coordinates, boundedness LMI, or its check on the fine grid).
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): observer: Corollary 3.1, (61)–(66); UIO: Corollary 4.1,
+    (107)–(117), with :math:`\Gamma = -\lambda I` as in Section 5; C of the form (9), R of the form (16), conditions
+    (17), (18), the LMIs (63)/(109) and the blocks of (63)/(74); :math:`\varepsilon_2` of (63).
     """
     n, p = system.n, system.p
     ct_inv = _partition(system)

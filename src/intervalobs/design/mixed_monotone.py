@@ -140,7 +140,7 @@ def lipschitz_bound(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
 
 
 def jacobian_decomposition_parts(j_lower: ArrayLike, j_upper: ArrayLike) -> tuple[BoolArray, FloatArray]:
-    r"""The case split of Yang–Mickelin–Ozay (Khajenejad & Yong, eq. (2)): which argument feeds :math:`\zeta`, and
+    r"""The case split of the Yang–Mickelin–Ozay decomposition: which argument feeds :math:`\zeta`, and
     :math:`C`.
 
     Parameters
@@ -153,7 +153,11 @@ def jacobian_decomposition_parts(j_lower: ArrayLike, j_upper: ArrayLike) -> tupl
     from_first : numpy.ndarray of bool, shape (..., m, n)
         True where :math:`\zeta^i_j` is taken from the first argument :math:`x`.
     C : numpy.ndarray, shape (..., m, n)
-        The nonnegative matrix :math:`C_q` of (2).
+        The nonnegative matrix :math:`C_q` of the decomposition.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): the decomposition (2).
     """
     a = np.asarray(j_lower, dtype=float)
     b = np.asarray(j_upper, dtype=float)
@@ -190,7 +194,7 @@ def width_matrix(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
 
 
 def paper_lipschitz_constant(lipschitz: float, c: ArrayLike) -> float:
-    r"""The paper's Lemma 2 constant :math:`L_{q_d} = L_q + 2\|C_q\|_2` (reported for comparison only).
+    r"""Khajenejad & Yong's Lipschitz-like constant :math:`L_{q_d} = L_q + 2\|C_q\|_2` (for comparison only).
 
     It is not a valid bound of the decomposition width in general: for :math:`q(x) = Ax` with
     :math:`A = [[1, 1], [1, -1]]`, :math:`C = 0`, :math:`L_q = \sqrt 2`, but the width is
@@ -202,11 +206,15 @@ def paper_lipschitz_constant(lipschitz: float, c: ArrayLike) -> float:
     lipschitz : float
         Lipschitz constant :math:`L_q`.
     c : array_like, shape (m, n)
-        The matrix :math:`C_q` of (2).
+        The matrix :math:`C_q` of the decomposition.
 
     Returns
     -------
     float
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): Lemma 2, the decomposition (2).
     """
     return float(lipschitz + 2.0 * np.linalg.norm(np.asarray(c, dtype=float), ord=2))
 
@@ -225,7 +233,7 @@ def decomposition_bounds(
     j_upper: ArrayLike,
     name: str = "function",
 ) -> tuple[FloatArray, FloatArray]:
-    r"""Bounds :math:`q_d(\underline x, \overline x) \le q(x) \le q_d(\overline x, \underline x)` (Prop. 3 with (2)).
+    r"""Bounds :math:`q_d(\underline x, \overline x) \le q(x) \le q_d(\overline x, \underline x)`.
 
     Parameters
     ----------
@@ -242,6 +250,10 @@ def decomposition_bounds(
     -------
     lower, upper : numpy.ndarray, shape (..., m)
         Outward-rounded.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): Proposition 3 with the decomposition (2).
     """
     lo = np.asarray(lower, dtype=float)
     hi = np.asarray(upper, dtype=float)
@@ -257,7 +269,7 @@ def decomposition_bounds(
 
 @dataclass(frozen=True)
 class JacobianDecomposition:
-    r"""Yang–Mickelin–Ozay decomposition function with fixed Jacobian bounds (Khajenejad & Yong, eq. (2)).
+    r"""Yang–Mickelin–Ozay decomposition function with fixed Jacobian bounds.
 
     Parameters
     ----------
@@ -271,11 +283,15 @@ class JacobianDecomposition:
     from_first : numpy.ndarray of bool
         Where :math:`\zeta_j` is the first argument.
     C : numpy.ndarray
-        :math:`C_q \ge 0` of (2).
+        :math:`C_q \ge 0` of the decomposition.
     W : numpy.ndarray
         Width matrix (see :func:`width_matrix`).
     lipschitz_width : float
-        :math:`\|W\|_2`, the sound "Lipschitz-like" constant of Lemma 2.
+        :math:`\|W\|_2`, the sound "Lipschitz-like" constant of the decomposition.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): the decomposition (2); the constant of Lemma 2.
     """
 
     func: VectorFunction
@@ -321,7 +337,12 @@ class JacobianDecomposition:
 
     @property
     def C(self) -> FloatArray:
-        """:math:`C_q` of (2)."""
+        """:math:`C_q` of the decomposition.
+
+        References
+        ----------
+        Khajenejad & Yong (:mod:`intervalobs.references`): the decomposition (2).
+        """
         return jacobian_decomposition_parts(self.j_lower, self.j_upper)[1]
 
     @property

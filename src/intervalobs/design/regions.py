@@ -72,7 +72,7 @@ _MARGIN = 0.02
 
 @dataclass(frozen=True)
 class Disk:
-    """An open disk of the complex plane, the LMI region of the sampled-output high-gain paper, eq. (14).
+    """An open disk of the complex plane, an LMI region in which an eigenvalue is placed.
 
     Parameters
     ----------
@@ -80,6 +80,10 @@ class Disk:
         Centre :math:`c_1 + ic_2`.
     radius : float
         Radius, positive.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (14).
     """
 
     center: complex
@@ -96,7 +100,12 @@ class Disk:
 
     @property
     def R(self) -> tuple[float, complex, float]:
-        """``(R00, R10, R11)`` of eq. (14): ``|c|^2 - r^2``, ``-c1 + i c2``, ``1``."""
+        """``(R00, R10, R11)`` of the disk's LMI: ``|c|^2 - r^2``, ``-c1 + i c2``, ``1``.
+
+        References
+        ----------
+        The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (14).
+        """
         c = complex(self.center)
         return abs(c) ** 2 - self.radius**2, complex(-c.real, c.imag), 1.0
 
@@ -302,7 +311,7 @@ r"""Any of the LMI (:math:`\mathbb{D}_R`) regions of the sampled-output high-gai
 
 
 def in_region(region: Region, s: complex | ComplexArray) -> Any:
-    """True where ``s`` lies strictly inside ``region`` (its characteristic function (6) is negative).
+    """True where ``s`` lies strictly inside ``region`` (its characteristic function is negative).
 
     Parameters
     ----------
@@ -314,13 +323,17 @@ def in_region(region: Region, s: complex | ComplexArray) -> Any:
     Returns
     -------
     bool or numpy.ndarray
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (6).
     """
     return np.asarray(region.characteristic(s)) < 0
 
 
 @dataclass(frozen=True)
 class ModalDecomposition:
-    r"""The C-diagonalisation :math:`A - LC = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1` (eq. (13)).
+    r"""The C-diagonalisation :math:`A - LC = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1`.
 
     Attributes
     ----------
@@ -336,6 +349,10 @@ class ModalDecomposition:
         2-norm condition number of ``v1``.
     separation : float
         Smallest distance between two eigenvalues.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (13).
     """
 
     eigenvalues: ComplexArray
@@ -360,7 +377,7 @@ def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
 
     LAPACK returns each eigenvector up to an arbitrary factor :math:`e^{i\varphi}` (and scale), and
     everything computed from :math:`v_1` in a fixed basis (the modal box of the observer, the complex
-    logarithm of the paper's (43)) inherits that phase. Here each column is scaled to unit 2-norm and
+    logarithm in the paper's high-gain design) inherits that phase. Here each column is scaled to unit 2-norm and
     multiplied by the unit complex number that makes its *pivot* real and positive; the pivot is the
     first entry whose modulus is at least :math:`1 - 10^{-6}` times the column's largest modulus (the
     tolerance makes near-ties resolve the same way whatever the rounding of the eigensolver, whose
@@ -377,6 +394,10 @@ def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
     -------
     numpy.ndarray, shape (n, n), complex
         The same eigenvectors, normalised.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (43) (the complex logarithm).
     """
     vecs = np.asarray(vectors, dtype=complex)
     vecs = vecs / np.linalg.norm(vecs, axis=0, keepdims=True)
@@ -392,8 +413,7 @@ def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
 def modal_decomposition(
     A: ArrayLike, C: ArrayLike, L: ArrayLike, order: Sequence[complex] | None = None
 ) -> ModalDecomposition:
-    """Diagonalise ``A - L C`` and check that it is C-diagonalisable and Hurwitz (the sampled-output high-gain paper,
-    eq. (13)).
+    """Diagonalise ``A - L C`` and check that it is C-diagonalisable and Hurwitz.
 
     Parameters
     ----------
@@ -414,6 +434,10 @@ def modal_decomposition(
     ------
     DesignError
         If ``A - LC`` is not Hurwitz, has repeated eigenvalues or an ill-conditioned eigenbasis.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (13).
     """
     a = as_matrix("A", A)
     n = a.shape[0]
@@ -451,8 +475,7 @@ def radius_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike) -> Floa
 
     With :math:`P_1 = |v_1 L C v_1^{-1}|` (elementwise modulus). It bounds, uniformly in time, the
     radius dynamics of real and imaginary parts when the output injection :math:`LCx` is bounded from
-    the observer's own box (Proposition 4.3 with :math:`a = 0`, Algorithm 1 step 8, the known part
-    :math:`M_1` of (36)). Hurwitz is the condition under which those radii stay bounded.
+    the observer's own box. Hurwitz is the condition under which those radii stay bounded.
 
     Parameters
     ----------
@@ -466,6 +489,11 @@ def radius_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike) -> Floa
     Returns
     -------
     numpy.ndarray, shape (2n, 2n)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Proposition 4.3 with :math:`a = 0`,
+    Algorithm 1 step 8, the known part :math:`M_1` of (36).
     """
     p1 = np.abs(modal.v1 @ np.asarray(L, dtype=float) @ np.asarray(C, dtype=float) @ modal.v1_inv)
     diag = np.diag(modal.p1) + p1
@@ -474,7 +502,7 @@ def radius_matrix(modal: ModalDecomposition, L: ArrayLike, C: ArrayLike) -> Floa
 
 @dataclass(frozen=True)
 class RegionPlacement:
-    """Result of :func:`place_in_disks` (Algorithm 1), verified from the eigenvalues of ``A - L C``.
+    """Result of :func:`place_in_disks`, verified from the eigenvalues of ``A - L C``.
 
     Attributes
     ----------
@@ -487,9 +515,14 @@ class RegionPlacement:
     margins : numpy.ndarray, shape (n,)
         ``r_j - |λ_j - c_j|`` (all positive).
     radius_abscissa : float
-        Largest real eigenvalue of :func:`radius_matrix` (Algorithm 1, step 8; negative = stable).
+        Largest real eigenvalue of :func:`radius_matrix` (negative: the observer's radii stay bounded).
     steps : list of dict
         For each LMI solve: the disk, the eigenvalue before and after, the solver status.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Algorithm 1 (the radius check is its step
+    8).
     """
 
     L: FloatArray
@@ -639,14 +672,13 @@ def _place_block(
 def place_in_disks(
     A: ArrayLike, C: ArrayLike, disks: Sequence[Disk | tuple[complex, float]], objective: str = "min_gain"
 ) -> RegionPlacement:
-    r"""Place every eigenvalue of :math:`A - LC` in its own disk (the sampled-output high-gain paper, Theorem 4.1,
-    Algorithm 1).
+    r"""Place every eigenvalue of :math:`A - LC` in its own disk.
 
     Eigenvalues of :math:`A` are matched to disks by least total distance; disk by disk (a conjugate
-    pair of disks at once) LMI (15) is solved for the modal subsystem and the gain accumulated
-    (step 6, :math:`L_1 = \sum_j L_{1j}`, step 10). Eigenvalues are recomputed after each step (steps
-    3 and 7). Where the matching puts a real eigenvalue in a non-real disk or one of a conjugate pair in
-    a real disk (Theorem 4.1's one-mode gain cannot do either with a real :math:`L`), those eigenvalues
+    pair of disks at once) an LMI places the modal subsystem's eigenvalues in the disk and the gains
+    are summed, :math:`L_1 = \sum_j L_{1j}`. Eigenvalues are recomputed after each disk. Where the
+    matching puts a real eigenvalue in a non-real disk or one of a conjugate pair in a real disk (the
+    paper's one-mode gain cannot do either with a real :math:`L`), those eigenvalues
     (closed under conjugation) are moved together, by pole placement on their real invariant subspace,
     to their disk centres. The result is verified from the eigenvalues of :math:`A - L_1C`.
 
@@ -673,6 +705,11 @@ def place_in_disks(
     DesignError
         If an LMI is infeasible, modes that must move together cannot be moved by output injection
         (unobservable), or the verification fails.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), Theorem 4.1 and Algorithm 1: LMI (15) per
+    disk, gains summed (step 6, step 10), eigenvalues recomputed (steps 3 and 7).
     """
     a = as_matrix("A", A)
     n = a.shape[0]

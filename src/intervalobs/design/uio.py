@@ -57,24 +57,28 @@ _PLACEMENT_JITTER = 1e-13
 
 @dataclass(frozen=True)
 class UIODecoupling:
-    """The decoupling matrices of the aircraft UIO paper, eqs. (11), (25), with the hypotheses' evidence.
+    """The decoupling matrices that remove the unknown input from the error, with the evidence of their conditions.
 
     Attributes
     ----------
     E : numpy.ndarray, shape (n, p)
-        ``E = -D (CD)† + W (I - CD (CD)†)`` (eq. (11)).
+        ``E = -D (CD)† + W (I - CD (CD)†)``.
     P : numpy.ndarray, shape (n, n)
         ``P = I + E C``; ``P D = 0`` up to rounding.
     W : numpy.ndarray, shape (n, p)
-        The free parameter of (24).
+        The free parameter ``W``.
     M0 : numpy.ndarray, shape (q, p)
-        ``(CD)†``, the left inverse of ``CD`` used for the unknown input (eq. (36)).
+        ``(CD)†``, the left inverse of ``CD`` used for the unknown input.
     rank_CD, rank_D : int
-        Ranks checked by Hypothesis 4.
+        Ranks checked: the unknown input must be visible in the outputs.
     observability_margin : float
         Smallest singular value of the observability matrix of ``(PA, C)`` (0 when unobservable).
     decoupling_residual : float
         ``max |P D|`` (exactly 0 in exact arithmetic).
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): eqs. (11), (24), (25), (36); Hypothesis 4.
     """
 
     E: FloatArray
@@ -89,18 +93,18 @@ class UIODecoupling:
 
 @dataclass(frozen=True)
 class UIOCoordinates:
-    r"""A gain ``K`` and coordinates ``z = T x`` with ``T N T⁻¹`` Metzler and Hurwitz (Hypothesis 6).
+    r"""A gain ``K`` and coordinates ``z = T x`` with ``T N T⁻¹`` Metzler and Hurwitz: a cooperative, stable error.
 
     Attributes
     ----------
     K : numpy.ndarray, shape (n, p)
-        Output-injection gain of ``N = PA - KC`` (eq. (14)).
+        Output-injection gain of ``N = PA - KC``.
     T, S : numpy.ndarray, shape (n, n)
-        Coordinate change and its computed inverse ``S = T⁻¹`` (eq. (31)).
+        Coordinate change and its computed inverse ``S = T⁻¹``.
     N : numpy.ndarray, shape (n, n)
         ``PA - KC``.
     L : numpy.ndarray, shape (n, p)
-        ``K - N E`` (eq. (14)).
+        ``K - N E``.
     M : numpy.ndarray, shape (n, n)
         The Metzler, Hurwitz matrix the observer integrates: block diagonal (1×1 real poles, 3×3
         cyclic blocks for complex pairs, see :func:`metzler_block_form`), or ``T N T⁻¹`` with its
@@ -120,6 +124,10 @@ class UIOCoordinates:
         Sum of the asymptotic state-width bound used to choose among candidates (inf if not scored).
     tried : dict
         Score of every candidate pole set.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6, eqs. (14), (31).
     """
 
     K: FloatArray
@@ -168,7 +176,7 @@ def _undetectable_modes(a: FloatArray, c: FloatArray) -> list[complex]:
 
 
 def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None = None) -> UIODecoupling:
-    r"""Decoupling matrices ``E``, ``P`` of the aircraft UIO paper (eqs. (11), (24)–(25)) with Hypotheses 4–5 checked.
+    r"""Decoupling matrices ``E``, ``P`` that remove the unknown input from the error, their conditions checked.
 
     Parameters
     ----------
@@ -179,7 +187,7 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
     D : array_like, shape (n, q)
         Unknown-input matrix.
     W : array_like, shape (n, p), optional
-        Free parameter of (11) (default 0, as in the paper's example).
+        Free parameter ``W`` of ``E`` (default 0, as in the paper's example).
 
     Returns
     -------
@@ -188,8 +196,13 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
     Raises
     ------
     AssumptionError
-        Hypothesis 4 fails (rank(CD) ≠ rank(D), rank(D) ≠ q, or q > p) or Hypothesis 5 fails
-        (I_p + CW singular, or (PA, C) not detectable).
+        The unknown input is not visible in the outputs (rank(CD) ≠ rank(D), rank(D) ≠ q, or q > p) or the decoupled
+        model is not usable (I_p + CW singular, or (PA, C) not detectable).
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): eqs. (11), (24)–(25); Hypotheses 4 (ranks) and 5
+    (``I_p + CW`` nonsingular, ``(PA, C)`` detectable).
     """
     a = as_matrix("A", A)
     n = a.shape[0]
@@ -236,7 +249,7 @@ def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None
 
 
 def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-    r"""The matrices of the compact constraint ``[N K E] Σ = Θ`` (the aircraft UIO paper, eqs. (23)–(24)).
+    r"""The matrices of the compact constraint ``[N K E] Σ = Θ`` of the decoupling.
 
     .. math:: \Sigma = \begin{bmatrix} I_n & 0 \\ C & 0 \\ -CA & CD \end{bmatrix}, \qquad
               \Theta = [A \;\; -D], \qquad
@@ -252,7 +265,11 @@ def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[F
     Sigma : numpy.ndarray, shape (n + 2p, n + q)
     Theta : numpy.ndarray, shape (n, n + q)
     Sigma_pinv : numpy.ndarray, shape (n + q, n + 2p)
-        The left inverse printed in (24); ``Sigma_pinv @ Sigma = I`` under Hypothesis 4.
+        The paper's left inverse; ``Sigma_pinv @ Sigma = I`` when the unknown input is visible in the outputs.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): eqs. (23)–(24); Hypothesis 4.
     """
     a = as_matrix("A", A)
     n = a.shape[0]
@@ -291,7 +308,7 @@ def _pair_spectrum(poles: NDArray[np.complex128], scale: float) -> tuple[FloatAr
 
 
 def metzler_block_form(poles: ArrayLike) -> FloatArray:
-    r"""A block-diagonal Metzler matrix with the given spectrum (the form of Hypothesis 6 we integrate).
+    r"""A block-diagonal Metzler matrix with the given spectrum (the cooperative error form we integrate).
 
     Real poles are 1×1 blocks. A 2×2 Metzler matrix has real eigenvalues, so each complex pair
     :math:`\sigma \pm i\omega` (:math:`\omega > 0`) shares a 3×3 cyclic block with a real pole :math:`r`:
@@ -321,6 +338,10 @@ def metzler_block_form(poles: ArrayLike) -> FloatArray:
     ------
     DesignError
         The set is not conjugate-closed, or a complex pair finds no real pole ``r ≥ σ + √3 ω``.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): the form of Hypothesis 6.
     """
     pl = np.asarray(poles, dtype=complex).ravel()
     if pl.size == 0 or not np.all(np.isfinite(pl)):
@@ -468,7 +489,7 @@ def asymptotic_state_width(
 def check_cooperative(
     A: ArrayLike, C: ArrayLike, decoupling: UIODecoupling, K: ArrayLike, T: ArrayLike | None = None
 ) -> UIOCoordinates:
-    """Check Hypothesis 6 for a given gain ``K`` (and coordinates ``T``).
+    """Check that a given gain ``K`` (and coordinates ``T``) make the error cooperative and stable.
 
     Without ``T`` the coordinates map ``PA - KC`` onto its :func:`metzler_block_form` (diagonal for real
     poles, 3×3 cyclic blocks for complex pairs); ``PA - KC`` must then be diagonalisable.
@@ -493,6 +514,10 @@ def check_cooperative(
     AssumptionError
         ``T (PA - KC) T⁻¹`` is not Metzler (a negative off-diagonal entry beyond rounding) or not
         Hurwitz, ``T`` is singular, or no Metzler block form exists for the spectrum.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
     a = as_matrix("A", A)
     n = a.shape[0]
@@ -561,7 +586,7 @@ def design_uio_coordinates(
     delta_radius: ArrayLike,
     poles: ArrayLike | None = None,
 ) -> UIOCoordinates:
-    """Gain ``K`` and Metzler coordinates ``T`` (Hypothesis 6) with the smallest state-width bound.
+    """Gain ``K`` and coordinates ``T`` of a cooperative, stable error with the smallest state-width bound.
 
     Each candidate places its poles on ``PA - KC`` (``scipy.signal.place_poles``; real, repeated up to
     ``p`` times, or complex pairs; the two best sets again on copies of ``PA`` jittered at 1e-13, because the
@@ -593,6 +618,10 @@ def design_uio_coordinates(
     ------
     DesignError
         No candidate passes the checks, or the given poles are not admissible.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
     a = as_matrix("A", A)
     n = a.shape[0]

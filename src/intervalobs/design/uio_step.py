@@ -77,7 +77,7 @@ class UIOStepConstants:
     delta_lo, delta_hi : numpy.ndarray, shape (p,)
         Bounds of the measurement noise :math:`\delta = Fv`.
     Mw, Mpsi : numpy.ndarray
-        Maps of :math:`w` and :math:`\psi` in the unknown-input bound (36)–(37).
+        Maps of :math:`w` and :math:`\psi` in the unknown-input bound.
     xi_noise_lo, xi_noise_hi, xi_noise_mag : numpy.ndarray, shape (q,)
         Bounds and magnitude of the process noise's term in it.
     xi_pad : numpy.ndarray, shape (q,)
@@ -86,6 +86,10 @@ class UIOStepConstants:
         :math:`|M_0CA|`.
     TL_mag, TE_mag, Mw_mag, Mpsi_mag, TPB_mag : numpy.ndarray
         Magnitude matrices of the rounding pads.
+
+    References
+    ----------
+    The aircraft UIO paper: the unknown-input bound (36)–(37).
     """
 
     Phi: FloatArray
@@ -215,9 +219,9 @@ def uio_step_constants(
     h : float
         Sampling period.
     decoupling : UIODecoupling
-        ``E``, ``P``, ``M0`` of (11), (25), (36).
+        ``E``, ``P``, ``M0`` of the decoupling and the unknown-input bound.
     coords : UIOCoordinates
-        ``K``, ``L``, ``N``, ``T``, ``S``, ``M``, ``J`` of Hypothesis 6.
+        ``K``, ``L``, ``N``, ``T``, ``S``, ``M``, ``J`` of the cooperative error coordinates.
     output_accel : numpy.ndarray, shape (p,)
         Bound ``L`` of the output acceleration without the known input's direct term.
     input_magnitude : float
@@ -233,6 +237,10 @@ def uio_step_constants(
     ------
     DesignError
         If the coordinate change is ill-conditioned or the rounding recursion does not contract.
+
+    References
+    ----------
+    The aircraft UIO paper: (11), (25), (36); Hypothesis 6.
     """
     n, q = system.n, D.shape[1]
     mm = coords.M

@@ -95,7 +95,7 @@ def modal_width_bound(modal: ModalDecomposition, input_radius: ArrayLike, h: flo
     Parameters
     ----------
     modal : ModalDecomposition
-        :math:`A - L_1C = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1` (eq. (13)).
+        :math:`A - L_1C = v_1^{-1}\operatorname{diag}(p_1 + i\omega_1)v_1`.
     input_radius : array_like, shape (n,)
         :math:`g^r`, radius of :math:`\varphi + d + L_1Cx` over a step (nonnegative).
     h : float
@@ -104,6 +104,10 @@ def modal_width_bound(modal: ModalDecomposition, input_radius: ArrayLike, h: flo
     Returns
     -------
     WidthBound
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): eq. (13).
     """
     lam = modal.eigenvalues
     n = lam.size
@@ -139,23 +143,27 @@ class WidthDesign:
     Attributes
     ----------
     L : numpy.ndarray, shape (n, p)
-        Gain :math:`L_1` from Algorithm 1 in ``disks`` (verified).
+        Gain :math:`L_1` placed in ``disks`` (verified).
     bound : WidthBound
         Width bound of ``L``.
     placement : RegionPlacement
-        Algorithm 1 in the derived disks (Theorem 4.1, LMI (15)).
+        the disk placement in the derived disks.
     disks : tuple of Disk
         One disjoint disk per optimal eigenvalue, inside every constraint region.
     regions : tuple
         The constraint regions every eigenvalue had to lie in.
     optimum_L : numpy.ndarray, shape (n, p)
-        The gain the optimiser found (Algorithm 1 reproduces it up to the LMI solver's accuracy).
+        The gain the optimiser found (the disk placement reproduces it up to the LMI solver's accuracy).
     objective : float
         ``weights @ bound.mean`` at ``L``.
     weights : numpy.ndarray, shape (n,)
         Weights of the objective.
     output_radius : numpy.ndarray, shape (p,)
         :math:`y^r` used in the bound.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): Algorithm 1, Theorem 4.1, LMI (15).
     """
 
     L: FloatArray
@@ -228,13 +236,13 @@ def design_for_width(
     Parameters
     ----------
     A : array_like, shape (n, n)
-        State matrix of model (8).
+        State matrix of the partially linear model.
     C : array_like, shape (p, n)
         Output matrix.
     h : float
         Grid step of the observer.
     d_radius : array_like, shape (n,)
-        :math:`d^r` (Assumption 3.1).
+        :math:`d^r`, the radius of the disturbance box.
     phi_radius : array_like, shape (n,)
         Radius of the range of φ over any box and the input over one step (e.g. 0.5 for
         :math:`e^{-|x|}`, plus :math:`|B_u|\dot u_{\max}h` for a known input term).
@@ -258,7 +266,12 @@ def design_for_width(
     Raises
     ------
     DesignError
-        If no start is feasible or Algorithm 1 fails in the derived disks.
+        If no start is feasible or the disk placement fails in the derived disks.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): model (8), the disturbance radius of
+    Assumption 3.1, Algorithm 1.
     """
     a = as_matrix("A", A)
     n = a.shape[0]

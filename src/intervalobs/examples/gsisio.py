@@ -165,11 +165,15 @@ def _g_own_jacobian(x: Sequence[Any]) -> list[list[Any]]:
 
 
 def fullrank_system() -> NonlinearSystem:
-    """Our own two-state system with one unknown input and a full-column-rank H (condition (8) holds).
+    """Our own two-state system with one unknown input and a full-column-rank H: state and input recoverable.
 
     Returns
     -------
     NonlinearSystem
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): existence condition (8).
     """
     return NonlinearSystem(
         _f_own, _g_own, FULLRANK_G, FULLRANK_H, f_jacobian=_f_own_jacobian, g_jacobian=_g_own_jacobian

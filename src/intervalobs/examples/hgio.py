@@ -142,7 +142,7 @@ def bounds() -> Bounds:
 
 
 def input_signal(t: float | FloatArray) -> FloatArray:
-    """The known input :math:`u = 3\\sin t - 2\\sin 3t`, eq. (53).
+    """The known input :math:`u = 3\\sin t - 2\\sin 3t` of the paper's example.
 
     Parameters
     ----------
@@ -152,6 +152,10 @@ def input_signal(t: float | FloatArray) -> FloatArray:
     Returns
     -------
     numpy.ndarray, shape (..., 1)
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (53).
     """
     tt = np.asarray(t, dtype=float)
     return np.asarray((3 * np.sin(tt) - 2 * np.sin(3 * tt))[..., None])

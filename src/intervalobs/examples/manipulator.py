@@ -477,7 +477,7 @@ class ManipulatorModel(SampledLPVModel):
         return bl, bh
 
     def rotated_bounds_at(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` at points (14)–(15).
+        """Exact bounds of :math:`\\Delta A_R` and :math:`\\Delta B_R` (uncertainty in observer coordinates) at points.
 
         Parameters
         ----------
@@ -488,12 +488,16 @@ class ManipulatorModel(SampledLPVModel):
         -------
         da_lower, da_upper : numpy.ndarray, shape (..., 4, 4)
         db_lower, db_upper : numpy.ndarray, shape (..., 4, 2)
+
+        References
+        ----------
+        Rotondo et al., (14)–(15).
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
         return (*self._velocity_columns(lo, hi, f3, f4, 4, 0), *self._input_block(lo, hi, 0, 0))
 
     def da_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` (11).
+        """Exact elementwise bounds of :math:`\\Delta A(\\vartheta)` over the parameter box.
 
         Parameters
         ----------
@@ -503,12 +507,16 @@ class ManipulatorModel(SampledLPVModel):
         Returns
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 4)
+
+        References
+        ----------
+        Rotondo et al. (:mod:`intervalobs.references`), (11).
         """
         lo, hi, f3, f4 = self._entry_bounds(theta)
         return self._velocity_columns(lo, hi, f3, f4, 12, 2)
 
     def db_bounds(self, theta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` (12), (23).
+        """Exact elementwise bounds of :math:`\\Delta B(\\vartheta) = \\Delta B_{un}(\\vartheta)` on the box.
 
         Parameters
         ----------
@@ -518,6 +526,10 @@ class ManipulatorModel(SampledLPVModel):
         Returns
         -------
         lower, upper : numpy.ndarray, shape (..., 4, 2)
+
+        References
+        ----------
+        Rotondo et al., (12) and (23).
         """
         lo, hi, _, _ = self._entry_bounds(theta)
         return self._input_block(lo, hi, 8, 2)

@@ -63,7 +63,7 @@ PRINTED_GAINS: dict[str, dict[str, list[float]]] = {
 
 
 def system(variant: str = "68") -> LTISystem:
-    """The uncertain system (68) or (70) (discrete time, ``dt`` = 3π/199).
+    """The integrated-observer paper's uncertain three-state system, first or second form (``dt`` = 3π/199).
 
     Parameters
     ----------
@@ -72,6 +72,10 @@ def system(variant: str = "68") -> LTISystem:
     Returns
     -------
     LTISystem
+
+    References
+    ----------
+    The integrated-observer paper: the systems (68) and (70).
     """
     if variant not in ("68", "70"):
         raise DataError(f"variant: expected '68' or '70', got {variant!r}")
@@ -81,11 +85,15 @@ def system(variant: str = "68") -> LTISystem:
 
 
 def bounds() -> Bounds:
-    """Initial box ±1 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (Assumption 3.1).
+    """Initial box ±1 (chosen), ``|ω| ≤ 1``, ``|υ| ≤ 1`` (the paper's noise bounds).
 
     Returns
     -------
     Bounds
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`), Assumption 3.1.
     """
     return Bounds(
         x0=(-X0_RADIUS * np.ones(3), X0_RADIUS * np.ones(3)),

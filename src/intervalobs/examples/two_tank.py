@@ -49,11 +49,15 @@ PRINTED_GAINS: dict[str, list[float]] = {
 
 
 def system() -> LTISystem:
-    """The uncertain two-tank model (72) (discrete time, Ts = 1 s).
+    """The uncertain two-tank model (discrete time, Ts = 1 s).
 
     Returns
     -------
     LTISystem
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`), model (72).
     """
     d = THETA * np.ones((2, 2))
     return LTISystem(A0, C, B=B, E=E_W, F=E_V, dt=SAMPLING_PERIOD, dA=(-d, d))

@@ -44,19 +44,17 @@ class EnvelopeLP(RecordsPath):
     :math:`\delta` box only. A slot outside the window (the first ``H`` steps) has its columns fixed at 0
     and its rows free. Every loaded value is kept, and only the entries that differ are passed on.
 
-    **Warm starts.** The optimal basis of every objective is kept and restored at the next step, in
-    one of two alignments: each variable and row with the status it had *at the same time* (the basis
-    as it is: a variable keeps its slot), or with the status of the one *one step earlier*, i.e. at the
-    same lag behind ``x_k`` (the basis rolled by one slot). Which one needs fewer pivots depends on the
-    example: on the integrated-observer paper's (68), where the extremal trajectories of ``x_k`` are shaped by the
-    shared
-    :math:`\delta`, the lagged basis (several times fewer pivots); on the two-tank, where the measurements
-    shape them, the timed one (a quarter fewer). So each objective uses the alignment whose recent pivot
-    count (:data:`_PIVOT_MEMORY`) is lower and tries the other one every :data:`_EXPLORE` steps. An
-    objective without a kept basis starts from the last solve's optimum. Dual simplex with Devex pricing
-    (steepest-edge weights would be recomputed after every restored basis). A restored basis is passed
-    as alien (HiGHS repairs a singular one); when it leads to no optimum, the LP is solved again from
-    scratch.
+    **Warm starts.** The optimal basis of every objective is kept and restored at the next step, in one of two
+    alignments: each variable and row with the status it had *at the same time* (the basis as it is: a variable
+    keeps its slot), or with the status of the one *one step earlier*, i.e. at the same lag behind ``x_k`` (the
+    basis rolled by one slot). Which one needs fewer pivots depends on the example: on the integrated-observer
+    paper's three-state example, where the extremal trajectories of ``x_k`` are shaped by the shared :math:`\delta`,
+    the lagged basis (several times fewer pivots); on the two-tank, where the measurements shape them, the timed one
+    (a quarter fewer). So each objective uses the alignment whose recent pivot count (:data:`_PIVOT_MEMORY`) is
+    lower and tries the other one every :data:`_EXPLORE` steps. An objective without a kept basis starts from the
+    last solve's optimum. Dual simplex with Devex pricing (steepest-edge weights would be recomputed after every
+    restored basis). A restored basis is passed as alien (HiGHS repairs a singular one); when it leads to no
+    optimum, the LP is solved again from scratch.
 
     **Certificate.** A copy of the matrix with the same entries (as ``Aᵀ`` in CSR, updated in place)
     gives the weak-duality bounds (:func:`~intervalobs.lp.certified.dual_bounds`); an optimum

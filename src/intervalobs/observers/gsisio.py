@@ -88,31 +88,40 @@ def _input_hull(M: FloatArray, h_lo: FloatArray, h_hi: FloatArray, d_lo: FloatAr
 
 
 class GSISIO(Observer):
-    r"""The paper's GSISIO, eqs. (4)–(7) with Theorem 1's gains (Khajenejad & Yong, Algorithm 1).
+    r"""Simultaneous bounds of the state and of an unknown input of a nonlinear discrete-time system.
 
-    Use :meth:`design`. The bounds :math:`\underline f, \overline f, \underline g, \overline g` over the
-    previous box are Corollary 1's (global-Jacobian decomposition (2) ∩ affine abstraction (1)) and,
-    with ``tight=True``, also intersected with the local-Jacobian decomposition, mean-value form and
-    natural extension; intersecting only shrinks the widths, so Lemma 5's bounds still hold.
+    The simultaneous input and state interval observer of Khajenejad & Yong, with its gains. Use
+    :meth:`design`. The bounds :math:`\underline f, \overline f, \underline g, \overline g` over the
+    previous box intersect a decomposition of ``f`` and ``g`` from global Jacobian bounds with an affine
+    abstraction over the abstraction domain and, with ``tight=True``, also the local-Jacobian
+    decomposition, mean-value form and natural extension; intersecting only shrinks the widths, so the
+    paper's width bounds still hold.
 
     Parameters
     ----------
     system : NonlinearSystem
         The model, with Jacobians.
     design_result : GSISIODesign
-        From :func:`gsisio_design` (the constructor does not check (8): :meth:`design` does).
+        From :func:`gsisio_design` (the constructor does not check that the input can be recovered:
+        :meth:`design` does).
     bounds : Bounds
         Boxes of ``x0``, ``w`` and ``v``.
     abstraction_f, abstraction_g : AffineAbstraction, optional
-        LP (1) solutions on the abstraction domain.
+        Affine bounds of ``f`` and ``g`` on the abstraction domain (from a linear program).
     tight : bool
         Also intersect with local-Jacobian ranges.
     splits : int
         Sub-boxes per axis for the local ranges.
     input_hull : bool
-        Replace Lemma 3's box :math:`J^+\overline h - J^-\underline h` by the exact interval hull of
-        :math:`\{d : \underline h \le [G; H]d \le \overline h\}` (2q LPs per step with HiGHS; Lemma 3's
-        "tight" holds only relative to the J-based box). Default False.
+        Replace the paper's input box :math:`J^+\overline h - J^-\underline h` by the exact interval
+        hull of :math:`\{d : \underline h \le [G; H]d \le \overline h\}` (2q LPs per step with HiGHS;
+        the paper's box is "tight" only relative to the J-based box). Default False.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`): the observer (4)–(7) with Theorem 1's gains
+    (Algorithm 1); the bounds of Corollary 1 (decomposition (2), abstraction LP (1)); the input box of
+    Lemma 3; the width bounds of Lemma 5; the existence condition (8).
     """
 
     summary_fields = ("tight", "input_hull")
@@ -153,7 +162,7 @@ class GSISIO(Observer):
         abstraction_domain: tuple[ArrayLike, ArrayLike] | None = None,
         **options: Any,
     ) -> GSISIO:
-        """Compute Theorem 1's gains, check (8) and correctness, solve LP (1).
+        """Compute the gains, check that the unknown input can be recovered, then bound ``f`` and ``g`` affinely.
 
         Parameters
         ----------
@@ -164,10 +173,11 @@ class GSISIO(Observer):
         jacobian_domain : tuple of array_like, optional
             Domain of the global Jacobian bounds (default: the whole space).
         abstraction_domain : tuple of array_like, optional
-            Box on which LP (1) is solved (default: the initial box); used for boxes inside it.
+            Box on which the affine bounds of ``f`` and ``g`` are computed (default: the initial box);
+            used for boxes inside it.
         **options
             ``tight`` (bool, default True), ``splits`` (int, default 1), ``input_hull`` (bool, default
-            False: exact LP hull of the input bounds instead of Lemma 3's box).
+            False: exact LP hull of the input bounds instead of the paper's box).
 
         Returns
         -------
@@ -176,7 +186,14 @@ class GSISIO(Observer):
         Raises
         ------
         AssumptionError
-            Condition (8) fails, or :math:`\\rho(K_1 + L_1) \\ge 1` (framers of (9) not guaranteed).
+            The state and unknown input cannot both be recovered from the outputs with these gains
+            (the existence condition fails), or :math:`\\rho(K_1 + L_1) \\ge 1` (the widths are not
+            guaranteed bounded).
+
+        References
+        ----------
+        Khajenejad & Yong: Theorem 1 (gains), condition (8) (existence), LP (1) (affine abstraction),
+        Lemma 3 (input box), (9) (framers).
         """
         check_no_kwargs("GSISIO.design", options, ("tight", "splits", "input_hull"))
         full = bounds.resolve(system)
@@ -277,7 +294,7 @@ class GSISIO(Observer):
     def current_input_bounds(
         self, x_lower: ArrayLike, x_upper: ArrayLike, y: ArrayLike, u: ArrayLike | None = None
     ) -> tuple[BoxPair, FloatArray]:
-        r"""Lemma 4: bounds of :math:`d_{1,k} = V_1^\top d_k` from the current output and the box of :math:`x_k`.
+        r"""Bounds of the input part :math:`d_{1,k} = V_1^\top d_k` the current output sees, given a box of x_k.
 
         Parameters
         ----------
@@ -292,6 +309,10 @@ class GSISIO(Observer):
         -------
         (lower, upper), V1
             Bounds of :math:`V_1^\top d_k` and the matrix :math:`V_1` (:math:`d_k = V_1d_{1,k} + V_2d_{2,k}`).
+
+        References
+        ----------
+        Khajenejad & Yong, Lemma 4.
         """
         sysm = self.system
         U, S, Vt = np.linalg.svd(sysm.H)

@@ -210,21 +210,25 @@ class _Modal:
 
 
 class HighGainIntervalObserver(Observer):
-    """Continuous–discrete high-gain interval observer (the sampled-output high-gain paper, Theorems 4.2 and 4.5).
+    """Continuous–discrete high-gain interval observer: state bounds between sampled, noisy outputs.
+
+    Two observers run together, as in the sampled-output high-gain paper: one bounds the noise-free
+    output between samples and is corrected at each sample, the other bounds the state from those
+    output bounds.
 
     Parameters
     ----------
     system : SampledSystem
-        Model (8).
+        The partially linear model ``ẋ = Ax + φ(t, u, x) + d`` with outputs sampled at ``t_k``.
     bounds : Bounds
         ``x0`` (default initial box), ``w`` the box of the disturbance ``d``, ``v`` the box of ``V``.
     L : array_like, shape (n, p)
-        Gain :math:`L_1 = \\theta\\Delta_\\theta^{-1}K` of the state-bound observer (Theorem 4.5);
+        Gain :math:`L_1 = \\theta\\Delta_\\theta^{-1}K` of the state-bound observer;
         ``A - L C`` must be Hurwitz and C-diagonalisable.
     h : float
         Grid step of the observer (the paper's Euler step; here an exact step).
     output_gain : array_like, shape (n, p), optional
-        Gain of the output-bound observer (Theorem 4.2); default ``L``. Its radius system must be
+        Gain of the output-bound observer; default ``L``. Its radius system must be
         stable (checked), which fails for large gains: the θ = 1000 design of Thabet et al. (2021)
         needs a small output gain here.
     theta : float
@@ -234,24 +238,30 @@ class HighGainIntervalObserver(Observer):
     order : list of complex, optional
         Eigenvalue order of the modal coordinates (e.g. the disk centres).
     refine : bool
-        Report the intersection of the state-bound box (Theorem 4.5), the output-observer box and the
-        slab ``{x : Cx ∈ output bounds}`` (all three enclose ``x(t_k)``) instead of the Theorem 4.5 box
+        Report the intersection of the state-bound observer's box, the output-observer box and the
+        slab ``{x : Cx ∈ output bounds}`` (all three enclose ``x(t_k)``) instead of the state-bound box
         alone (kept in ``Estimate.meta['theorem45_lower'/'theorem45_upper']``: the state-bound
         observer's own box, tightened by ``rewrap`` when that is on). Without ``rewrap`` this changes
         only what is reported and the a-priori boxes.
     predictor : {"modal", "box"}
-        Bound of ``C ẋ`` over a step for the intersample predictor (12c): ``"box"`` is ``C F(B)`` over
+        Bound of ``C ẋ`` over a step for the intersample output predictor: ``"box"`` is ``C F(B)`` over
         the a-priori box (the paper's predictor in interval form); ``"modal"`` (default) intersects it
         with ``CA x(t_k) + [0, h] CA F(B) + C(φ(B) + [d])``, ``CA x(t_k)`` bounded over both modal
         enclosures, which keep the correlations between the states that a box loses.
     rewrap : bool
         Intersect each observer's modal enclosure, after every step, with the rectangle of the
         reported box in its modal coordinates (both contain ζ; default True). With ``False`` the two
-        observers run as the paper's Theorems 4.2 and 4.5 and only the report is refined.
+        observers run as the paper's and only the report is refined.
     scheme : {"exact", "paper-euler"}
         ``"exact"`` (sound, default) or the paper's explicit Euler step in the θ-shifted coordinates
         (evaluated rescaled, so it cannot overflow), with every input bounded at ``t_k`` only. The
         latter is NOT sound; it exists to measure what θ and the Euler step do to the paper's bounds.
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`): model (8), the output-bound
+    observer of Theorem 4.2 with the intersample predictor (12c), the state-bound observer of Theorem
+    4.5 (meta keys ``theorem45_*``).
     """
 
     summary_fields = ("theta", "predictor", "rewrap", "scheme")
@@ -335,13 +345,14 @@ class HighGainIntervalObserver(Observer):
         predictor: str = "modal",
         rewrap: bool = True,
     ) -> HighGainIntervalObserver:
-        """The constructive design of the sampled-output high-gain paper: Algorithm 1 for ``L1``, then (optionally)
-        Theorem 4.4.
+        """Place the error's eigenvalues in the given disks, then (optionally) compute the high gain θ.
+
+        The constructive design of the sampled-output high-gain paper.
 
         Parameters
         ----------
         system : SampledSystem
-            Model (8).
+            The partially linear model with sampled outputs.
         bounds : Bounds
             Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
         disks : sequence of Disk or (centre, radius)
@@ -351,7 +362,8 @@ class HighGainIntervalObserver(Observer):
         objective : {"min_gain", "center"}
             Passed to :func:`~intervalobs.design.regions.place_in_disks`.
         alpha_d, alpha_n : float, optional
-            The scalars of (34); when both are given θ is computed (Theorem 4.4, both readings, in
+            The margins θ must leave for the disturbance and the noise; when both are given θ is
+            computed (both readings of the paper, in
             ``theta_design``) and recorded — it does not change the bounds.
         input_rate : float
             Bound of ``|du/dt|``.
@@ -372,6 +384,11 @@ class HighGainIntervalObserver(Observer):
         DesignError
             If no gain places the eigenvalues in the disks, or the output-bound observer with
             ``output_gain`` (default: the placed gain) diverges (its radius system is not Hurwitz).
+
+        References
+        ----------
+        The sampled-output high-gain paper: Algorithm 1 (the gain ``L1``), Theorem 4.4 with the
+        scalars of (34) (θ), model (8).
         """
         from ..design.high_gain import theta_design
         from ..design.regions import place_in_disks
@@ -421,7 +438,7 @@ class HighGainIntervalObserver(Observer):
         Parameters
         ----------
         system : SampledSystem
-            Model (8).
+            The partially linear model with sampled outputs.
         bounds : Bounds
             Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
         h : float
@@ -486,7 +503,7 @@ class HighGainIntervalObserver(Observer):
     def init(
         self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None, t0: float = 0.0
     ) -> ObserverState:
-        """State at ``t0`` from the prior box (Theorems 4.2/4.5: ``z^c(0) = v1 x^c(0)``, ``z^r(0) = v1 ∘ x^r(0)``).
+        """State at ``t0`` from the prior box, in modal coordinates: ``z^c(0) = v1 x^c(0)``, ``z^r(0) = v1 ∘ x^r(0)``.
 
         Parameters
         ----------
@@ -581,7 +598,7 @@ class HighGainIntervalObserver(Observer):
         Estimate
             State bounds; ``meta`` holds the output bounds (``output_lower``/``output_upper``: bounds
             of the noise-free output ``Cx(t_k)``, with the sample at ``t_k`` taken into account) and
-            Theorem 4.5's own state bounds (``theorem45_lower``/``theorem45_upper``).
+            the state-bound observer's own box (``theorem45_lower``/``theorem45_upper``).
         """
         times, ys, us = self._signals(t, y, u)
         state = self._initial(*self.bounds.x0, float(times[0]))

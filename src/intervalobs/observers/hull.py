@@ -157,8 +157,8 @@ class HullEstimator(Observer):
         returns the box of ``x_k`` given ``y_0 … y_k``.
     window_boxes : bool
         Also bound every state inside the window by its earlier box (not only the first one, the
-        prior). Slightly tighter for short windows (0.4 % at H = 10 on the integrated-observer paper's (68), nothing at
-        H = 40) but about 1.5× more simplex pivots; redundant for the full history.
+        prior). Slightly tighter for short windows (0.4 % at H = 10 on the integrated-observer paper's
+        three-state example, nothing at H = 40) but about 1.5× more simplex pivots; redundant for the full history.
     workers : int
         HiGHS instances solving the ``2n`` LPs of a step in parallel threads (condensed LP only; HiGHS
         releases the GIL while it solves). The bounds do not depend on it; use at most the number of

@@ -124,7 +124,7 @@ class _KnownTerms:
 
 
 class LPVIntervalObserver(Observer):
-    r"""LPV interval observer (31)–(34), sampled soundly (module docstring).
+    r"""Interval observer of an uncertain LPV system, sampled soundly (module docstring).
 
     Two ways to build one: from a model with its own sampled-data enclosures (a
     :class:`~intervalobs.systems.lpv.SampledLPVModel`, e.g. the manipulator's, and given Metzler
@@ -138,9 +138,10 @@ class LPVIntervalObserver(Observer):
     h : float
         Sampling interval (s).
     f_lower, f_upper : array_like, shape (n, n)
-        Constant Metzler Hurwitz :math:`\underline F, \overline F` (Section 5: :math:`-\lambda I`).
+        Constant Metzler Hurwitz :math:`\underline F, \overline F` (the manipulator example uses
+        :math:`-\lambda I`).
     bounds : Bounds, optional
-        Default prior box ``x0`` of :math:`x(t_0)` (20); its disturbance box ``w`` must be zero.
+        Default prior box ``x0`` of :math:`x(t_0)`; its disturbance box ``w`` must be zero.
 
     Raises
     ------
@@ -149,6 +150,11 @@ class LPVIntervalObserver(Observer):
         state; use :meth:`design` for n_y < n_x), or ``bounds`` has a disturbance d.
     DesignError
         If F is not Hurwitz.
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): the observer (31)–(34), the prior box (20), the
+    example's :math:`F = -\lambda I` (Section 5).
     """
 
     summary_fields: tuple[str, ...] = ("method",)
@@ -209,7 +215,7 @@ class LPVIntervalObserver(Observer):
         theta_rate: ArrayLike,
         **design_options: Any,
     ) -> LPVIntervalObserver:
-        r"""Design from the LMIs (63)–(66) and run with interval enclosures of the model between samples.
+        r"""Design the gains by LMIs on a grid of the scheduling box; run with enclosures of the model between samples.
 
         Parameters
         ----------
@@ -217,7 +223,7 @@ class LPVIntervalObserver(Observer):
             Model with :math:`C = (\tilde C\ 0)` (measured states first) and matrix functions in the
             component convention.
         bounds : Bounds
-            Prior box ``x0`` of :math:`x(t_0)` (20) and the box ``w`` of the disturbance d (10).
+            Prior box ``x0`` of :math:`x(t_0)` and the box ``w`` of the disturbance d.
         h : float
             Sampling interval (s).
         theta_rate : array_like, shape (n_theta,) or float
@@ -234,6 +240,10 @@ class LPVIntervalObserver(Observer):
         ------
         DesignError
             Naming the failed design condition.
+
+        References
+        ----------
+        Rotondo et al.: LMIs (63)–(66); the prior box (20) and the disturbance box (10).
         """
         unknown = {"R", "grid", "fine_grid", "eps2", "q_scale", "gain_bound"}
         for key in design_options:
@@ -561,7 +571,10 @@ class LPVIntervalObserver(Observer):
         x0_upper: ArrayLike | None = None,
         theta: ArrayLike | None = None,
     ) -> tuple[Estimate, FloatArray, FloatArray]:
-        """Like :meth:`run`, also returning :math:`\\underline\\varepsilon, \\overline\\varepsilon` (29)–(30).
+        """Like :meth:`run`, also returning the isolation signals (lower and upper ε).
+
+        A component of a signal below zero says the output left the bounds from that side: a fault acts
+        on that direction.
 
         Parameters
         ----------
@@ -580,6 +593,10 @@ class LPVIntervalObserver(Observer):
         -------
         estimate : Estimate
         eps_lower, eps_upper : numpy.ndarray, shape like ``estimate.lower``
+
+        References
+        ----------
+        Rotondo et al.: the isolation signals (29)–(30).
         """
         times, ys, us = self._signals(t, y, u)
         th = self._check_theta(theta, ys.shape[:-1])
@@ -620,12 +637,13 @@ class LPVIntervalObserver(Observer):
 
 
 class LPVIntervalUIO(LPVIntervalObserver):
-    r"""LPV interval unknown-input observer (69)–(72) with isolation signals (29)–(30).
+    r"""Interval unknown-input observer of an uncertain LPV system, with fault-isolation signals.
 
     On top of :class:`LPVIntervalObserver`: the bounded term of :math:`R\Delta B_{un}u_{un}` enters
-    both bounds ((69), (71), :math:`\underline w^4, \overline w^4 \ge 0` of (83), (85)); the switching
-    rule is built into the sampled step (module docstring); :math:`H = R B_{un}` must be constant
-    (26) and its columns eigenvectors of both F ((103)–(104), Theorem 4.1) — checked here.
+    both bounds (:math:`\underline w^4, \overline w^4 \ge 0`); the switching rule is built into the
+    sampled step (module docstring); :math:`H = R B_{un}` must be constant and its columns
+    eigenvectors of both F, so that each unknown input moves the error along its own direction only —
+    checked here.
 
     Parameters
     ----------
@@ -638,13 +656,19 @@ class LPVIntervalUIO(LPVIntervalObserver):
     bounds : Bounds, optional
         Default prior box ``x0`` (its disturbance box ``w`` must be zero).
     unknown_input : tuple of array_like
-        ``(lower, upper)`` of :math:`u_{un}` with lower ≤ 0 ≤ upper (Assumption 2.2).
+        ``(lower, upper)`` of :math:`u_{un}` with lower ≤ 0 ≤ upper (no fault is a possible value).
 
     Raises
     ------
     AssumptionError
         If :math:`RB_{un}` is not constant, the bounds do not contain 0, or H's columns are not
         eigenvectors of F.
+
+    References
+    ----------
+    Rotondo et al.: the observer (69)–(72) with the isolation signals (29)–(30); the bounds (69), (71)
+    with the terms of (83), (85); H of (26) and its eigenvector condition (103)–(104), Theorem 4.1; the
+    input bounds of Assumption 2.2.
     """
 
     summary_fields = ("method", "q")
@@ -702,12 +726,13 @@ class LPVIntervalUIO(LPVIntervalObserver):
         decay: float = 1.0,
         **design_options: Any,
     ) -> LPVIntervalUIO:
-        r"""Design from the LMIs (107)–(117) (Corollary 4.1, :math:`\Gamma = -\lambda I`) and run generically.
+        r"""Design the gains by LMIs with decay :math:`\Gamma = -\lambda I` and run with generic enclosures.
 
         Parameters
         ----------
         system : LPVSystem
-            Model with :math:`C = (\tilde C\ 0)`, a constant ``B_un`` and Assumption 2.3 (ΔA12 = 0).
+            Model with :math:`C = (\tilde C\ 0)`, a constant ``B_un``, and an uncertainty of the
+            measured states' equations that involves no unmeasured state (ΔA12 = 0).
         bounds : Bounds
             Prior box ``x0`` of :math:`x(t_0)` and the box ``w`` of the disturbance d.
         h : float
@@ -715,7 +740,7 @@ class LPVIntervalUIO(LPVIntervalObserver):
         theta_rate : array_like, shape (n_theta,) or float
             Bound of :math:`|\dot\vartheta|` (``inf`` allowed).
         unknown_input : tuple of array_like
-            ``(lower, upper)`` of :math:`u_{un}`, lower ≤ 0 ≤ upper (Assumption 2.2).
+            ``(lower, upper)`` of :math:`u_{un}`, lower ≤ 0 ≤ upper (no fault is a possible value).
         decay : float
             :math:`\lambda` of :math:`\Gamma = -\lambda I`.
         **design_options
@@ -729,9 +754,14 @@ class LPVIntervalUIO(LPVIntervalObserver):
         Raises
         ------
         AssumptionError
-            If Assumption 2.2 or 2.3 fails, or B_un is missing or not constant.
+            If the input bounds exclude 0, ΔA12 ≠ 0, or B_un is missing or not constant.
         DesignError
             Naming the failed design condition.
+
+        References
+        ----------
+        Rotondo et al.: LMIs (107)–(117), Corollary 4.1; Assumptions 2.2 (input bounds) and 2.3
+        (ΔA12 = 0).
         """
         for key in design_options:
             if key not in {"grid", "fine_grid", "eps2", "q_scale", "gain_bound"}:

@@ -247,8 +247,8 @@ class NullSpaceGSISIO(Observer):
     slope : tuple of numpy.ndarray
         Global bounds of :math:`\partial(U_2^\top g)/\partial t`, shape (p - rk H, h).
     preconditioners : list of numpy.ndarray
-        Matrices P (h, p - rk H) for which :math:`P\,\partial(U_2^\top g)/\partial t` is an H-matrix on
-        the whole space (the existence condition).
+        Matrices P (h, p - rk H) for which :math:`P\,\partial(U_2^\top g)/\partial t` is
+        generalised diagonally dominant on the whole space (the existence condition).
     """
 
     summary_fields = ("hidden", "newton_steps")
@@ -350,11 +350,11 @@ class NullSpaceGSISIO(Observer):
     def design(cls, system: NonlinearSystem, bounds: Bounds, **options: Any) -> NullSpaceGSISIO:
         """Build the observer; checks the existence condition.
 
-        The existence condition: at least as many d-free outputs as hidden input directions
-        (:math:`p - \\mathrm{rk}H \\ge q - \\mathrm{rk}H`), and a preconditioner P for which the
-        global slope :math:`P\\,\\partial(U_2^\\top g)/\\partial t` is an H-matrix (for one hidden direction:
-        some d-free output strictly monotone along :math:`GV_2`). Then the current d-free outputs
-        determine t, and the interval Gauss–Seidel step cannot divide by an interval containing 0.
+        The existence condition: at least as many d-free outputs as hidden input directions (:math:`p -
+        \\mathrm{rk}H \\ge q - \\mathrm{rk}H`), and a preconditioner P for which the global slope
+        :math:`P\\,\\partial(U_2^\\top g)/\\partial t` is generalised diagonally dominant (one hidden direction:
+        some d-free output strictly monotone along :math:`GV_2`). Then the current d-free outputs determine t, and
+        the interval Gauss–Seidel step cannot divide by an interval containing 0.
 
         Parameters
         ----------
@@ -542,7 +542,7 @@ class NullSpaceGSISIO(Observer):
         r"""A design-time bound of the widths, from the decomposition's global interval Jacobians.
 
         Every step intersects (i) the a-prediction with the fixed gain :math:`\ell_c` bounded by the
-        decomposition (2) with *global* Jacobian bounds of :math:`\psi = [R, -\ell_c][f; g]\circ Z^{-1}`,
+        mixed-monotone decomposition with *global* Jacobian bounds of :math:`\psi = [R, -\ell_c][f; g]\circ Z^{-1}`,
         whose width is at most :math:`W_a\Delta z_k` plus the noise widths
         :math:`\omega_a = |R|\Delta w + |\ell_c|\Delta v`; and (ii) the t-bound
         :math:`\hat t \pm \langle M\rangle^{-1}|r|` around a point :math:`\hat t` solving the
@@ -556,7 +556,7 @@ class NullSpaceGSISIO(Observer):
 
         and if :math:`\rho(\Gamma) < 1` the widths stay below
         :math:`(I - \Gamma)^{-1}\gamma` (in z; :math:`|Z^{-1}|` of it in x) after the transient
-        :math:`\Gamma^k\Delta z_0`. Input widths follow from (5)–(7) with the fixed gains. No
+        :math:`\Gamma^k\Delta z_0`. Input widths follow from the input bounds with the fixed gains. No
         certificate exists when a Jacobian is unbounded on the whole space or :math:`\rho(\Gamma) \ge 1`
         (the reason is stated). The bound assumes the point solve reached a residual below its tolerance
         (1e-13 relative), which makes :math:`0 \in r` hold up to that residual, added to
@@ -565,6 +565,10 @@ class NullSpaceGSISIO(Observer):
         Returns
         -------
         WidthCertificate
+
+        References
+        ----------
+        Khajenejad & Yong: decomposition (2), input bounds (5)–(7).
         """
         sysm = self.system
         n, na, h = self.n, self.n_a, self.hidden

@@ -129,7 +129,11 @@ def _rmul(x: FloatArray, m: FloatArray) -> FloatArray:
 
 
 class UnknownInputIntervalObserver(Observer):
-    """Interval observer of the state and of the unknown input ξ (the aircraft UIO paper, eqs. (15), (31), (37)).
+    """Interval observer of the state and of the unknown input ξ of a continuous-time LTI system.
+
+    The state and unknown-input bounds of the aircraft UIO paper: the unknown input is removed from the
+    error by a decoupling that needs it to be visible in the outputs, then bounded from the output's
+    derivative.
 
     Build it with :meth:`design`; see the module docstring for the equations and step semantics.
 
@@ -146,7 +150,7 @@ class UnknownInputIntervalObserver(Observer):
     decoupling : UIODecoupling
         From :func:`~intervalobs.design.uio.uio_decoupling`.
     coords : UIOCoordinates
-        Gain and Metzler coordinates (Hypothesis 6).
+        Gain and coordinates in which the error is cooperative (off-diagonal entries ≥ 0) and stable.
     noise_rate : array_like, shape (nv,)
         Bound of ``|dv/dt|``.
     output_accel : array_like, shape (p,)
@@ -156,7 +160,7 @@ class UnknownInputIntervalObserver(Observer):
     hosm : HOSMDifferentiator, optional
         Differentiator for ``derivative="hosm"``.
     mu1 : float
-        ``µ_1`` of (8).
+        ``µ_1``, the gain of the differentiator's error bound ``µ_1 δ^½``.
     hosm_transient : float
         Time after which the HOSM bound is claimed.
     input_magnitude : float
@@ -169,9 +173,9 @@ class UnknownInputIntervalObserver(Observer):
     D : numpy.ndarray, shape (n, q)
         Unknown-input matrix.
     decoupling : UIODecoupling
-        ``E``, ``P`` of (11), (25).
+        ``E``, ``P`` that remove the unknown input from the error (``PD = 0``).
     coords : UIOCoordinates
-        ``K``, ``T`` of Hypothesis 6.
+        Gain ``K`` and coordinates ``T`` of the cooperative, stable error.
     h : float
         Sampling period.
     derivative : str
@@ -179,7 +183,12 @@ class UnknownInputIntervalObserver(Observer):
     transient_s : float
         Time after which the input bounds are claimed (state bounds hold from ``t_0``).
     rho_x, rho_xi : numpy.ndarray
-        Asymptotic widths of the state and input bounds (eqs. (34), (48) for this observer).
+        Asymptotic widths of the state and input bounds of this observer.
+
+    References
+    ----------
+    The aircraft UIO paper (:mod:`intervalobs.references`): bounds (15), (31), (37); ``µ_1`` of (8);
+    ``E``, ``P`` of (11), (25); ``K``, ``T`` of Hypothesis 6; widths as in (34), (48).
     """
 
     summary_fields = ("q", "derivative")
@@ -279,7 +288,11 @@ class UnknownInputIntervalObserver(Observer):
         hosm_transient: float = 1.0,
         input_magnitude: float = 1e6,
     ) -> UnknownInputIntervalObserver:
-        """Check Hypotheses 4–6 and build the observer (the aircraft UIO paper, §4).
+        """Check that the unknown input can be removed and the error made cooperative, then build the observer.
+
+        Three conditions on the model: the unknown input acts through directions the outputs see
+        (``rank(CD) = rank(D) = q ≤ p``); after removing it, the state is still detectable from the
+        outputs; and a gain and coordinates exist in which the error is cooperative and stable.
 
         Parameters
         ----------
@@ -297,19 +310,19 @@ class UnknownInputIntervalObserver(Observer):
             Bound ``L`` of ``|d/dt (dψ/dt - CBu)|``, the output acceleration without the known input's
             direct term (``|d²ψ/dt²|`` when ``B = 0``; Levant's Lipschitz constant, ``λ_1 = 1.1 L``).
         W : array_like, shape (n, p), optional
-            Free parameter of (11), default 0.
+            Free parameter of the decoupling ``E = -D(CD)† + W(I - CD(CD)†)``, default 0.
         poles : array_like, shape (n,), optional
             Poles of ``PA - KC``: real (repeated up to ``p`` times) or complex pairs with a real partner
             (default: searched, see :func:`~intervalobs.design.uio.design_uio_coordinates`).
         K, T : array_like, optional
-            A given gain (and coordinates), checked against Hypothesis 6: ``T (PA - KC) T⁻¹`` Metzler and
+            A given gain (and coordinates), checked: ``T (PA - KC) T⁻¹`` Metzler and
             Hurwitz (default ``T``: onto :func:`~intervalobs.design.uio.metzler_block_form`).
         derivative : {"difference", "hosm"}
             Derivative enclosure used for the unknown-input bounds.
         hosm : HOSMDifferentiator, optional
             Differentiator for ``derivative="hosm"``.
         mu1 : float
-            ``µ_1`` of (8) for ``derivative="hosm"``.
+            ``µ_1`` (the differentiator's error gain) for ``derivative="hosm"``.
         hosm_transient : float
             Time after which the HOSM bound is claimed.
         input_magnitude : float
@@ -322,9 +335,15 @@ class UnknownInputIntervalObserver(Observer):
         Raises
         ------
         AssumptionError
-            Hypothesis 4, 5 or 6 fails.
+            The unknown input is not visible in the outputs, the decoupled model is not detectable, or
+            the given gain does not make the error cooperative and stable.
         DesignError
             No suitable gain/coordinates.
+
+        References
+        ----------
+        The aircraft UIO paper, §4: Hypotheses 4–6 (the three conditions above), ``W`` of (11), ``µ_1``
+        of (8).
         """
         refuse_uncertain_input(system, "UnknownInputIntervalObserver")
         full = bounds.resolve(system)
@@ -372,7 +391,7 @@ class UnknownInputIntervalObserver(Observer):
         return np.asarray(rho_x), np.asarray(rho_xi)
 
     def paper_rho(self, zeta: ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
-        r"""The paper's asymptotic bounds (30), (34), (48) with its ``ẏ``-based forcing (sign-corrected).
+        r"""The aircraft UIO paper's asymptotic widths, with its ``ẏ``-based forcing (sign-corrected).
 
         :math:`\rho_z = -M^{-1}(2|TP|\bar\omega + 2|TK|\bar\delta + |TE|\bar\zeta)`,
         :math:`\rho_x = |T^{-1}|\rho_z`,
@@ -382,11 +401,15 @@ class UnknownInputIntervalObserver(Observer):
         Parameters
         ----------
         zeta : array_like, shape (p,), optional
-            Bound of ζ in (29); default ``2 (δ̇ + µ1 δ^½)``.
+            Bound of ζ, the error of the output derivative; default ``2 (δ̇ + µ1 δ^½)``.
 
         Returns
         -------
         rho_x, rho_xi : numpy.ndarray
+
+        References
+        ----------
+        The aircraft UIO paper: widths (30), (34), (48); ζ of (29).
         """
         c, co, dec = self._c, self.coords, self.decoupling
         omega_r = 0.5 * (c.noise_hi - c.noise_lo)  # already through |TPE|

@@ -55,8 +55,10 @@ _TINY = float(np.finfo(float).tiny)
 
 
 class ZonotopicObserver(Observer):
-    r"""Zonotopic set-based observer of the integrated-observer paper, Proposition 3.1 (sound interval-matrix
-    inclusion).
+    r"""Zonotopic set-based observer: the error set kept as a zonotope, whose box holds the state.
+
+    For a discrete-time model with an uncertain ``dA`` (the set-based observer of the integrated-observer
+    paper, with a sound inclusion of the interval matrix product).
 
     With :math:`A^* = A_0 + \Delta A - LC` an interval matrix (midpoint :math:`M`, radius :math:`D`),
 
@@ -66,9 +68,9 @@ class ZonotopicObserver(Observer):
         R_{k+1} &= [\,M\check R_k,\ \mathrm{diag}(D(|c_k| + |\check R_k|\mathbf 1)),\
                    E_\omega\mathrm{diag}(\omega_r),\ -LE_\upsilon\mathrm{diag}(\upsilon_r)\,],
 
-    :math:`\check R_k = \downarrow_q R_k` ((7a)–(7b)); the diagonal block replaces the printed
-    ``⋄(A*Ř)`` / ``diam(A*)/2 c`` terms by their sound form. The state bounds are the interval hull
-    (57): :math:`c_k \pm |R_k|\mathbf 1`. Each step also adds the floating-point error bound of its own
+    :math:`\check R_k = \downarrow_q R_k` (the zonotope reduced to ``q`` generators); the diagonal
+    block replaces the printed ``⋄(A*Ř)`` / ``diam(A*)/2 c`` terms by their sound form. The state bounds
+    are the interval hull :math:`c_k \pm |R_k|\mathbf 1`. Each step also adds the floating-point error bound of its own
     dot products to the diagonal block, so the enclosure does not depend on a contraction argument.
 
     Stability certificate: the hull radius :math:`h_k = |R_k|\mathbf 1` obeys
@@ -97,6 +99,11 @@ class ZonotopicObserver(Observer):
         For a continuous-time system.
     DesignError
         When :math:`\rho(A_0 + \mathrm{mid}\,\Delta A - LC) \ge 1` and not ``allow_unstable``.
+
+    References
+    ----------
+    The integrated-observer paper (:mod:`intervalobs.references`): Proposition 3.1 (the observer),
+    (7a)–(7b) (the reduction :math:`\downarrow_q`), (57) (the interval hull).
     """
 
     summary_fields = ("order", "spectral_radius", "width_spectral_radius")
@@ -154,7 +161,7 @@ class ZonotopicObserver(Observer):
 
     @classmethod
     def design(cls, system: LTISystem, bounds: Bounds, **options: Any) -> ZonotopicObserver:
-        """Gain from the zonotope-size LMI (26) (Theorem 3.5) or the H∞ LMI (19), then the observer.
+        """Gain that keeps the zonotope small (default) or bounds the noise-to-error gain, then the observer.
 
         Parameters
         ----------
@@ -163,14 +170,20 @@ class ZonotopicObserver(Observer):
         bounds : Bounds
             Boxes of ``x0``, ``w``, ``v``.
         **options
-            ``lmi`` (``"(26)"`` default, or ``"(19)"``), ``rho`` (contraction factor of (26), default
-            0.9), ``E_theta`` (direction matrix of Lemma A.2, default identity), ``order`` (reduction
-            order, default ``5 n``).
+            ``lmi`` (``"(26)"`` default: the zonotope-size LMI, or ``"(19)"``: the H∞ LMI), ``rho``
+            (contraction factor the zonotope-size LMI asks of the error, default 0.9), ``E_theta``
+            (directions in which ``dA`` moves the state, default identity), ``order`` (reduction order,
+            default ``5 n``).
 
         Returns
         -------
         ZonotopicObserver
             With ``gain_design`` holding the verified :class:`~intervalobs.design.hinf.GainDesign`.
+
+        References
+        ----------
+        The integrated-observer paper: LMI (26) and Theorem 3.5 (zonotope size), LMI (19) (H∞),
+        Lemma A.2 (``E_theta``). The option values ``"(26)"`` and ``"(19)"`` are those equation labels.
         """
         check_no_kwargs("ZonotopicObserver.design", options, ("lmi", "rho", "E_theta", "order"))
         if not isinstance(system, LTISystem):
@@ -188,7 +201,7 @@ class ZonotopicObserver(Observer):
         return observer
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
-        """The initial zonotope: the box of ``x(0)`` (default ``bounds.x0``), Assumption 3.2.
+        """The initial zonotope: the box known to hold ``x(0)`` (default ``bounds.x0``).
 
         Parameters
         ----------
@@ -259,9 +272,10 @@ class ZonotopicObserver(Observer):
 
 
 class IntegratedObserver(IntervalObserver):
-    r"""Integrated interval observer of the integrated-observer paper, Theorem 5.3, made sound.
+    r"""Integrated interval observer: a centre and a radius propagated separately, sound for any gain.
 
-    Centre (63) and segments (64) are propagated separately:
+    The integrated observer of the integrated-observer paper, made sound for any sign of the error
+    matrix. Centre and radius follow
 
     .. math::
 
@@ -269,10 +283,10 @@ class IntegratedObserver(IntervalObserver):
         r_{k+1} &= |M|r_k + |E_\omega|\omega_r + |LE_\upsilon|\upsilon_r + D(|c_k| + r_k),
 
     :math:`x_{\sup/\inf} = c \pm r`, with :math:`M = A_0 + \mathrm{mid}\,\Delta A - LC` and ``D`` the
-    radius of ``ΔA`` (Lemma A.1 in centre–radius form). For :math:`M \ge 0` this is (64) literally;
-    for any sign it stays sound. The recursion is that of
-    :class:`~intervalobs.observers.interval_observer.IntervalObserver` with ``T = I`` (inherited);
-    stability is certified by :math:`\rho(|M| + D) < 1` (checked on construction).
+    radius of ``ΔA`` (the exact bound of an interval matrix times an interval vector, in centre–radius
+    form). For :math:`M \ge 0` this is the paper's recursion literally; for any sign it stays sound.
+    The recursion is that of :class:`~intervalobs.observers.interval_observer.IntervalObserver` with
+    ``T = I`` (inherited); stability is certified by :math:`\rho(|M| + D) < 1` (checked on construction).
 
     Parameters
     ----------
@@ -281,7 +295,12 @@ class IntegratedObserver(IntervalObserver):
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
     L : array_like, shape (n, p)
-        Gain; :meth:`design` computes it from LMI (19) + (65).
+        Gain; :meth:`design` computes it from the H∞ and monotonicity LMIs.
+
+    References
+    ----------
+    The integrated-observer paper: Theorem 5.3 (the observer), (63) (centre), (64) (segments), Lemma
+    A.1 (interval matrix product), LMIs (19) and (65) (the gain).
     """
 
     def __init__(self, system: LTISystem, bounds: Bounds, L: ArrayLike) -> None:
@@ -301,7 +320,7 @@ class IntegratedObserver(IntervalObserver):
         h: float | None = None,
         **options: Any,
     ) -> IntegratedObserver:
-        """Gain from the H∞ LMI (19) with the monotonicity LMI (65) (diagonal ``P``), then the observer.
+        """Gain bounding the noise-to-error gain with a monotone error (``A0 - LC ≥ 0``), then the observer.
 
         Parameters
         ----------
@@ -312,14 +331,19 @@ class IntegratedObserver(IntervalObserver):
         h : float, optional
             None or the system's ``dt`` (discrete time); present for signature compatibility.
         **options
-            ``E_theta`` (array, default identity): direction matrix of Lemma A.2 used in (19).
+            ``E_theta`` (array, default identity): directions in which ``dA`` moves the state.
             ``fallback`` (``"raise"`` default, or ``"hinf"``): when :math:`A_0 - LC \\ge 0` is
-            impossible, raise :class:`AssumptionError` or use the gain of (19) alone (the observer stays
+            impossible, raise :class:`AssumptionError` or use the H∞ gain alone (the observer stays
             sound; ``fallback`` records why).
 
         Returns
         -------
         IntegratedObserver
+
+        References
+        ----------
+        The integrated-observer paper: H∞ LMI (19) with the monotonicity LMI (65) (diagonal ``P``),
+        Lemma A.2 (``E_theta``).
         """
         check_no_kwargs("IntegratedObserver.design", options, ("E_theta", "fallback"))
         if not isinstance(system, LTISystem):

@@ -65,7 +65,7 @@ class LPVSystem(ModelDimensions):
     B_un : callable, optional
         :math:`B_{un}(\vartheta)` (n×q), full column rank.
     dA, dB, dB_un : tuple of array_like or callable, optional
-        Elementwise bounds of :math:`\Delta A, \Delta B, \Delta B_{un}` ((11), (12), (23)).
+        Elementwise bounds of :math:`\Delta A, \Delta B, \Delta B_{un}`.
     c : array_like, shape (n,), optional
         Known constant term.
 
@@ -78,6 +78,10 @@ class LPVSystem(ModelDimensions):
         and of measurement noise (0: :math:`y = Cx`).
     continuous : bool
         Always True (the paper's systems are continuous time).
+
+    References
+    ----------
+    Rotondo et al. (:mod:`intervalobs.references`): the uncertainty bounds (11), (12), (23).
     """
 
     continuous = True
@@ -335,11 +339,15 @@ class StepEnclosure:
     rx_lower, rx_upper : numpy.ndarray, shape (M, n)
         Bounds of :math:`R(\vartheta)x`.
     da_lower, da_upper : numpy.ndarray, shape (M, n, n)
-        Bounds of :math:`\Delta A_R` (14).
+        Bounds of :math:`\Delta A_R`, the uncertainty of ``A`` in the observer's coordinates.
     db_lower, db_upper : numpy.ndarray, shape (M, n, m)
-        Bounds of :math:`\Delta B_R` (15).
+        Bounds of :math:`\Delta B_R`, likewise for ``B``.
     dbun_lower, dbun_upper : numpy.ndarray, shape (M, n, q)
-        Bounds of :math:`\Delta B_{un,R}` (24).
+        Bounds of :math:`\Delta B_{un,R}`, likewise for the unknown-input matrix.
+
+    References
+    ----------
+    Rotondo et al.: :math:`\Delta A_R` (14), :math:`\Delta B_R` (15), :math:`\Delta B_{un,R}` (24).
     """
 
     flow_lower: FloatArray
@@ -361,12 +369,16 @@ class SampledLPVModel(ABC):
 
     Methods are vectorised over a leading run axis and return *sound* enclosures valid for every
     admissible parameter, unknown input and intersample behaviour. ``R`` is the observer's coordinate
-    matrix :math:`R(\vartheta)` (Rotondo et al., (14)–(16)). Subclasses set :attr:`system`.
+    matrix :math:`R(\vartheta)`. Subclasses set :attr:`system`.
 
     Attributes
     ----------
     system : LPVSystem
-        The model in the form (1)–(2).
+        The uncertain LPV model.
+
+    References
+    ----------
+    Rotondo et al.: :math:`R(\vartheta)` of (14)–(16); the model (1)–(2).
     """
 
     system: LPVSystem

@@ -42,7 +42,7 @@ FloatArray = NDArray[np.float64]
 
 
 class NonlinearSystem(ModelDimensions):
-    """A nonlinear discrete-time system with unknown inputs, Khajenejad & Yong, eq. (3).
+    """A nonlinear discrete-time system with unknown inputs that act on the state and the outputs.
 
     Parameters
     ----------
@@ -85,6 +85,10 @@ class NonlinearSystem(ModelDimensions):
         ``[G; H]`` does not have full column rank (Khajenejad & Yong, Section III).
     DataError
         A user Jacobian misses the automatic derivative at a sample point.
+
+    References
+    ----------
+    Khajenejad & Yong (:mod:`intervalobs.references`), eq. (3).
     """
 
     def __init__(

@@ -60,7 +60,7 @@ def _as_domain(domain: tuple[ArrayLike, ArrayLike] | None, n: int) -> tuple[Floa
 
 
 class SampledSystem(ModelDimensions):
-    """The continuous-discrete model of the sampled-output high-gain paper, eq. (8).
+    """A continuous-time partially linear model whose outputs are measured only at sample times.
 
     Parameters
     ----------
@@ -87,6 +87,10 @@ class SampledSystem(ModelDimensions):
     ----------
     n, m, p, nw, nv : int
         States, known inputs, outputs, disturbance channels (= n) and noise channels (= p).
+
+    References
+    ----------
+    The sampled-output high-gain paper (:mod:`intervalobs.references`), eq. (8).
     """
 
     def __init__(
