@@ -22,6 +22,10 @@ def test_chemostat_reproduction(tmp_path) -> None:
     assert tight["biomass_consistent_inner_width_second_half"] <= free
     assert design["kinetics_free_biomass_noise_floor"] <= free < 0.5
     assert np.isfinite(summary["runtime_s"]["ms_per_sample"])
+    bundle = design["bundle"]
+    assert bundle["enclosure"] == 1.0
+    assert tight["bundle_biomass_ratio"] >= 1.0
+    assert bundle["biomass_mean_width_second_half"] < design["biomass_mean_width_second_half"]
 
 
 @pytest.mark.slow

@@ -17,6 +17,12 @@ parameter and measurable disturbance); at each sample it is *contracted* by stri
 
 A wide prior is *split* into parts (``splits``), one zonotope each, so that the validated step, whose
 loss grows with the square of the set's size, stays accurate; a part the data contradict is dropped.
+With ``refine`` the parts form a *bundle*: whenever the data have dropped half of them, the live ones are
+bisected, so the parts gather where the states and parameters are still consistent with the record.
+Moisan, Bernard & Gouzé (2009) run several observers of the same set and intersect them; here the
+parts partition the set and the report is the hull of their union. A strip whose cut is shallow changes no coordinate's
+hull, so one zonotope does not learn a parameter from many such cuts (a chemostat's μmax and Ks keep
+their whole box); the bundle learns them by dropping the parts that a cut misses entirely.
 Rows are *filtered*: row :math:`k` bounds :math:`x(t_k)` given :math:`y_0 \dots y_k` (the hull of
 the live parts). When every part is contradicted the record contradicts the model (or its boxes):
 the run's bounds stay as they were up to that sample, the rows after it are ``[-inf, inf]``, and
@@ -31,6 +37,8 @@ warn (``RuntimeWarning``) and set ``meta["diverging"]``.
   41(6):1035-1043, 2005. DOI: 10.1016/j.automatica.2004.12.008.
 * L. Jaulin, M. Kieffer, O. Didrit, É. Walter, *Applied Interval Analysis*, Springer, 2001.
   DOI: 10.1007/978-1-4471-0249-6.
+* M. Moisan, O. Bernard, J.-L. Gouzé, "Near optimal interval observers bundle for uncertain
+  bioreactors", *Automatica* 45(1):291-295, 2009.
 * C. Combastel, "Zonotopes and Kalman observers: gain optimality under distinct uncertainty
   paradigms and robust convergence", *Automatica* 55:265-273, 2015.
 """

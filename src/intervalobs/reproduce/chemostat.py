@@ -78,6 +78,8 @@ REFERENCE_ROUNDS, REFERENCE_TIMES = 8, 7
 lower bound)."""
 STEP_FRACTIONS = (1.0, 0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02, 0.01)
 """Fractions of the way to a linear programme's target tried by exact simulation (the farthest consistent is kept)."""
+BUNDLE_PARTS = 256
+"""Most parts of the bundle run (``ContinuousNonlinearObserver(refine=...)``)."""
 DIFFERENCE = 1e-6
 """Forward-difference step of the sensitivities, per unit of each box width."""
 
@@ -251,6 +253,14 @@ def _kinetics_free_run(t: FloatArray, y: FloatArray) -> tuple[Estimate, float]:
     return estimate, time.perf_counter() - clock
 
 
+def _bundle_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> tuple[Estimate, float]:
+    """The invariant model as a bundle: up to ``BUNDLE_PARTS`` parts, bisected where the data drop half of them."""
+    observer = ContinuousNonlinearObserver(invariant_model(), bounds, STEP, refine=BUNDLE_PARTS)
+    clock = time.perf_counter()
+    estimate = observer.run(t, y[:, None])
+    return estimate, time.perf_counter() - clock
+
+
 def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     """The model as written, over the first ``DIRECT_HOURS``: when its bounds are lost, and the warning."""
     short = t <= DIRECT_HOURS + 1e-9
@@ -296,9 +306,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     y = x[:, 1] + NOISE * rng.choice([-1.0, 1.0], size=t.size) * rng.uniform(0.5, 1.0, size=t.size)
     direct_bounds = Bounds(x0=X0_BOX, v=(-NOISE, NOISE), p=PARAMETER_BOX)
     invariant_box = (np.array([X0_BOX[0][0] / YIELD + X0_BOX[0][1], 0.3]), np.array([X0_BOX[1][0] / YIELD + 0.8, 0.8]))
-    observer = ContinuousNonlinearObserver(
-        invariant_model(), Bounds(x0=invariant_box, v=(-NOISE, NOISE), p=PARAMETER_BOX), STEP
-    )
+    invariant_bounds = Bounds(x0=invariant_box, v=(-NOISE, NOISE), p=PARAMETER_BOX)
+    observer = ContinuousNonlinearObserver(invariant_model(), invariant_bounds, STEP)
     clock = time.perf_counter()
     estimate = observer.run(t, y[:, None])
     run_time = time.perf_counter() - clock
@@ -317,6 +326,9 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     width = (upper - lower)[half].mean(axis=0)
     free, free_time = _kinetics_free_run(t, y)
     free_width = free.width()[half].mean(axis=0)
+    bundle, bundle_time = _bundle_run(t, y, invariant_bounds)
+    bundle_lower, bundle_upper = _biomass_bounds(bundle)
+    bundle_width = (bundle_upper - bundle_lower)[half].mean(axis=0)
     summary["design"] = {
         "coordinates": "Z = X/Y + S, S",
         "substeps": observer.substeps,
@@ -326,9 +338,20 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
         "kinetics_free_biomass_mean_width_second_half": free_width[0],
         "kinetics_free_biomass_noise_floor": 2.0 * NOISE * YIELD,
         "kinetics_free_ms_per_sample": 1000.0 * free_time / t.size,
+        "bundle": {
+            "parts": BUNDLE_PARTS,
+            "biomass_mean_width_second_half": bundle_width[0],
+            "substrate_mean_width_second_half": bundle_width[1],
+            "ms_per_sample": 1000.0 * bundle_time / t.size,
+            "enclosure": float(np.mean((bundle_lower <= x) & (x <= bundle_upper))),
+        },
     }
     trajectories = {"t": t, "x": x, "x_lower": lower, "x_upper": upper, "y": y}
-    widths = {"invariant coordinates": upper - lower, "no kinetics (asymptotic)": free.width()}
+    widths = {
+        "invariant coordinates": upper - lower,
+        f"bundle ({BUNDLE_PARTS} parts)": bundle_upper - bundle_lower,
+        "no kinetics (asymptotic)": free.width(),
+    }
     if full:  # the consistent-set reference: a comparison, behind --full like the other examples' tightness
         reference = consistent_inner_hull(t, y, np.concatenate([start, TRUE_PARAMETERS]))
         inner = (reference[1] - reference[0])[half].mean(axis=0)
@@ -338,6 +361,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
             "substrate_ratio": width[1] / inner[1],
             "reference": "inner hull of exact consistent trajectories (sequential linear programming from the truth)",
             "kinetics_free_biomass_ratio": free_width[0] / inner[0],
+            "bundle_biomass_ratio": bundle_width[0] / inner[0],
+            "bundle_substrate_ratio": bundle_width[1] / inner[1],
         }
         trajectories.update(reference_x_lower=reference[0], reference_x_upper=reference[1])
         widths["consistent set (inner)"] = reference[1] - reference[0]
