@@ -8,7 +8,7 @@ r"""Reproduction ``chemostat``: guaranteed biomass bounds of a Monod chemostat f
 with :math:`S` measured :math:`\pm 0.02` g/L every 0.1 h, :math:`\mu_{max}` and :math:`K_s` known to
 :math:`\pm 5\,\%`, :math:`X_0 \in [1, 3]`, :math:`S_0 \in [0.3, 0.8]` (the case of issue 32).
 
-Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`:
+Three runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`:
 
 * **as written** (states :math:`X, S`, the prior split in 8 parts along :math:`X`): sound, but the
   first-order validated step loses the set within hours (``direct`` in the summary: when, and the
@@ -19,6 +19,10 @@ Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlin
   :math:`\dot Z = D(S_{in} - Z)` whatever the kinetics, so the model written in :math:`(Z, S)` —
   the same model, no approximation — has an exact linear row; the bounds of :math:`X = Y(Z - S)` are
   the recommended ones.
+* the same as a **bundle** (``refine=BUNDLE_PARTS``, ``design.bundle`` in the summary): one zonotope
+  keeps the whole box of :math:`\mu_{max}, K_s` (a sample's cut is too shallow to narrow it), so its
+  :math:`S` is as wide as the steady substrate :math:`K_s D/(\mu_{max} - D)` over that box allows; the
+  bundle drops the parts of the box the data contradict and bisects the rest.
 
 And :class:`~intervalobs.observers.reaction_invariant.ReactionInvariantObserver`, the interval
 asymptotic observer, which uses no kinetic model at all (the yield, the dilution and the inlet only):
@@ -253,12 +257,32 @@ def _kinetics_free_run(t: FloatArray, y: FloatArray) -> tuple[Estimate, float]:
     return estimate, time.perf_counter() - clock
 
 
-def _bundle_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> tuple[Estimate, float]:
-    """The invariant model as a bundle: up to ``BUNDLE_PARTS`` parts, bisected where the data drop half of them."""
-    observer = ContinuousNonlinearObserver(invariant_model(), bounds, STEP, refine=BUNDLE_PARTS)
-    clock = time.perf_counter()
+def _bundle_run(
+    t: FloatArray, y: FloatArray, x: FloatArray, bounds: Bounds, parts: int
+) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+    """The invariant model as a bundle of up to ``parts`` parts (0: one zonotope): (X, S) bounds and their widths.
+
+    The widths are means over the record's second half; ``ms_per_sample`` is CPU time.
+    """
+    observer = ContinuousNonlinearObserver(invariant_model(), bounds, STEP, refine=parts)
+    clock = time.process_time()
     estimate = observer.run(t, y[:, None])
-    return estimate, time.perf_counter() - clock
+    elapsed = time.process_time() - clock
+    lower, upper = _biomass_bounds(estimate)
+    half = t >= 0.5 * t[-1]
+    width = (upper - lower)[half].mean(axis=0)
+    return (
+        lower,
+        upper,
+        {
+            "parts": parts,
+            "biomass_mean_width_second_half": width[0],
+            "substrate_mean_width_second_half": width[1],
+            "invariant_mean_width_second_half": float(estimate.width()[half, 0].mean()),
+            "ms_per_sample": 1000.0 * elapsed / t.size,
+            "enclosure": float(np.mean((lower <= x) & (x <= upper))),
+        },
+    )
 
 
 def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
@@ -278,7 +302,9 @@ def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     }
 
 
-def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float = T_FINAL) -> dict[str, Any]:
+def run(
+    out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float = T_FINAL, sweep: tuple[int, ...] = ()
+) -> dict[str, Any]:
     """Simulate the chemostat, bound it in both coordinates, write the contract files.
 
     Parameters
@@ -293,6 +319,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
         Also compute the consistent-set reference (the inner hull) and the ``tightness`` ratios.
     t_final : float
         Length of the record (hours).
+    sweep : tuple of int
+        Bundle sizes (``refine``; 0: one zonotope) also run, their widths and cost in ``design.bundle_sweep``.
 
     Returns
     -------
@@ -326,8 +354,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     width = (upper - lower)[half].mean(axis=0)
     free, free_time = _kinetics_free_run(t, y)
     free_width = free.width()[half].mean(axis=0)
-    bundle, bundle_time = _bundle_run(t, y, invariant_bounds)
-    bundle_lower, bundle_upper = _biomass_bounds(bundle)
+    bundle_lower, bundle_upper, bundle = _bundle_run(t, y, x, invariant_bounds, BUNDLE_PARTS)
     bundle_width = (bundle_upper - bundle_lower)[half].mean(axis=0)
     summary["design"] = {
         "coordinates": "Z = X/Y + S, S",
@@ -338,13 +365,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
         "kinetics_free_biomass_mean_width_second_half": free_width[0],
         "kinetics_free_biomass_noise_floor": 2.0 * NOISE * YIELD,
         "kinetics_free_ms_per_sample": 1000.0 * free_time / t.size,
-        "bundle": {
-            "parts": BUNDLE_PARTS,
-            "biomass_mean_width_second_half": bundle_width[0],
-            "substrate_mean_width_second_half": bundle_width[1],
-            "ms_per_sample": 1000.0 * bundle_time / t.size,
-            "enclosure": float(np.mean((bundle_lower <= x) & (x <= bundle_upper))),
-        },
+        "bundle": bundle,
+        "bundle_sweep": [_bundle_run(t, y, x, invariant_bounds, parts)[2] for parts in sweep],
     }
     trajectories = {"t": t, "x": x, "x_lower": lower, "x_upper": upper, "y": y}
     widths = {
