@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -104,10 +105,12 @@ def test_refine_is_checked() -> None:
         ContinuousNonlinearObserver(case.system, case.bounds, case.h, splits=2, refine=3)
 
 
-def test_step_and_run_agree() -> None:
-    case = pendulum()
-    t, u, _, y = _record(case, 0.5)
-    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h)
+@pytest.mark.parametrize("make", [pendulum, chemostat_bundle], ids=["pendulum", "chemostat-bundle"])
+def test_step_and_run_agree(make: Callable[[], Case]) -> None:
+    case = make()
+    t, u, _, y = _record(case, 1.0)
+    u = u if case.system.m else np.zeros((t.size, 0))
+    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h, **case.observer_options)
     estimate = observer.run(t, y[0], u)
     state = observer.init()
     for k in range(t.size):
