@@ -2,7 +2,7 @@
 
 Runs ``intervalobs.reproduce.chemostat.run`` with ``t_final=60`` into ``results/chemostat-60h`` (or the
 folder given as first argument) and writes the tightness and cost it reports to
-``benchmarks/chemostat_long.json`` (about a minute on one core).
+``benchmarks/chemostat_long.json`` (about two minutes on one core), with the bundle at ``SWEEP`` sizes.
 
 Run with ``python benchmarks/chemostat_long.py [OUT_DIR]``.
 """
@@ -16,10 +16,13 @@ from pathlib import Path
 from intervalobs.reproduce.chemostat import run
 from intervalobs.reproduce.contract import to_json
 
+SWEEP = (0, 64, 128)
+"""Bundle sizes run besides the reproduction's (0: one zonotope), for the width against the number of parts."""
+
 
 def main() -> None:
     out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("results/chemostat-60h")
-    summary = run(out, 0, False, t_final=60.0)
+    summary = run(out, 0, False, t_final=60.0, sweep=SWEEP)
     report = {"tightness": summary["tightness"], "design": summary["design"], "runtime_s": summary["runtime_s"]}
     text = json.dumps(to_json(report), indent=1)
     (Path(__file__).parent / "chemostat_long.json").write_text(text + "\n")

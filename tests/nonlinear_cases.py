@@ -86,6 +86,19 @@ def chemostat(x0: tuple[list[float], list[float]] = ([1.0, 0.3], [3.0, 0.8])) ->
     return Case("chemostat", system, bounds, _with_w(f, 2, []), [1], 0.1, {"splits": (8, 1)})
 
 
+def chemostat_bundle() -> Case:
+    """The chemostat in reaction-invariant coordinates (Z = X/Y + S, S), run as a bundle of up to 16 parts."""
+    dilution, inlet, yield_ = 0.2, 5.0, 0.5
+
+    def f(z: Any, u: Any, p: Any) -> tuple[Any, Any]:
+        return dilution * (inlet - z[0]), dilution * (inlet - z[1]) - p[0] * z[1] / (p[1] + z[1]) * (z[0] - z[1])
+
+    system = ContinuousNonlinearSystem(f, lambda z, u: (z[1],), n=2, n_params=2, domain=(0.0, np.inf))
+    prior = ([1.0 / yield_ + 0.3, 0.3], [3.0 / yield_ + 0.8, 0.8])
+    bounds = Bounds(x0=prior, v=(-0.02, 0.02), p=([0.475, 0.285], [0.525, 0.315]))
+    return Case("chemostat-bundle", system, bounds, _with_w(f, 2, []), [1], 0.1, {"refine": 16})
+
+
 def pendulum() -> Case:
     """Damped pendulum, angle measured ±0.01 rad every 0.05 s; friction ±10 %, torque disturbance ±0.05."""
 

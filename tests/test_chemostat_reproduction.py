@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -22,6 +25,10 @@ def test_chemostat_reproduction(tmp_path) -> None:
     assert tight["biomass_consistent_inner_width_second_half"] <= free
     assert design["kinetics_free_biomass_noise_floor"] <= free < 0.5
     assert np.isfinite(summary["runtime_s"]["ms_per_sample"])
+    bundle = design["bundle"]
+    assert bundle["enclosure"] == 1.0
+    assert tight["bundle_biomass_ratio"] >= 1.0
+    assert bundle["biomass_mean_width_second_half"] < design["biomass_mean_width_second_half"]
 
 
 @pytest.mark.slow
@@ -29,3 +36,22 @@ def test_chemostat_default_run_leaves_the_reference_out(tmp_path) -> None:
     summary = registry()["chemostat"].run(tmp_path / "chemostat", 0, False, full=False)
     assert check_reproduction(tmp_path / "chemostat") == []
     assert "tightness" not in summary and summary["enclosure"]["state"]["fraction"] == 1.0
+
+
+def test_design_notes_quote_the_long_benchmark() -> None:
+    """The bundle paragraph of docs/design.md quotes benchmarks/chemostat_long.json (widths and ratios; the
+    CPU times vary from run to run and are read from the file)."""
+    root = Path(__file__).resolve().parents[1]
+    report = json.loads((root / "benchmarks" / "chemostat_long.json").read_text())
+    design, tight = report["design"], report["tightness"]
+    notes = (root / "docs" / "design.md").read_text()
+    sweep = {entry["parts"]: entry for entry in design["bundle_sweep"]}
+    quoted = [
+        f"{tight['biomass_consistent_inner_width_second_half']:.2e}".replace("e-0", "e-"),
+        f"{design['biomass_mean_width_second_half']:.3g} g/L, ratio {tight['biomass_ratio']:.0f}",
+        f"{design['bundle']['biomass_mean_width_second_half']:.3g} g/L, ratio {tight['bundle_biomass_ratio']:.0f}",
+        f"gave {sweep[64]['biomass_mean_width_second_half']:.2g} and "
+        f"{sweep[128]['biomass_mean_width_second_half']:.2g}",
+    ]
+    missing = [text for text in quoted if text not in notes]
+    assert missing == []

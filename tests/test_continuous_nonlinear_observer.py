@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -11,10 +12,13 @@ import pytest
 from intervalobs import Bounds, ContinuousNonlinearObserver, ContinuousNonlinearSystem
 from intervalobs.errors import BoundsError, DivergenceWarning
 from intervalobs.estimate import enclosure_report
-from nonlinear_cases import Case, chemostat, compartments, cstr, measure, pendulum, simulate_truth
+from intervalobs.observers.continuous_nonlinear import _bisect_parts
+from intervalobs.systems.flow_enclosure import StateZonotope
+from nonlinear_cases import Case, chemostat, chemostat_bundle, compartments, cstr, measure, pendulum, simulate_truth
 
 CASES = {
     "chemostat": (chemostat, 2.0, False),
+    "chemostat-bundle": (chemostat_bundle, 6.0, True),
     "pendulum": (pendulum, 3.0, True),
     "cstr": (cstr, 4.0, True),
     "compartments": (compartments, 3.0, True),
@@ -75,10 +79,38 @@ def test_chemostat_wide_prior_warns() -> None:
     assert enclosure_report(t, estimate.lower, x, estimate.upper).fraction == 1.0
 
 
-def test_step_and_run_agree() -> None:
-    case = pendulum()
-    t, u, _, y = _record(case, 0.5)
-    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h)
+def test_bisected_parts_hold_every_point_of_the_live_parts() -> None:
+    """Two runs of four parts (one and three alive): the run with one live part bisects it into a dropped slot,
+    every sampled point of it lies in one of the halves, and the run with three live parts is left alone."""
+    rng = np.random.default_rng(3)
+    centre, generators = rng.normal(size=(2, 4, 3)), rng.normal(size=(2, 4, 3, 5))
+    zset = StateZonotope(centre, generators)
+    alive = np.array([[False, True, False, False], [True, True, False, True]])
+    split, now = _bisect_parts(zset, alive, np.ones(3), 5)
+    assert now.tolist() == [[True, True, False, False], alive[1].tolist()]
+    np.testing.assert_array_equal(split.centre[1], centre[1])
+    xi = rng.uniform(-1.0, 1.0, size=(2000, 5))
+    xi[:200] = np.sign(xi[:200])
+    points = centre[0, 1] + xi @ generators[0, 1].T
+    halves = split.box()
+    inside = [(halves.lower[0, j] - 1e-12 <= points) & (points <= halves.upper[0, j] + 1e-12) for j in (0, 1)]
+    assert np.all(np.all(inside[0], axis=1) | np.all(inside[1], axis=1))
+    widths = halves.upper[0, :2] - halves.lower[0, :2]
+    assert np.all(widths.max(axis=0) <= (zset.box().upper - zset.box().lower)[0, 1] + 1e-12)
+
+
+def test_refine_is_checked() -> None:
+    case = chemostat_bundle()
+    with pytest.raises(BoundsError, match="refine: expected 0 or a number of parts of at least 2 and 4"):
+        ContinuousNonlinearObserver(case.system, case.bounds, case.h, splits=2, refine=3)
+
+
+@pytest.mark.parametrize("make", [pendulum, chemostat_bundle], ids=["pendulum", "chemostat-bundle"])
+def test_step_and_run_agree(make: Callable[[], Case]) -> None:
+    case = make()
+    t, u, _, y = _record(case, 1.0)
+    u = u if case.system.m else np.zeros((t.size, 0))
+    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h, **case.observer_options)
     estimate = observer.run(t, y[0], u)
     state = observer.init()
     for k in range(t.size):

@@ -17,6 +17,12 @@ parameter and measurable disturbance); at each sample it is *contracted* by stri
 
 A wide prior is *split* into parts (``splits``), one zonotope each, so that the validated step, whose
 loss grows with the square of the set's size, stays accurate; a part the data contradict is dropped.
+With ``refine`` the parts form a *bundle*: whenever the data have dropped half of them, the live ones are
+bisected, so the parts gather where the states and parameters are still consistent with the record.
+Moisan, Bernard & Gouzé (2009) run several observers of the same set and intersect them; here the
+parts partition the set and the report is the hull of their union. A strip whose cut is shallow changes no coordinate's
+hull, so one zonotope does not learn a parameter from many such cuts (a chemostat's μmax and Ks keep
+their whole box); the bundle learns them by dropping the parts that a cut misses entirely.
 Rows are *filtered*: row :math:`k` bounds :math:`x(t_k)` given :math:`y_0 \dots y_k` (the hull of
 the live parts). When every part is contradicted the record contradicts the model (or its boxes):
 the run's bounds stay as they were up to that sample, the rows after it are ``[-inf, inf]``, and
@@ -31,6 +37,8 @@ warn (``RuntimeWarning``) and set ``meta["diverging"]``.
   41(6):1035-1043, 2005. DOI: 10.1016/j.automatica.2004.12.008.
 * L. Jaulin, M. Kieffer, O. Didrit, É. Walter, *Applied Interval Analysis*, Springer, 2001.
   DOI: 10.1007/978-1-4471-0249-6.
+* M. Moisan, O. Bernard, J.-L. Gouzé, "Near optimal interval observers bundle for uncertain
+  bioreactors", *Automatica* 45(1):291-295, 2009.
 * C. Combastel, "Zonotopes and Kalman observers: gain optimality under distinct uncertainty
   paradigms and robust convergence", *Automatica* 55:265-273, 2015.
 """
@@ -147,6 +155,12 @@ class ContinuousNonlinearObserver(Observer):
         parameters).
     divergence_factor : float
         A width that ends above this many times the prior's (or infinite) warns.
+    refine : int
+        The bundle (0: off): the most parts carried per run. Whenever the data have dropped at least
+        half of them, each live part is bisected along the coordinate (state or parameter) whose
+        width is largest relative to the prior box's, so the parts gather where the data leave the
+        states and parameters (:func:`_bisect_parts`). Each half is the part cut by a strip, so the
+        halves together hold every point the part held.
 
     Attributes
     ----------
@@ -166,7 +180,7 @@ class ContinuousNonlinearObserver(Observer):
     """
 
     rows = "filtered"
-    summary_fields = ("substeps", "splits")
+    summary_fields = ("substeps", "splits", "refine")
 
     def __init__(
         self,
@@ -178,6 +192,7 @@ class ContinuousNonlinearObserver(Observer):
         splits: int | tuple[int, ...] = 1,
         order: int | None = None,
         divergence_factor: float = 10.0,
+        refine: int = 0,
     ) -> None:
         if not isinstance(system, ContinuousNonlinearSystem):
             raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")
@@ -201,6 +216,12 @@ class ContinuousNonlinearObserver(Observer):
         self.order = ORDER_FACTOR * (system.n + system.n_params) if order is None else int(order)
         if self.order < system.n + system.n_params:
             raise BoundsError(f"order: expected at least {system.n + system.n_params} generators, got {order!r}")
+        count = int(np.prod(self.splits))
+        if not (isinstance(refine, (int, np.integer)) and (refine == 0 or refine >= max(2, count))):
+            raise BoundsError(
+                f"refine: expected 0 or a number of parts of at least 2 and {count} (splits), got {refine!r}"
+            )
+        self.refine = int(refine)
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
 
@@ -225,7 +246,14 @@ class ContinuousNonlinearObserver(Observer):
         part_hi = np.stack([grids[i][index[:, i] + 1] for i in range(size)], -1)
         count = index.shape[0]
         zset = StateZonotope.from_box(part_lo, part_hi, self.order)
-        internal = {"set": zset, "alive": np.ones(count, dtype=bool), "lost": np.zeros((), dtype=bool)}
+        if self.refine:
+            zset = StateZonotope(
+                np.concatenate([zset.centre, np.repeat(zset.centre[:1], self.refine - count, axis=0)]),
+                np.concatenate([zset.generators, np.repeat(zset.generators[:1], self.refine - count, axis=0)]),
+            )
+        alive = np.arange(max(count, self.refine)) < count
+        self._scale = np.maximum(high - low, np.finfo(float).tiny)
+        internal = {"set": zset, "alive": alive, "lost": np.zeros((), dtype=bool)}
         internal.update(started=False, u=None, lost_flag=np.zeros(1))
         internal["consistent"] = np.ones(1)
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
@@ -244,6 +272,8 @@ class ContinuousNonlinearObserver(Observer):
         corrected, empty = self._correct(zset, parts_y, u[..., None, :])
         alive &= ~empty
         zset = _revive(alive, _select(alive, corrected, zset))
+        if self.refine:
+            zset, alive = _bisect_parts(zset, alive, self._scale, self.order)
         consistent = alive.any(-1) | lost
         box = zset.box()
         n = self.n
@@ -392,6 +422,44 @@ def _slope_remainder(slope: Interval, zset: StateZonotope) -> Interval:
     reach = np.maximum(-image.lower, image.upper)[..., 0, :].sum(-1)
     reach = np.nextafter(reach * (1.0 + 2 * reach.size * _EPS), np.inf)
     return Interval._raw(-reach, reach)
+
+
+def _bisect_parts(
+    zset: StateZonotope, alive: BoolArray, scale: FloatArray, order: int
+) -> tuple[StateZonotope, BoolArray]:
+    r"""Where at most half the parts of a run live, bisect each live part into its own slot and a dropped one's.
+
+    A part is cut along its coordinate :math:`i` of widest hull relative to ``scale``, at the middle
+    :math:`m` of that hull: the halves are the part intersected with the strips :math:`z_i \in [l, m]`
+    and :math:`z_i \in [m, u]` (:func:`_strip_update`), so their union holds every point of the part.
+    Runs with more than half their parts alive are left as they are.
+    """
+    parts = alive.shape[-1]
+    count = alive.sum(-1, keepdims=True)
+    split = (2 * count <= parts) & (count > 0)
+    if not split.any():
+        return zset, alive
+    hull = zset.box()
+    coordinate = np.argmax((hull.upper - hull.lower) / scale, axis=-1)
+    row = np.eye(scale.size)[coordinate]
+    low = np.take_along_axis(hull.lower, coordinate[..., None], -1)[..., 0]
+    high = np.take_along_axis(hull.upper, coordinate[..., None], -1)[..., 0]
+    middle = 0.5 * (low + high)
+    lower_half, lower_empty = _strip_update(zset, row, Interval._raw(low, middle), order)
+    upper_half, upper_empty = _strip_update(zset, row, Interval._raw(middle, high), order)
+    slots = np.argsort(~alive, axis=-1, kind="stable")
+    rank = np.argsort(slots, axis=-1)
+    source = np.take_along_axis(slots, np.clip(rank - count, 0, parts - 1), axis=-1)
+    keeps = split & (rank < count)
+    takes = split & (rank >= count) & (rank < 2 * count)
+    moved = StateZonotope(
+        np.take_along_axis(upper_half.centre, source[..., None], axis=-2),
+        np.take_along_axis(upper_half.generators, source[..., None, None], axis=-3),
+    )
+    zset = _select(takes, moved, _select(keeps, lower_half, zset))
+    alive = np.where(keeps, alive & ~lower_empty, alive)
+    alive = np.where(takes, ~np.take_along_axis(upper_empty, source, axis=-1), alive)
+    return zset, alive
 
 
 def _broadcast(zset: StateZonotope, lead: tuple[int, ...]) -> StateZonotope:

@@ -8,7 +8,7 @@ r"""Reproduction ``chemostat``: guaranteed biomass bounds of a Monod chemostat f
 with :math:`S` measured :math:`\pm 0.02` g/L every 0.1 h, :math:`\mu_{max}` and :math:`K_s` known to
 :math:`\pm 5\,\%`, :math:`X_0 \in [1, 3]`, :math:`S_0 \in [0.3, 0.8]` (the case of issue 32).
 
-Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`:
+Three runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`:
 
 * **as written** (states :math:`X, S`, the prior split in 8 parts along :math:`X`): sound, but the
   first-order validated step loses the set within hours (``direct`` in the summary: when, and the
@@ -19,6 +19,10 @@ Two runs of :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlin
   :math:`\dot Z = D(S_{in} - Z)` whatever the kinetics, so the model written in :math:`(Z, S)` —
   the same model, no approximation — has an exact linear row; the bounds of :math:`X = Y(Z - S)` are
   the recommended ones.
+* the same as a **bundle** (``refine=BUNDLE_PARTS``, ``design.bundle`` in the summary): one zonotope
+  keeps the whole box of :math:`\mu_{max}, K_s` (a sample's cut is too shallow to narrow it), so its
+  :math:`S` is as wide as the steady substrate :math:`K_s D/(\mu_{max} - D)` over that box allows; the
+  bundle drops the parts of the box the data contradict and bisects the rest.
 
 And :class:`~intervalobs.observers.reaction_invariant.ReactionInvariantObserver`, the interval
 asymptotic observer, which uses no kinetic model at all (the yield, the dilution and the inlet only):
@@ -28,7 +32,8 @@ over 60 h (``benchmarks/chemostat_long.py``) the validated run, which knows the 
 
 The reference is a lower bound of the consistent set: the inner hull of trajectories simulated
 exactly (RK4, 10 steps per sample) from initial states and parameters of their boxes that stay within
-the noise of every sample, found by bisection along rays from the true ones.
+the noise of every sample, pushed from the true ones towards the extreme biomass and substrate of the
+record's second half by sequential linear programming (:func:`consistent_inner_hull`).
 
 **References.**
 
@@ -46,6 +51,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import linprog
 
 from ..estimate import Estimate
 from ..interval import Interval
@@ -71,8 +77,15 @@ STEP, T_FINAL = 0.1, 12.0
 """Sampling period and record length (hours); ``benchmarks/chemostat_long.py`` runs the 60 h record."""
 DIRECT_HOURS = 2.0
 """Length of the run in the coordinates as written (it loses its set within it)."""
-RAYS, BISECTIONS = 12, 8
-"""Directions and bisection steps of the consistent-set lower bound."""
+REFERENCE_ROUNDS, REFERENCE_TIMES = 8, 7
+"""Linearisations per goal and times of the second half whose extreme X and S are sought (the consistent-set
+lower bound)."""
+STEP_FRACTIONS = (1.0, 0.8, 0.6, 0.45, 0.3, 0.2, 0.1, 0.05, 0.02, 0.01)
+"""Fractions of the way to a linear programme's target tried by exact simulation (the farthest consistent is kept)."""
+BUNDLE_PARTS = 256
+"""Most parts of the bundle run (``ContinuousNonlinearObserver(refine=...)``)."""
+DIFFERENCE = 1e-6
+"""Forward-difference step of the sensitivities, per unit of each box width."""
 
 
 def _growth(s: Any, p: Any) -> Any:
@@ -151,12 +164,19 @@ def simulate_exact(x0: FloatArray, p: FloatArray, t: FloatArray, substeps: int =
     return np.stack(out, axis=-2)
 
 
-def consistent_inner_hull(t: FloatArray, y: FloatArray, truth: FloatArray, rng: np.random.Generator) -> FloatArray:
+def consistent_inner_hull(
+    t: FloatArray, y: FloatArray, truth: FloatArray, rounds: int = REFERENCE_ROUNDS
+) -> FloatArray:
     """Lower bound of the consistent set: the hull of exact trajectories that stay within the noise of every sample.
 
-    From the true start and parameters (consistent by construction), along ``RAYS`` random directions
-    of the box of (X0, S0, μmax, Ks), the farthest consistent point is found by bisection; every
-    trajectory kept is consistent with the whole record, so their hull lies inside the consistent set.
+    For each goal (the largest and the smallest X and S at ``REFERENCE_TIMES`` times of the record's
+    second half) a point of the box of (X0, S0, μmax, Ks) is moved, from the true one (consistent by
+    construction), by sequential linear programming: the samples' constraints
+    :math:`|S_k(\\theta) - y_k| \\le` ``NOISE`` and the goal are linearised at the point (finite
+    differences of the exact simulation), the linear programme gives a target, and the farthest of
+    ``STEP_FRACTIONS`` of the way to it whose exact trajectory stays within the noise of every sample
+    is the next point. Only exactly simulated trajectories checked against every sample are kept, so
+    their hull lies inside the consistent set whatever the linearisation's error.
 
     Parameters
     ----------
@@ -166,31 +186,58 @@ def consistent_inner_hull(t: FloatArray, y: FloatArray, truth: FloatArray, rng: 
         Measured substrate.
     truth : numpy.ndarray, shape (4,)
         True (X0, S0, μmax, Ks).
-    rng : numpy.random.Generator
-        Directions.
+    rounds : int
+        Linearisations per goal.
 
     Returns
     -------
     numpy.ndarray, shape (2, T, 2)
         Lower and upper ends of the inner hull of (X, S).
     """
-    low = np.concatenate([X0_BOX[0], PARAMETER_BOX[0]])
-    high = np.concatenate([X0_BOX[1], PARAMETER_BOX[1]])
-    directions = rng.normal(size=(RAYS, 4)) * (high - low)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        limits = np.where(directions > 0, (high - truth) / directions, (low - truth) / directions)
-    reach = np.min(np.where(np.isfinite(limits), limits, np.inf), axis=1)
-    inside, outside = np.zeros(RAYS), reach
+    times = np.searchsorted(t, np.linspace(0.5 * t[-1], t[-1], REFERENCE_TIMES))
+    goals = [(state, index, sign) for state in (0, 1) for index in times for sign in (1.0, -1.0)]
+    points = np.repeat(truth[None, :], len(goals), axis=0)
     kept = [simulate_exact(truth[None, :2], truth[None, 2:], t)]
-    for _ in range(BISECTIONS):
-        trial = 0.5 * (inside + outside)
-        points = truth + trial[:, None] * directions
-        paths = simulate_exact(points[:, :2], points[:, 2:], t)
-        good = np.all(np.abs(paths[..., 1] - y) <= NOISE, axis=1)
+    for _ in range(rounds):
+        targets = _linearised_extremes(t, y, points, goals)
+        trials = points[:, None, :] + np.asarray(STEP_FRACTIONS)[:, None] * (targets - points)[:, None, :]
+        paths = simulate_exact(trials[..., :2], trials[..., 2:], t)
+        good = np.all(np.abs(paths[..., 1] - y) <= NOISE, axis=-1)
         kept.append(paths[good])
-        inside, outside = np.where(good, trial, inside), np.where(good, outside, trial)
+        farthest = np.argmax(good, axis=1)
+        moved = good.any(axis=1)[:, None]
+        points = np.where(moved, trials[np.arange(len(goals)), farthest], points)
     every = np.concatenate(kept)
     return np.stack([every.min(axis=0), every.max(axis=0)])
+
+
+def _linearised_extremes(
+    t: FloatArray, y: FloatArray, points: FloatArray, goals: list[tuple[int, int, float]]
+) -> FloatArray:
+    """For each goal, the maximiser of its linearisation at its point over the linearised consistent set and the box.
+
+    Sensitivities are forward differences of the exact simulation, per unit of each box width.
+    """
+    low = np.concatenate([X0_BOX[0], PARAMETER_BOX[0]])
+    high = np.concatenate([X0_BOX[1], PARAMETER_BOX[1]])
+    scale = high - low
+    probes = points[:, None, :] + np.concatenate([np.zeros((1, 4)), np.diag(scale * DIFFERENCE)])[None]
+    paths = simulate_exact(probes[..., :2], probes[..., 2:], t)
+    base, sensitivity = paths[:, 0], (paths[:, 1:] - paths[:, :1]) / DIFFERENCE
+    targets = points.copy()
+    for g, (state, index, sign) in enumerate(goals):
+        rows = sensitivity[g, :, :, 1].T
+        room = np.concatenate([y + NOISE - base[g, :, 1], base[g, :, 1] - y + NOISE])
+        solution = linprog(
+            -sign * sensitivity[g, :, index, state],
+            A_ub=np.vstack([rows, -rows]),
+            b_ub=np.maximum(room, 0.0),
+            bounds=list(zip((low - points[g]) / scale, (high - points[g]) / scale)),
+            method="highs",
+        )
+        if solution.status == 0:
+            targets[g] = np.clip(points[g] + solution.x * scale, low, high)
+    return targets
 
 
 def _biomass_bounds(estimate: Estimate) -> tuple[FloatArray, FloatArray]:
@@ -210,6 +257,34 @@ def _kinetics_free_run(t: FloatArray, y: FloatArray) -> tuple[Estimate, float]:
     return estimate, time.perf_counter() - clock
 
 
+def _bundle_run(
+    t: FloatArray, y: FloatArray, x: FloatArray, bounds: Bounds, parts: int
+) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+    """The invariant model as a bundle of up to ``parts`` parts (0: one zonotope): (X, S) bounds and their widths.
+
+    The widths are means over the record's second half; ``ms_per_sample`` is CPU time.
+    """
+    observer = ContinuousNonlinearObserver(invariant_model(), bounds, STEP, refine=parts)
+    clock = time.process_time()
+    estimate = observer.run(t, y[:, None])
+    elapsed = time.process_time() - clock
+    lower, upper = _biomass_bounds(estimate)
+    half = t >= 0.5 * t[-1]
+    width = (upper - lower)[half].mean(axis=0)
+    return (
+        lower,
+        upper,
+        {
+            "parts": parts,
+            "biomass_mean_width_second_half": width[0],
+            "substrate_mean_width_second_half": width[1],
+            "invariant_mean_width_second_half": float(estimate.width()[half, 0].mean()),
+            "ms_per_sample": 1000.0 * elapsed / t.size,
+            "enclosure": float(np.mean((lower <= x) & (x <= upper))),
+        },
+    )
+
+
 def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     """The model as written, over the first ``DIRECT_HOURS``: when its bounds are lost, and the warning."""
     short = t <= DIRECT_HOURS + 1e-9
@@ -227,7 +302,9 @@ def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     }
 
 
-def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float = T_FINAL) -> dict[str, Any]:
+def run(
+    out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float = T_FINAL, sweep: tuple[int, ...] = ()
+) -> dict[str, Any]:
     """Simulate the chemostat, bound it in both coordinates, write the contract files.
 
     Parameters
@@ -235,13 +312,15 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     out_dir : pathlib.Path
         Output folder for this example.
     seed : int
-        Seed of the noise realisation and of the rays of the reference.
+        Seed of the noise realisation.
     plots : bool
         Also write ``states.png`` and ``widths.png``.
     full : bool
         Also compute the consistent-set reference (the inner hull) and the ``tightness`` ratios.
     t_final : float
         Length of the record (hours).
+    sweep : tuple of int
+        Bundle sizes (``refine``; 0: one zonotope) also run, their widths and cost in ``design.bundle_sweep``.
 
     Returns
     -------
@@ -255,9 +334,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     y = x[:, 1] + NOISE * rng.choice([-1.0, 1.0], size=t.size) * rng.uniform(0.5, 1.0, size=t.size)
     direct_bounds = Bounds(x0=X0_BOX, v=(-NOISE, NOISE), p=PARAMETER_BOX)
     invariant_box = (np.array([X0_BOX[0][0] / YIELD + X0_BOX[0][1], 0.3]), np.array([X0_BOX[1][0] / YIELD + 0.8, 0.8]))
-    observer = ContinuousNonlinearObserver(
-        invariant_model(), Bounds(x0=invariant_box, v=(-NOISE, NOISE), p=PARAMETER_BOX), STEP
-    )
+    invariant_bounds = Bounds(x0=invariant_box, v=(-NOISE, NOISE), p=PARAMETER_BOX)
+    observer = ContinuousNonlinearObserver(invariant_model(), invariant_bounds, STEP)
     clock = time.perf_counter()
     estimate = observer.run(t, y[:, None])
     run_time = time.perf_counter() - clock
@@ -276,6 +354,8 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
     width = (upper - lower)[half].mean(axis=0)
     free, free_time = _kinetics_free_run(t, y)
     free_width = free.width()[half].mean(axis=0)
+    bundle_lower, bundle_upper, bundle = _bundle_run(t, y, x, invariant_bounds, BUNDLE_PARTS)
+    bundle_width = (bundle_upper - bundle_lower)[half].mean(axis=0)
     summary["design"] = {
         "coordinates": "Z = X/Y + S, S",
         "substeps": observer.substeps,
@@ -285,18 +365,26 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float
         "kinetics_free_biomass_mean_width_second_half": free_width[0],
         "kinetics_free_biomass_noise_floor": 2.0 * NOISE * YIELD,
         "kinetics_free_ms_per_sample": 1000.0 * free_time / t.size,
+        "bundle": bundle,
+        "bundle_sweep": [_bundle_run(t, y, x, invariant_bounds, parts)[2] for parts in sweep],
     }
     trajectories = {"t": t, "x": x, "x_lower": lower, "x_upper": upper, "y": y}
-    widths = {"invariant coordinates": upper - lower, "no kinetics (asymptotic)": free.width()}
+    widths = {
+        "invariant coordinates": upper - lower,
+        f"bundle ({BUNDLE_PARTS} parts)": bundle_upper - bundle_lower,
+        "no kinetics (asymptotic)": free.width(),
+    }
     if full:  # the consistent-set reference: a comparison, behind --full like the other examples' tightness
-        reference = consistent_inner_hull(t, y, np.concatenate([start, TRUE_PARAMETERS]), rng)
+        reference = consistent_inner_hull(t, y, np.concatenate([start, TRUE_PARAMETERS]))
         inner = (reference[1] - reference[0])[half].mean(axis=0)
         summary["tightness"] = {
             "biomass_consistent_inner_width_second_half": inner[0],
             "biomass_ratio": width[0] / inner[0],
             "substrate_ratio": width[1] / inner[1],
-            "reference": "inner hull of exact consistent trajectories (rays from the truth, bisection)",
+            "reference": "inner hull of exact consistent trajectories (sequential linear programming from the truth)",
             "kinetics_free_biomass_ratio": free_width[0] / inner[0],
+            "bundle_biomass_ratio": bundle_width[0] / inner[0],
+            "bundle_substrate_ratio": bundle_width[1] / inner[1],
         }
         trajectories.update(reference_x_lower=reference[0], reference_x_upper=reference[1])
         widths["consistent set (inner)"] = reference[1] - reference[0]
