@@ -259,3 +259,29 @@ def test_the_pilot_charges_computing_not_waiting() -> None:
     t = np.arange(30.0)
     cost = _cost_per_sample(Waiting(), t, np.zeros((30, 1)), None, {})  # type: ignore[arg-type]
     assert cost < 1.0  # wall time would say 2 ms a sample
+
+
+def test_the_pilot_does_not_charge_other_threads() -> None:
+    """A thread that spins beside the pilot (as BLAS workers do after a design) is not charged to the estimator."""
+    import threading
+
+    from intervalobs.front_door import _cost_per_sample
+
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            pass
+
+    class Waiting:
+        def run(self, t, y, u=None):
+            time.sleep(0.002 * len(t))
+
+    spinner = threading.Thread(target=spin)
+    spinner.start()
+    try:
+        cost = _cost_per_sample(Waiting(), np.arange(30.0), np.zeros((30, 1)), None, {})  # type: ignore[arg-type]
+    finally:
+        stop.set()
+        spinner.join()
+    assert cost < 1.0
