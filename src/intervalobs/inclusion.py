@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import interval
+from ._docstrings import shared_docs
 from .errors import DimensionError, IntervalObserverError
 
 __all__ = [
@@ -50,6 +51,7 @@ def _stack(values: Sequence[Any], lead: tuple[int, ...], name: str, size: int | 
     return np.stack([np.broadcast_to(np.asarray(v, dtype=float), lead) for v in values], axis=-1)
 
 
+@shared_docs
 def evaluate_function(
     func: VectorFunction, x: ArrayLike, size: int | None = None, name: str = "function"
 ) -> FloatArray:
@@ -62,10 +64,7 @@ def evaluate_function(
         flattened), returns a sequence of m components; a matrix product ``A @ x`` is such a function.
     x : array_like, shape (..., n)
         Points; leading axes are carried through.
-    size : int, optional
-        Expected number of returned components.
-    name : str
-        Name used in error messages.
+    %(size_name)s
 
     Returns
     -------
@@ -91,6 +90,7 @@ def evaluate_function(
     return values.reshape(*xa.shape[:-1], values.shape[-1])
 
 
+@shared_docs
 def interval_function(
     func: VectorFunction, lower: ArrayLike, upper: ArrayLike, size: int | None = None, name: str = "function"
 ) -> tuple[FloatArray, FloatArray]:
@@ -101,12 +101,8 @@ def interval_function(
     func : callable
         Component-convention vector function, written with the operations
         :class:`~intervalobs.interval.Interval` supports.
-    lower, upper : array_like, shape (..., n)
-        Boxes; leading axes are carried through.
-    size : int, optional
-        Expected number of returned components.
-    name : str
-        Name used in error messages.
+    %(boxes)s
+    %(size_name)s
 
     Returns
     -------

@@ -55,6 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, BoundsError, DimensionError
 from ..inclusion import MatrixFunction, VectorFunction, evaluate_function, interval_matrix
 from ..interval import inflate
@@ -74,6 +75,7 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+@shared_docs
 def jacobian_bounds(
     jacobian: MatrixFunction,
     lower: ArrayLike,
@@ -91,8 +93,7 @@ def jacobian_bounds(
     ----------
     jacobian : callable
         Component-convention matrix function: a sequence of n components to m rows of n entries.
-    lower, upper : array_like, shape (..., n)
-        Boxes; leading axes are carried through.
+    %(boxes)s
     shape : tuple of int, optional
         Expected (m, n).
     name : str
@@ -372,13 +373,13 @@ class JacobianDecomposition:
         zeta = np.where(first, xa[..., None, :], ya[..., None, :])
         return _diagonal_evaluate(self.func, zeta, first.shape[0], "function") + (xa - ya) @ c.T
 
+    @shared_docs
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Outward-rounded :math:`(q_d(\\underline x, \\overline x), q_d(\\overline x, \\underline x))`.
 
         Parameters
         ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes; leading axes are carried through.
+        %(boxes)s
 
         Returns
         -------
@@ -450,13 +451,13 @@ class VertexDecomposition:
         zeta = np.where(self.signs >= 0, xa[..., None, :], ya[..., None, :])
         return _diagonal_evaluate(self.func, zeta, self.signs.shape[0], "function")
 
+    @shared_docs
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The exact range of ``func`` over the boxes, outward-rounded.
 
         Parameters
         ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes; leading axes are carried through.
+        %(boxes)s
 
         Returns
         -------

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import place_poles
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, DesignError, DimensionError
 from ..validation import as_matrix, as_vector
 from .regions import canonical_eigenvectors
@@ -175,15 +176,13 @@ def _undetectable_modes(a: FloatArray, c: FloatArray) -> list[complex]:
     return bad
 
 
+@shared_docs
 def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None = None) -> UIODecoupling:
     r"""Decoupling matrices ``E``, ``P`` that remove the unknown input from the error, their conditions checked.
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-        State matrix.
-    C : array_like, shape (p, n)
-        Output matrix.
+    %(state_output)s
     D : array_like, shape (n, q)
         Unknown-input matrix.
     W : array_like, shape (n, p), optional

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import sparse
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from .certified import centred_bounds, dual_bounds, highs_model, new_highs, run_highs
@@ -113,6 +114,7 @@ class WindowModel:
         return inflate(lo + drive, hi + drive, 8 * ROUNDING_MARGIN)
 
 
+@shared_docs
 class SparseWindowLP(RecordsPath):
     """The hull LP over a window of ``H`` steps, built once; each step changes only bounds and costs.
 
@@ -122,13 +124,7 @@ class SparseWindowLP(RecordsPath):
     kept and restored at the next step: the extremal trajectory seen from ``x_k`` changes little when
     the window moves, so the dual simplex restarts close to the optimum.
 
-    Parameters
-    ----------
-    model : WindowModel
-    horizon : int
-        Window length ``H`` (steps).
-    points : int
-        Points of the prior's convex hull (0: the prior is a box).
+    %(window)s
     """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
@@ -320,16 +316,11 @@ class SparseWindowLP(RecordsPath):
         return ok, x + self.centre if x.size == self.ncol else x
 
 
+@shared_docs
 class SparseWindow:
     """Fills the bounds of a :class:`SparseWindowLP` for step ``k`` from the record and the stored boxes.
 
-    Parameters
-    ----------
-    model : WindowModel
-    horizon : int
-        Window length ``H`` (steps).
-    points : int
-        Points of the prior's convex hull (0: the prior is a box).
+    %(window)s
     """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:

@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..complex_interval import real_part_radius
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..estimate import Estimate
@@ -329,6 +330,7 @@ class HighGainIntervalObserver(Observer):
 
     @classmethod
     @options_after_bounds("disks", "h")
+    @shared_docs
     def design(
         cls,
         system: SampledSystem,
@@ -351,10 +353,7 @@ class HighGainIntervalObserver(Observer):
 
         Parameters
         ----------
-        system : SampledSystem
-            The partially linear model with sampled outputs.
-        bounds : Bounds
-            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        %(sampled_system_bounds)s
         disks : sequence of Disk or (centre, radius)
             One disk per eigenvalue of ``A - L1 C`` (conjugate pairs for complex ones).
         h : float
@@ -419,6 +418,7 @@ class HighGainIntervalObserver(Observer):
 
     @classmethod
     @options_after_bounds("h")
+    @shared_docs
     def design_for_width(
         cls,
         system: SampledSystem,
@@ -437,10 +437,7 @@ class HighGainIntervalObserver(Observer):
 
         Parameters
         ----------
-        system : SampledSystem
-            The partially linear model with sampled outputs.
-        bounds : Bounds
-            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        %(sampled_system_bounds)s
         h : float
             Grid step.
         phi_radius : array_like, shape (n,)

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import BoundsError, DataError
 from ..estimate import Estimate
 from ..interval import Interval
@@ -83,17 +84,11 @@ class ReactionInvariantObserver(Observer):
         inlet = system.inlet
         self._z_inlet = inlet[system.unmeasured] + self._gain @ inlet[system.measured]
 
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The prior box of ``x(t_0)`` and its invariants, before the first measurement.
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, shape (n,), optional
-            Prior box of the state (default: the bounds' ``x0``).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         prior = Interval(lo, hi)

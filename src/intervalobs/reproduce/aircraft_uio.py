@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .._docstrings import shared_docs
 from ..design.differentiator import HOSMDifferentiator, levant_gains, settling_time
 from ..estimate import Estimate
 from ..examples import aircraft as ac
@@ -136,24 +137,15 @@ def _single(est: Estimate, i: int) -> Estimate:
     return Estimate(est.t, est.lower[i], est.upper[i], est.input_lower[i], est.input_upper[i], est.meta)
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Run the example and write summary.json, trajectories.npz and the figures into ``out_dir``.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder.
-    seed : int
-        Seed of the noise realisations.
-    plots : bool
-        Write the PNG figures.
+    %(reproduction_run)s
     full : bool
         Also run the study with the rudder and aileron commands known (:func:`_known_inputs`).
 
-    Returns
-    -------
-    dict
-        The summary.
+    %(reproduction_summary)s
     """
     start = time.perf_counter()
     observer = _observer()

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .._docstrings import shared_docs
 from ..design.hinf import hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError
 from ..examples import numerical3
@@ -59,24 +60,11 @@ MONTE_CARLO_RUNS = 20
 LABELS = ["$x_1$", "$x_2$", "$x_3$"]
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design, simulate (bang-bang noise, vertex θ), run every observer on (68) and (70), write files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder for this example.
-    seed : int
-        Seed of the noise realisation.
-    plots : bool
-        Also write the PNG figures.
-    full : bool
-        Also write the tightness report (window LPs, the ΔA lower bound, the IntersectionObserver).
-
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(tightness_run)s
     """
     t = numerical3.time_grid()
     u = numerical3.input_signal(t)

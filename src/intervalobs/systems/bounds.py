@@ -25,6 +25,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import BoundsError, DimensionError
 
 __all__ = ["Bounds", "BoxPair", "ResolvedBounds"]
@@ -233,32 +234,20 @@ class ResolvedBounds(Bounds):
             _size(system, name, box[0].size)
         return self
 
+    @shared_docs
     def centre(self, name: BoxName) -> FloatArray:
         """Midpoint ``(lower + upper) / 2`` of one box.
 
-        Parameters
-        ----------
-        name : {"x0", "w", "v", "p"}
-            Which box.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(box_name)s
         """
         lower, upper = getattr(self, name)
         return np.asarray(0.5 * (lower + upper))
 
+    @shared_docs
     def radius(self, name: BoxName) -> FloatArray:
         """Half-width ``(upper - lower) / 2`` of one box.
 
-        Parameters
-        ----------
-        name : {"x0", "w", "v", "p"}
-            Which box.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(box_name)s
         """
         lower, upper = getattr(self, name)
         return np.asarray(0.5 * (upper - lower))
