@@ -46,7 +46,28 @@ DESCRIPTIONS: dict[str, str] = {
     ),
     "state_output": "A : array_like, shape (n, n)\n    State matrix.\nC : array_like, shape (p, n)\n    Output matrix.",
     "boxes": "lower, upper : array_like, shape (..., n)\n    Boxes; leading axes are carried through.",
-    "complex_points": "Parameters\n----------\ns : complex or numpy.ndarray\n    Point(s) of the complex plane.",
+    "complex_value": (
+        "Parameters\n----------\ns : complex or numpy.ndarray\n    Point(s) of the complex plane.\n\n"
+        "Returns\n-------\nfloat or numpy.ndarray"
+    ),
+    "complex_inside": (
+        "Parameters\n----------\ns : complex or numpy.ndarray\n    Point(s) of the complex plane.\n\n"
+        "Returns\n-------\nbool or numpy.ndarray"
+    ),
+    "boxes_range": (
+        "Parameters\n----------\n"
+        "lower, upper : array_like, shape (..., n)\n    Boxes; leading axes are carried through.\n\n"
+        "Returns\n-------\nlower, upper : numpy.ndarray, shape (..., m)"
+    ),
+    "natural_extension": (
+        "Parameters\n----------\nlower, upper : array_like, shape (..., n)\n    Boxes.\n\n"
+        "Returns\n-------\nlower, upper : numpy.ndarray"
+    ),
+    "resolve": (
+        "Parameters\n----------\nsystem : LTISystem, SampledSystem, NonlinearSystem or LPVSystem\n"
+        "    Any model with the sizes ``n``, ``nw`` and ``nv`` of its unknowns.\n\nReturns\n-------\nResolvedBounds"
+    ),
+    "shape_name": "shape : tuple of int, optional\n    Expected (m, n).\nname : str\n    Name used in error messages.",
     "points": "Parameters\n----------\nx : array_like, shape (..., n)\n    Points.\n\nReturns\n-------\nnumpy.ndarray",
     "box_name": 'Parameters\n----------\nname : {"x0", "w", "v", "p"}\n    Which box.\n\n'
     "Returns\n-------\nnumpy.ndarray",

@@ -119,6 +119,7 @@ def interval_function(
     )
 
 
+@shared_docs
 def evaluate_matrix(
     func: MatrixFunction, x: ArrayLike, shape: tuple[int, int] | None = None, name: str = "jacobian"
 ) -> FloatArray:
@@ -130,10 +131,7 @@ def evaluate_matrix(
         Component convention: a sequence of n components to m rows of entries.
     x : array_like, shape (..., n)
         Points.
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(shape_name)s
 
     Returns
     -------
@@ -147,6 +145,7 @@ def evaluate_matrix(
     return np.stack([_stack(list(r), xa.shape[:-1], name, cols) for r in rows], axis=-2)
 
 
+@shared_docs
 def interval_matrix(
     func: MatrixFunction,
     lower: ArrayLike,
@@ -162,10 +161,7 @@ def interval_matrix(
         Component convention: a sequence of n components to m rows of entries.
     lower, upper : array_like, shape (..., n)
         Boxes.
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(shape_name)s
 
     Returns
     -------

@@ -94,10 +94,7 @@ def jacobian_bounds(
     jacobian : callable
         Component-convention matrix function: a sequence of n components to m rows of n entries.
     %(boxes)s
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(shape_name)s
 
     Returns
     -------
@@ -377,13 +374,7 @@ class JacobianDecomposition:
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Outward-rounded :math:`(q_d(\\underline x, \\overline x), q_d(\\overline x, \\underline x))`.
 
-        Parameters
-        ----------
-        %(boxes)s
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., m)
+        %(boxes_range)s
         """
         return decomposition_bounds(self.func, lower, upper, self.j_lower, self.j_upper)
 
@@ -455,12 +446,6 @@ class VertexDecomposition:
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The exact range of ``func`` over the boxes, outward-rounded.
 
-        Parameters
-        ----------
-        %(boxes)s
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., m)
+        %(boxes_range)s
         """
         return inflate(self(lower, upper), self(upper, lower))

@@ -114,11 +114,7 @@ class Disk:
     def characteristic(self, s: complex | ComplexArray) -> Any:
         """The region's function :math:`R_{00} + 2\\operatorname{Re}(R_{10}s) + |s|^2`; negative inside.
 
-        %(complex_points)s
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         r00, r10, r11 = self.R
         s_arr = np.asarray(s, dtype=complex)
@@ -128,11 +124,7 @@ class Disk:
     def margin(self, s: complex | ComplexArray) -> Any:
         """Distance from ``s`` to the disk's boundary, positive inside: ``r - |s - c|``.
 
-        %(complex_points)s
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         return self.radius - np.abs(np.asarray(s, dtype=complex) - complex(self.center))
 
@@ -159,11 +151,7 @@ class _LinearRegion:
     def characteristic(self, s: complex | ComplexArray) -> Any:
         """Largest eigenvalue of :math:`R_{00} + R_{10}s + (R_{10}s)^H` (eq. (6)); negative inside.
 
-        %(complex_points)s
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         r00, r10 = self.matrices()
         s_arr = np.asarray(s, dtype=complex)
@@ -175,11 +163,7 @@ class _LinearRegion:
     def contains(self, s: complex | ComplexArray) -> Any:
         """True strictly inside the region.
 
-        %(complex_points)s
-
-        Returns
-        -------
-        bool or numpy.ndarray
+        %(complex_inside)s
         """
         return self.characteristic(s) < 0
 

@@ -146,6 +146,12 @@ class UIOCoordinates:
     tried: dict[str, float] = field(default_factory=dict)
 
 
+def _state_and_output(A: ArrayLike, C: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """``A`` and ``C`` as float matrices, ``C`` checked to have as many columns as ``A`` has rows."""
+    a = as_matrix("A", A)
+    return a, as_matrix("C", C, (None, a.shape[0]))
+
+
 def _rank(m: FloatArray) -> int:
     if m.size == 0:
         return 0
@@ -270,9 +276,8 @@ def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[F
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): eqs. (23)–(24); Hypothesis 4.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     d = as_matrix("D", D, (n, None))
     p, q = c.shape[0], d.shape[1]
     cd = c @ d
@@ -518,9 +523,8 @@ def check_cooperative(
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     k = as_matrix("K", K, (n, c.shape[0]))
     t = None if T is None else as_matrix("T", T, (n, n))
     if t is not None and np.linalg.cond(t) > 1e12:
@@ -622,9 +626,8 @@ def design_uio_coordinates(
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     om = as_vector("omega_radius", omega_radius, n)
     de = as_vector("delta_radius", delta_radius, c.shape[0])
     pa = decoupling.P @ a

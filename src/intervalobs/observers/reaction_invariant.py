@@ -96,6 +96,15 @@ class ReactionInvariantObserver(Observer):
         internal = {"z_lower": z.lower, "z_upper": z.upper, "started": False, "u": None, "consistent": np.ones(1)}
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
 
+    def meta(self) -> dict[str, Any]:
+        """Design facts: method, sampling period, measured components.
+
+        Returns
+        -------
+        dict
+        """
+        return {"method": type(self).__name__, "h": self.h, "measured": self.system.measured.tolist()}
+
     def _decay(self, u: FloatArray) -> Interval:
         """Enclosure of :math:`e^{-D h}` for the dilution held over the last interval."""
         rate = np.full(u.shape[:-1], self.system.dilution) if self.system.dilution is not None else u[..., 0]
@@ -162,12 +171,3 @@ class ReactionInvariantObserver(Observer):
                 stacklevel=3,
             )
         return estimate
-
-    def meta(self) -> dict[str, Any]:
-        """Design facts: method, sampling period, measured components.
-
-        Returns
-        -------
-        dict
-        """
-        return {"method": type(self).__name__, "h": self.h, "measured": self.system.measured.tolist()}

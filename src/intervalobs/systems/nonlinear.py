@@ -150,31 +150,19 @@ class NonlinearSystem(ModelDimensions):
         """
         return evaluate_function(self.g, x, self.p, "g")
 
+    @shared_docs
     def f_range(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Natural interval extension of ``f`` over boxes.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray
+        %(natural_extension)s
         """
         return interval_function(self.f, lower, upper, self.n, "f")
 
+    @shared_docs
     def g_range(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Natural interval extension of ``g`` over boxes.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray
+        %(natural_extension)s
         """
         return interval_function(self.g, lower, upper, self.p, "g")
 
