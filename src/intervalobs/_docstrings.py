@@ -90,6 +90,18 @@ DESCRIPTIONS: dict[str, str] = {
         "v_radius : numpy.ndarray\n    Radius of the measurement-noise box."
     ),
     "states_inputs": "x : array_like, shape (..., n)\n    States.\nu : array_like, shape (..., m)\n    Inputs.",
+    "argument_name": "Parameters\n----------\nname : str\n    Argument name used in error messages.",
+    "not_real": (
+        "Returns\n-------\nfloat\n\nRaises\n------\nArgumentTypeError\n    When ``value`` is not a real number."
+    ),
+    "uio_decoupled": (
+        "A, C : array_like\n    System matrices.\ndecoupling : UIODecoupling\n    From :func:`uio_decoupling`."
+    ),
+    "pair_arguments": (
+        "Parameters\n----------\nx, y : array_like, shape (..., n)\n    The two arguments.\n\n"
+        "Returns\n-------\nnumpy.ndarray, shape (..., m)"
+    ),
+    "samples": "Parameters\n----------\nsteps : int\n    Number of samples.",
     "meta": "Facts recorded in every :class:`~intervalobs.estimate.Estimate`.\n\nReturns\n-------\ndict",
 }
 """Shared descriptions by name; a value is numpydoc text without indentation."""

@@ -126,7 +126,7 @@ def lipschitz_bound(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
     Parameters
     ----------
     j_lower, j_upper : array_like, shape (..., m, n)
-        Jacobian bounds.
+        The interval matrix (Jacobian bounds).
 
     Returns
     -------
@@ -179,7 +179,7 @@ def width_matrix(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
     Parameters
     ----------
     j_lower, j_upper : array_like, shape (..., m, n)
-        Jacobian bounds.
+        Jacobian bounds, as from :func:`jacobian_bounds`.
 
     Returns
     -------
@@ -356,13 +356,7 @@ class JacobianDecomposition:
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         r"""Evaluate :math:`q_d(x, y)` (no rounding margin; for analysis and tests).
 
-        Parameters
-        ----------
-        x, y : array_like, shape (..., n)
-
-        Returns
-        -------
-        numpy.ndarray, shape (..., m)
+        %(pair_arguments)s
         """
         xa = np.asarray(x, dtype=float)
         ya = np.asarray(y, dtype=float)
@@ -429,13 +423,7 @@ class VertexDecomposition:
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Evaluate :math:`q_d(x, y)`.
 
-        Parameters
-        ----------
-        x, y : array_like, shape (..., n)
-
-        Returns
-        -------
-        numpy.ndarray, shape (..., m)
+        %(pair_arguments)s
         """
         xa = np.asarray(x, dtype=float)
         ya = np.asarray(y, dtype=float)

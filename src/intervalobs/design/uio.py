@@ -490,6 +490,7 @@ def asymptotic_state_width(
     return np.asarray(np.abs(coords.S) @ rho_w + 2 * np.abs(decoupling.E) @ delta_radius)
 
 
+@shared_docs
 def check_cooperative(
     A: ArrayLike, C: ArrayLike, decoupling: UIODecoupling, K: ArrayLike, T: ArrayLike | None = None
 ) -> UIOCoordinates:
@@ -500,10 +501,7 @@ def check_cooperative(
 
     Parameters
     ----------
-    A, C : array_like
-        System matrices.
-    decoupling : UIODecoupling
-        From :func:`uio_decoupling`.
+    %(uio_decoupled)s
     K : array_like, shape (n, p)
         Output-injection gain.
     T : array_like, shape (n, n), optional
@@ -581,6 +579,7 @@ def _placed(
     return UIOCoordinates(**{**coords.__dict__, "score": score})
 
 
+@shared_docs
 def design_uio_coordinates(
     A: ArrayLike,
     C: ArrayLike,
@@ -601,10 +600,7 @@ def design_uio_coordinates(
 
     Parameters
     ----------
-    A, C : array_like
-        System matrices.
-    decoupling : UIODecoupling
-        From :func:`uio_decoupling`.
+    %(uio_decoupled)s
     omega_radius : array_like, shape (n,)
         Radius of the state-noise box, used to score candidates.
     delta_radius : array_like, shape (p,)

@@ -145,7 +145,7 @@ class ReactionInvariantObserver(Observer):
         Parameters
         ----------
         t : array_like, shape (T,)
-            Sample times, spaced by ``h``.
+            Sample times of the record, every ``h``.
         y : array_like, shape (T, p) or (M, T, p)
             Measured components (a leading axis of Monte Carlo runs).
         u : array_like, shape (T, 1) or (M, T, 1), optional
