@@ -677,6 +677,7 @@ def as_output_folder(name: str, path: str | Path) -> Path:
     Returns
     -------
     pathlib.Path
+        ``path``, which may not exist yet.
 
     Raises
     ------
@@ -712,6 +713,7 @@ def as_input_path(name: str, path: str | Path, kind: Literal["file", "folder"] =
     Returns
     -------
     pathlib.Path
+        ``path``.
 
     Raises
     ------
