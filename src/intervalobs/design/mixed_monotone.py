@@ -353,6 +353,7 @@ class JacobianDecomposition:
         """:math:`\\|W_q\\|_2`."""
         return float(inflate(0.0, np.linalg.norm(self.W, ord=2), floor=0.0)[1])
 
+    @shared_docs
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         r"""Evaluate :math:`q_d(x, y)` (no rounding margin; for analysis and tests).
 
@@ -420,6 +421,7 @@ class VertexDecomposition:
             )
         return cls(func, np.where(a >= 0, np.where(b > 0, 1.0, 0.0), -1.0))
 
+    @shared_docs
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Evaluate :math:`q_d(x, y)`.
 

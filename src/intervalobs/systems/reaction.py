@@ -96,9 +96,9 @@ class ReactionSystem(ModelDimensions):
     Attributes
     ----------
     n, m, p, q, nw, nv : int
-        Components, known inputs (1 when :math:`D` is the input ``u``, else 0), measured components
-        (= ``q``), reactions (their unknown rates are the unknown inputs), disturbance channels (0) and
-        measurement-noise channels (= ``p``).
+        Components, known inputs (one when :math:`D` is the input ``u``, else none), measured components
+        (as many as reactions), reactions (their unknown rates are the unknown inputs), disturbance channels
+        (none: ``nw`` is zero) and measurement-noise channels (one per measured component).
     n_params : int
         Always 0: the kinetics are not parametrised.
 
