@@ -189,17 +189,36 @@ def test_interval_observer_encloses_independent_truths(monkeypatch, continuous: 
         assert estimate.enclosure(xs).fraction == 1.0
 
 
-@pytest.mark.parametrize("sparse", [False, True], ids=["condensed", "sparse"])
+def _asymmetric(system: LTISystem) -> LTISystem:
+    """The same model with a box of ΔB not centred on 0 (the shared unknown is ΔB minus the box's centre)."""
+    assert system.dB is not None
+    return LTISystem(system.A, system.C, B=system.B, dt=system.dt, dB=(system.dB[0], 0.2 * system.dB[1]))
+
+
+HULL_VARIANTS = {  # (constant_dB, window_boxes): which window LP and which ΔB
+    "per-step-condensed": (False, False),
+    "per-step-sparse": (False, True),
+    "shared": (True, False),
+    "shared-window-boxes": (True, True),
+}
+
+
+@pytest.mark.parametrize("asymmetric", [False, True], ids=["symmetric", "asymmetric"])
+@pytest.mark.parametrize("variant", list(HULL_VARIANTS), ids=list(HULL_VARIANTS))
 @pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
-def test_hull_estimator_encloses_independent_truths(continuous: bool, sparse: bool) -> None:
+def test_hull_estimator_encloses_independent_truths(continuous: bool, variant: str, asymmetric: bool) -> None:
+    """ΔB at a vertex of its box (constant over the record), bang-bang w and v: every window LP contains it."""
     system, bounds = (_motor(), MOTOR_BOUNDS) if continuous else (_two(), TWO_BOUNDS)
+    system = _asymmetric(system) if asymmetric else system
+    constant_dB, window_boxes = HULL_VARIANTS[variant]
     steps = 150
     u = _input(steps, continuous)
     t = np.arange(steps) * (H if continuous else 1.0)
-    options = {"h": H if continuous else None, "horizon": 20, "filtered": True, "window_boxes": sparse}
-    hull = HullEstimator.design(system, bounds, **options)
-    assert hull.condensed_allowed() is not sparse  # both window LPs widen the noise by δΓ|u_j|
-    for seed in range(4):
+    options = {"h": H if continuous else None, "horizon": 20, "filtered": True, "window_boxes": window_boxes}
+    hull = HullEstimator.design(system, bounds, constant_dB=constant_dB, **options)
+    # the shared ΔB needs the sparse window LP (its coefficients move with u); per step, both LPs
+    assert hull.condensed_allowed() is (not constant_dB and not window_boxes)
+    for seed in range(5):
         x, y = _own_truth(system, bounds, u, seed)
         assert hull.run(t, y, u).enclosure(x).fraction == 1.0
 
@@ -214,16 +233,41 @@ def test_hull_estimator_with_dense_noise_map_encloses_independent_truths() -> No
         assert hull.run(np.arange(100.0), y, u).enclosure(x).fraction == 1.0
 
 
-def test_hull_estimator_is_the_hull_with_dB_free_at_every_step() -> None:
-    """Full history: the estimator's boxes are the test's own LP with one ΔB per step (to 1e-7 relative)."""
+@pytest.mark.parametrize("constant", [True, False], ids=["constant-dB", "dB-per-step"])
+def test_hull_estimator_is_the_exact_hull_for_its_dB(constant: bool) -> None:
+    """Full history: the estimator's boxes are the test's own LP with one ΔB for the record (``constant_dB``)
+    or one ΔB per step, to 1e-7 relative (the certificates' rounding and the solvers' tolerances)."""
     system = _two()
     u = _input(41, False)
     _, y = _own_truth(system, TWO_BOUNDS, u, 5)
-    estimate = HullEstimator.design(system, TWO_BOUNDS, horizon=None, filtered=True).run(np.arange(41.0), y, u)
+    hull = HullEstimator.design(system, TWO_BOUNDS, horizon=None, filtered=True, constant_dB=constant)
+    estimate = hull.run(np.arange(41.0), y, u)
     for k in (10, 25, 40):
-        box = _exact_hull(system, TWO_BOUNDS, y, u, k, constant=False)
+        box = _exact_hull(system, TWO_BOUNDS, y, u, k, constant=constant)
         np.testing.assert_allclose(estimate.lower[k], box[0], rtol=1e-7, atol=1e-9)
         np.testing.assert_allclose(estimate.upper[k], box[1], rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("horizon", [10, 31, None], ids=["H10", "H31", "full"])
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_constant_dB_hull_is_never_wider_than_the_per_step_hull(continuous: bool, horizon: int | None) -> None:
+    """Same window, same data: the window LP with one ΔB is the per-step LP with more constraints, and the
+    priors are nested by induction, so its boxes lie inside (to the certificates' 1e-9 relative)."""
+    make, bounds, h = (_motor, MOTOR_BOUNDS, H) if continuous else (_two, TWO_BOUNDS, None)
+    steps = 80
+    u = _input(steps, continuous)
+    t = np.arange(steps) * (H if continuous else 1.0)
+    options = {"h": h, "horizon": horizon, "filtered": True}
+    shared_hull = HullEstimator.design(make(), bounds, constant_dB=True, **options)
+    per_step_hull = HullEstimator.design(make(), bounds, constant_dB=False, **options)
+    narrower = []
+    for seed in range(3):
+        _, y = _own_truth(make(), bounds, u, seed)
+        shared, per_step = shared_hull.run(t, y, u), per_step_hull.run(t, y, u)
+        tol = 1e-9 * (1.0 + np.abs(per_step.lower) + np.abs(per_step.upper))
+        assert np.all(shared.lower >= per_step.lower - tol) and np.all(shared.upper <= per_step.upper + tol)
+        narrower.append(float(np.mean(shared.width()[20:].sum(axis=1) / per_step.width()[20:].sum(axis=1))))
+    assert max(narrower) < 1.0  # and it does gain on this input
 
 
 @pytest.mark.parametrize("asymmetric", [False, True], ids=["symmetric", "asymmetric"])

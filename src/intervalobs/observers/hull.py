@@ -59,11 +59,11 @@ from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds
 from ..lp.chain import RecordsPath, Solver, SolverPath, as_solver
 from ..lp.condensed import CondensedWindowLP
-from ..lp.window import SparseWindow, WindowModel
+from ..lp.window import SharedDeltaB, SparseWindow, WindowModel
 from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
-from ..systems.sampling import sampled_model
+from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_positive
 from .base import Observer, ObserverState, _one_blas_thread, options_after_bounds
 
@@ -77,17 +77,30 @@ def _single_support(matrix: FloatArray) -> bool:
     return bool(np.all(np.count_nonzero(matrix, axis=0) <= 1))
 
 
-def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> WindowModel:
+def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None, constant_dB: bool) -> WindowModel:
     """The exact (discrete) or sound sampled (continuous) model of a system without ``ΔA``; with an interval
-    ``ΔB`` its ``ΔΓ u_j`` widens each step's noise box (the noise then a box of the states)."""
+    ``ΔB`` one error shared by the window (``constant_dB``) or ``ΔΓ u_j`` widening each step's noise box (the
+    noise is then a box of the states either way)."""
     model = sampled_model(system, full, h)
     d_gamma = model.dGamma if system.uncertain_input else None
+    shared = _shared_dB(model, system.continuous) if d_gamma is not None and constant_dB else None
     if system.continuous or _single_support(system.E) or d_gamma is not None:
         G, w_lo, w_hi = None, model.noise_center - model.noise_radius, model.noise_center + model.noise_radius
     else:
         G, w_lo, w_hi = system.E, full.w[0], full.w[1]
     F, v_lo, v_hi = _measurement_noise(system, full)
-    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi, d_gamma)
+    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi, d_gamma, shared)
+
+
+def _shared_dB(model: SampledModel, continuous: bool) -> SharedDeltaB:
+    """``β = ΔB - ΔB_c`` as one unknown of the window: ``Ψ`` the midpoint of ``∫e^{As}ds`` (the identity in
+    discrete time); its radius times ``|β|`` and, in continuous time, a relative rounding margin of ``|Ψ||β|``
+    (the product ``Ψβu`` with a computed ``Ψ``) are left to each step's noise box."""
+    psi, d_psi, radius = model.input_integral, model.d_input_integral, model.dB_radius
+    assert psi is not None and d_psi is not None and radius is not None
+    spread = d_psi @ radius
+    scale = np.abs(psi) @ radius + spread if continuous else spread  # Ψ = I is exact in discrete time
+    return SharedDeltaB(psi, radius, inflate(-spread, spread, scale=scale, floor=0.0)[1])
 
 
 def inner_model(
@@ -143,7 +156,8 @@ class HullEstimator(Observer):
     ----------
     system : LTISystem
         Discrete- or continuous-time model without ``dA`` (for interval ``ΔA`` see
-        :func:`~intervalobs.tightness.hull_lower_bound`); an interval ``dB`` is bounded at every step.
+        :func:`~intervalobs.tightness.hull_lower_bound`); an interval ``dB`` is one unknown of each window
+        (``constant_dB``).
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
     horizon : int or None
@@ -170,6 +184,12 @@ class HullEstimator(Observer):
     solver : {"auto", "highs"}
         ``"auto"`` (default): the condensed LP's chain by the dense simplex first, HiGHS for what it gives up on;
         ``"highs"``: every LP by HiGHS. The boxes agree to the certificates' tolerance (both are certified).
+    constant_dB : bool
+        With an interval ``dB``: True (default) when the input matrix is constant in time (a motor's torque
+        constant), its error then one set of unknowns shared by the steps of a window, in the sparse window LP
+        (the condensed LP's matrix is fixed and these coefficients move with ``u``); False when it may change
+        from step to step, each step's noise box then widened by ``δΓ|u_j|`` (wider, but the condensed LP
+        is allowed). No effect without ``dB``.
 
     Notes
     -----
@@ -204,6 +224,7 @@ class HullEstimator(Observer):
         workers: int = 1,
         processes: int = 1,
         solver: Solver = "auto",
+        constant_dB: bool = True,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -229,14 +250,15 @@ class HullEstimator(Observer):
             raise DataError(f"processes: expected a positive integer, got {processes!r}")
         self.processes = int(processes)
         self.solver = as_solver(solver)
-        self._given = (system, bounds, horizon, h, filtered, window_boxes, workers, 1, self.solver)
+        self.constant_dB = bool(constant_dB)
+        self._given = (system, bounds, horizon, h, filtered, window_boxes, workers, 1, self.solver, self.constant_dB)
         # States in very different units: the LPs are solved in balanced coordinates x_b = S x (exact: S is
         # a diagonal of powers of two, systems/balancing.py); every box crosses between the two in _step.
         scales = state_scales(system, self.bounds)
         self.scales = np.ones(self.n) if scales is None else scales
         """``s`` of the balanced coordinates ``x_b = diag(s) x`` the LPs are solved in (ones: none)."""
         solved = (system, self.bounds) if scales is None else balanced(system, self.bounds, scales)
-        self.model = _outer_model(*solved, h)
+        self.model = _outer_model(*solved, h, self.constant_dB)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, SparseWindow] = {}
         self._condensed: CondensedWindowLP | None = None
@@ -260,6 +282,7 @@ class HullEstimator(Observer):
         workers: int = 1,
         processes: int = 1,
         solver: Solver = "auto",
+        constant_dB: bool = True,
     ) -> HullEstimator:
         """Build the estimator (there is no gain: the window LP of each step is the estimator).
 
@@ -283,6 +306,9 @@ class HullEstimator(Observer):
             Worker processes for the Monte Carlo runs of :meth:`run`.
         solver : {"auto", "highs"}
             ``"highs"``: every LP by HiGHS, the dense simplex bypassed (class docstring).
+        constant_dB : bool
+            With an interval ``dB``: one input-matrix error shared by each window (True) or free at every
+            step (class docstring).
 
         Returns
         -------
@@ -303,10 +329,12 @@ class HullEstimator(Observer):
             workers=workers,
             processes=processes,
             solver=solver,
+            constant_dB=constant_dB,
         )
 
     def condensed_allowed(self) -> bool:
-        """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ).
+        """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ,
+        no input-matrix error shared by the window).
 
         Returns
         -------
@@ -316,6 +344,7 @@ class HullEstimator(Observer):
             self.horizon is not None
             and self.model.F is None
             and not self.window_boxes
+            and self.model.shared_dB is None
             and bool(np.max(np.abs(np.linalg.eigvals(self.model.Phi))) <= 1.0)
         )
 
@@ -592,6 +621,7 @@ class HullEstimator(Observer):
             "window_boxes": self.window_boxes,
             "workers": self.workers,
             "solver": self.solver,
+            "constant_dB": self.constant_dB,
             "solver_path": [dict(path) for path in self._paths],
             "h": self.h,
             "transient_s": 0.0,
