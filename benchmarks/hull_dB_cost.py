@@ -22,10 +22,9 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_uncertain_input import H, MOTOR_BOUNDS, TWO_BOUNDS, _input, _motor, _own_truth, _two  # noqa: E402
-
-from intervalobs import HullEstimator  # noqa: E402
-from intervalobs.front_door import memory_horizon  # noqa: E402
+from intervalobs import HullEstimator
+from intervalobs.front_door import memory_horizon
+from test_uncertain_input import MOTOR_BOUNDS, TWO_BOUNDS, H, _input, _motor, _own_truth, _two
 
 REPEATS = 3
 STEPS = 300
@@ -63,7 +62,11 @@ def main() -> None:
         cases = {kind: measure(continuous, kind == "constant ΔB") for kind in ("constant ΔB", "ΔB per step")}
         widths = [cases[kind]["mean_summed_width"] for kind in ("constant ΔB", "ΔB per step")]
         costs = [cases[kind]["cpu_ms_per_step"] for kind in ("constant ΔB", "ΔB per step")]
-        entry[name] = {**cases, "width_ratio": round(widths[0] / widths[1], 4), "cost_ratio": round(costs[0] / costs[1], 2)}
+        entry[name] = {
+            **cases,
+            "width_ratio": round(widths[0] / widths[1], 4),
+            "cost_ratio": round(costs[0] / costs[1], 2),
+        }
     report[label] = entry
     text = json.dumps(report, indent=1, ensure_ascii=False)
     path.write_text(text + "\n")

@@ -195,11 +195,11 @@ def _asymmetric(system: LTISystem) -> LTISystem:
     return LTISystem(system.A, system.C, B=system.B, dt=system.dt, dB=(system.dB[0], 0.2 * system.dB[1]))
 
 
-HULL_VARIANTS = {  # (constant_dB, window_boxes): which window LP and which ΔB
+HULL_VARIANTS = {  # (constant_dB, window_boxes): which ΔB, and the condensed or the sparse window LP
     "per-step-condensed": (False, False),
     "per-step-sparse": (False, True),
-    "shared": (True, False),
-    "shared-window-boxes": (True, True),
+    "constant-condensed": (True, False),
+    "constant-sparse": (True, True),
 }
 
 
@@ -216,8 +216,7 @@ def test_hull_estimator_encloses_independent_truths(continuous: bool, variant: s
     t = np.arange(steps) * (H if continuous else 1.0)
     options = {"h": H if continuous else None, "horizon": 20, "filtered": True, "window_boxes": window_boxes}
     hull = HullEstimator.design(system, bounds, constant_dB=constant_dB, **options)
-    # the shared ΔB needs the sparse window LP (its coefficients move with u); per step, both LPs
-    assert hull.condensed_allowed() is (not constant_dB and not window_boxes)
+    assert hull.condensed_allowed() is not window_boxes  # both window LPs carry both kinds of ΔB
     for seed in range(5):
         x, y = _own_truth(system, bounds, u, seed)
         assert hull.run(t, y, u).enclosure(x).fraction == 1.0
@@ -233,14 +232,17 @@ def test_hull_estimator_with_dense_noise_map_encloses_independent_truths() -> No
         assert hull.run(np.arange(100.0), y, u).enclosure(x).fraction == 1.0
 
 
+@pytest.mark.parametrize("horizon", [None, 41], ids=["sparse-full-history", "condensed-from-x0"])
 @pytest.mark.parametrize("constant", [True, False], ids=["constant-dB", "dB-per-step"])
-def test_hull_estimator_is_the_exact_hull_for_its_dB(constant: bool) -> None:
-    """Full history: the estimator's boxes are the test's own LP with one ΔB for the record (``constant_dB``)
-    or one ΔB per step, to 1e-7 relative (the certificates' rounding and the solvers' tolerances)."""
+def test_hull_estimator_is_the_exact_hull_for_its_dB(constant: bool, horizon: int | None) -> None:
+    """Every window from x_0 (the full history, or a horizon longer than the record): the estimator's boxes are
+    the test's own LP with one ΔB for the record (``constant_dB``) or one ΔB per step, to 1e-7 relative (the
+    certificates' rounding and the solvers' tolerances), by the sparse and by the condensed window LP."""
     system = _two()
     u = _input(41, False)
     _, y = _own_truth(system, TWO_BOUNDS, u, 5)
-    hull = HullEstimator.design(system, TWO_BOUNDS, horizon=None, filtered=True, constant_dB=constant)
+    hull = HullEstimator.design(system, TWO_BOUNDS, horizon=horizon, filtered=True, constant_dB=constant)
+    assert hull.condensed_allowed() is (horizon is not None)
     estimate = hull.run(np.arange(41.0), y, u)
     for k in (10, 25, 40):
         box = _exact_hull(system, TWO_BOUNDS, y, u, k, constant=constant)

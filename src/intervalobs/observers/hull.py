@@ -30,12 +30,19 @@ is exact for that model (whose per-step noise set is a box around the true, non-
 sound for the continuous system and slightly wider than its true hull.
 :func:`~intervalobs.tightness.hull_lower_bound` gives the matching inner value.
 
-**Interval** :math:`\Delta B` (an uncertain input matrix, ``dB``): with :math:`u` known,
-:math:`\Delta\Gamma u_j` is an additive term of step :math:`j` in the box :math:`\pm\delta\Gamma|u_j|`
-(:mod:`intervalobs.systems.sampling`, section 7), which widens that step's noise box (the process noise is
-then taken as a box of the states, :math:`E[\underline w, \overline w]` in discrete time). The hull is exact
-for :math:`\Delta B` free at every step; the true :math:`\Delta B` is constant, so the hull of that smaller
-set can be narrower (``tests/test_uncertain_input.py`` measures both).
+**Interval** :math:`\Delta B` (an uncertain input matrix, ``dB``), constant in time (``constant_dB``, the
+default): with :math:`\Delta B = \Delta B_c + \beta`, the sampled model's :math:`\Gamma` holds
+:math:`\Delta B_c` and step :math:`j` adds :math:`\Psi\beta u_j`, :math:`\Psi = \int_0^h e^{As}ds` (the
+identity in discrete time; :mod:`intervalobs.systems.sampling`, section 7). With :math:`u` known this is linear
+in the entries of :math:`\beta`, which are LP unknowns in their box shared by all steps of the window (the
+true :math:`\Delta B` is constant over the record, hence over the window); their coefficients move with
+:math:`u` and are set at every step in both window LPs (:class:`~intervalobs.lp.window.SharedDeltaB`). The
+hull of the window is then exact for a constant :math:`\Delta B` (the process noise is taken as a box of the
+states, :math:`E[\underline w, \overline w]` in discrete time; in continuous time the rounding of
+:math:`\Psi` widens each step's noise box by a relative 1e-12 of :math:`|\Psi||\beta||u_j|`). With
+``constant_dB=False``, :math:`\Delta\Gamma u_j` is a term of step :math:`j` alone in the box
+:math:`\pm\delta\Gamma|u_j|`, which widens that step's noise box: the exact hull for :math:`\Delta B` free
+at every step, wider (``tests/test_uncertain_input.py`` and ``benchmarks/hull_dB_cost.py`` measure both).
 
 **Interval** :math:`\Delta A` makes :math:`S_k` non-convex. :class:`HullEstimator` refuses it;
 :func:`~intervalobs.tightness.hull_lower_bound` computes, for a few fixed samples of :math:`\Delta A`,
@@ -186,10 +193,9 @@ class HullEstimator(Observer):
         ``"highs"``: every LP by HiGHS. The boxes agree to the certificates' tolerance (both are certified).
     constant_dB : bool
         With an interval ``dB``: True (default) when the input matrix is constant in time (a motor's torque
-        constant), its error then one set of unknowns shared by the steps of a window, in the sparse window LP
-        (the condensed LP's matrix is fixed and these coefficients move with ``u``); False when it may change
-        from step to step, each step's noise box then widened by ``δΓ|u_j|`` (wider, but the condensed LP
-        is allowed). No effect without ``dB``.
+        constant): its error is then one set of unknowns shared by the steps of a window (module docstring),
+        which costs more per step; False when it may change from step to step: each step's noise box is then
+        widened by ``δΓ|u_j|`` (wider boxes). No effect without ``dB``.
 
     Notes
     -----
@@ -333,8 +339,7 @@ class HullEstimator(Observer):
         )
 
     def condensed_allowed(self) -> bool:
-        """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ,
-        no input-matrix error shared by the window).
+        """Whether the condensed LP is used (box measurement noise, finite horizon, prior-only boxes, stable Φ).
 
         Returns
         -------
@@ -344,7 +349,6 @@ class HullEstimator(Observer):
             self.horizon is not None
             and self.model.F is None
             and not self.window_boxes
-            and self.model.shared_dB is None
             and bool(np.max(np.abs(np.linalg.eigvals(self.model.Phi))) <= 1.0)
         )
 
