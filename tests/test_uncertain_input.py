@@ -232,6 +232,33 @@ def test_hull_estimator_with_dense_noise_map_encloses_independent_truths() -> No
         assert hull.run(np.arange(100.0), y, u).enclosure(x).fraction == 1.0
 
 
+@pytest.mark.parametrize("variant", ["condensed", "sparse", "full-history"])
+@pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
+def test_constant_dB_with_several_inputs_and_outputs_encloses_independent_truths(
+    continuous: bool, variant: str
+) -> None:
+    """Three states, two inputs, two outputs, every entry of ΔB uncertain (an asymmetric box): six shared
+    unknowns whose coefficients mix the inputs through a full Ψ in continuous time."""
+    a = np.array([[-1.0, 2.0, 0.0], [-2.0, -1.0, 1.0], [0.0, 0.5, -3.0]])
+    b = np.array([[1.0, 0.0], [0.5, 1.0], [0.0, 2.0]])
+    c = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    db = (-0.1 * np.ones((3, 2)), np.array([[0.1, 0.05], [0.2, 0.1], [0.1, 0.3]]))
+    system = LTISystem(a, c, B=b, dB=db) if continuous else LTISystem(np.eye(3) + 0.1 * a, c, B=b, dt=1.0, dB=db)
+    bounds = Bounds(x0=(-1, 1), w=(-0.05, 0.05), v=(-0.02, 0.02))
+    steps = 40 if variant == "full-history" else 90  # the full history's LPs grow with the record
+    k = np.arange(steps)
+    u = np.stack([np.sign(np.sin(0.07 * k)), np.cos(0.03 * k) + 0.3], axis=1)
+    t = k * (H if continuous else 1.0)
+    horizon, window_boxes = {"condensed": (20, False), "sparse": (20, True), "full-history": (None, False)}[variant]
+    hull = HullEstimator.design(
+        system, bounds, h=H if continuous else None, horizon=horizon, filtered=True, window_boxes=window_boxes
+    )
+    assert hull.condensed_allowed() is (variant == "condensed")
+    for seed in range(4):
+        x, y = _own_truth(system, bounds, u, seed)
+        assert hull.run(t, y, u).enclosure(x).fraction == 1.0
+
+
 @pytest.mark.parametrize("horizon", [None, 41], ids=["sparse-full-history", "condensed-from-x0"])
 @pytest.mark.parametrize("constant", [True, False], ids=["constant-dB", "dB-per-step"])
 def test_hull_estimator_is_the_exact_hull_for_its_dB(constant: bool, horizon: int | None) -> None:
