@@ -232,6 +232,16 @@ def test_hull_estimator_with_dense_noise_map_encloses_independent_truths() -> No
         assert hull.run(np.arange(100.0), y, u).enclosure(x).fraction == 1.0
 
 
+def test_certificates_refuse_the_constant_dB() -> None:
+    """The multipliers of a window with the shared ΔB are not a filter of y alone (the ΔB term needs u)."""
+    u = _input(30, False)
+    _, y = _own_truth(_two(), TWO_BOUNDS, u, 0)
+    with pytest.raises(AssumptionError, match="certificates: with one constant ΔB"):
+        HullEstimator.design(_two(), TWO_BOUNDS, horizon=10).certificates(np.arange(30.0), y, u)
+    per_step = HullEstimator.design(_two(), TWO_BOUNDS, horizon=10, constant_dB=False)
+    assert per_step.certificates(np.arange(30.0), y, u)[(0, 1.0)].shape == (19, 11, 1)  # windows k = 11 … 29
+
+
 @pytest.mark.parametrize("variant", ["condensed", "sparse", "full-history"])
 @pytest.mark.parametrize("continuous", [False, True], ids=["discrete", "continuous"])
 def test_constant_dB_with_several_inputs_and_outputs_encloses_independent_truths(

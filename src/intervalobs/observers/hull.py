@@ -588,6 +588,11 @@ class HullEstimator(Observer):
                 "certificates: needs the condensed window LP (finite horizon, box measurement noise, stable Φ, "
                 "window_boxes=False); see condensed_allowed()"
             )
+        if self.model.shared_dB is not None:
+            raise AssumptionError(
+                "certificates: with one constant ΔB for each window (constant_dB=True) a bound also rests on the "
+                "shared ΔB, so its multipliers are not a filter of the measurements alone; use constant_dB=False"
+            )
         times, ys, us = self._signals(t, y, u)
         if ys.ndim != 2:
             raise DimensionError(f"y: expected one record of shape (T, {self.p}), got shape {ys.shape}")
