@@ -382,7 +382,9 @@ def observe(
     why = f"the tightest estimator for this model ({problem.kind}) within {budget:g} ms a sample: {row.width}"
     if cost > budget:
         why = f"the only or last estimator for this model ({problem.kind}), over the budget: {row.width}"
-    if isinstance(system, LTISystem) and system.uncertain_input:
+    if isinstance(system, LTISystem) and system.uncertain_input and row.name == "HullEstimator":
+        why += "; the input matrix is uncertain (dB): one constant ΔB is kept for each window"
+    elif isinstance(system, LTISystem) and system.uncertain_input:
         why += "; the input matrix is uncertain (dB): ΔB·u is bounded at every step as if ΔB could change between steps"
     meta = {"estimator": row.name, "why": why, "considered": considered, "ms_per_sample": cost, "budget_ms": budget}
     estimate.meta.update(meta)

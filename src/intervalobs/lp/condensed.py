@@ -96,6 +96,11 @@ class CondensedWindowLP(RecordsPath):
     (the first steps, ``s = 0``) uses the same LP with ``w_L … w_{H-1}`` fixed at 0 and the rows after
     its last state free.
 
+    **A shared input-matrix error** (``model.shared_dB``, :class:`~intervalobs.lp.window.SharedDeltaB`): the entries
+    of :math:`\beta` are the last columns, one set for the window, and :math:`e_i` gains :math:`\Psi\beta u_{s+i}`;
+    their coefficients in the rows and the objectives move with the inputs and are set by :meth:`set_window` in
+    both solvers (the dense simplex refactors its basis at the start of every window anyway).
+
     **Warm start.** The ``2n`` objectives of a window are solved as a chain: the lower bounds of
     components ``0 … n-1``, then the upper bounds of ``n-1 … 0`` (:attr:`chain`), by the dense simplex of
     :class:`~intervalobs.lp.dense_simplex.DenseSimplex`, which keeps the basis inverse from one objective to
@@ -179,7 +184,9 @@ class CondensedWindowLP(RecordsPath):
             abs_powers.append(abs_phi @ abs_powers[-1])
         noise_map = np.eye(n) if model.G is None else model.G  # e_i = G w_i (a box of e_i when G is None)
         self.nw = nw = noise_map.shape[1]
-        self.ncol = n + H * nw
+        self.dB_entries = np.zeros((0, 2), dtype=np.intp) if model.shared_dB is None else model.shared_dB.entries()
+        self.nz = n + H * nw  # the columns before the shared β (fixed coefficients)
+        self.ncol = self.nz + self.dB_entries.shape[0]
         self.nrow = (H + 1) * p
         # Block row j: x_j (without the drive) as a function of z. The drive and the magnitudes use the
         # same recursion in state space, (x_s, e_0 … e_{H-1}), with |Φ|^j in place of Φ^j for magnitudes.
@@ -193,7 +200,8 @@ class CondensedWindowLP(RecordsPath):
                 step_map[j, :, n + i * n : n + (i + 1) * n] = powers[j - 1 - i]
                 abs_map[j, :, n + i * n : n + (i + 1) * n] = abs_powers[j - 1 - i]
         self.objectives = state_map
-        """``objectives[L, i]``: the cost of ``(x_{s+L})_i`` for a window of ``L`` steps."""
+        """``objectives[L, i]``: the cost of ``(x_{s+L})_i`` for a window of ``L`` steps (its β part set by
+        :meth:`set_window`)."""
         self.transfer = step_map.reshape((H + 1) * n, n + H * n)[:, n:]
         self.abs_map = abs_map.reshape((H + 1) * n, n + H * n)
         matrix = np.einsum("pn,jnc->jpc", model.C, state_map).reshape(self.nrow, self.ncol)
@@ -284,15 +292,15 @@ class CondensedWindowLP(RecordsPath):
         drives[:L] = u[:L] @ m.Gamma.T
         q = (self.transfer @ drives.ravel()).reshape(H + 1, n)
         growth = np.zeros((H, n))
-        w_lo, w_hi = m.noise_box(u[:L])  # per step: wider by δΓ|u_j| for an interval input matrix
+        w_lo, w_hi = m.window_noise_box(u[:L])  # per step: wider by δΓ|u_j| for an interval input matrix
         e_max = self.e_max if m.dGamma is None else np.maximum(np.abs(w_lo), np.abs(w_hi))
-        growth[:L] = e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1])
+        growth[:L] = e_max + np.abs(drives[:L]) + np.abs(q[1 : L + 1]) + self._set_shared_dB(u[:L])
         # x_s = mid + z, z in the centred prior box: the LP works with deviations from the prior's centre
         mid = 0.5 * (prior_lo + prior_hi)
         q += self.objectives[:, :, :n] @ mid
         start_mag = np.maximum(np.abs(prior_lo), np.abs(prior_hi))
         mag = (self.abs_map @ np.concatenate([start_mag, growth.ravel()])).reshape(H + 1, n)
-        width = n + m.Gamma.shape[1] + self.nw + 2  # terms per inner product of the powers, G and the drive
+        width = n + m.Gamma.shape[1] + self.nw + self.dB_entries.shape[0] + 2  # terms of the powers, G, drive, β
         rounding = width * eps * mag
         x_error = 4.0 * (H + 1) * rounding  # |computed x_j - exact x_j| for every z in the box
         row_pad = (x_error + rounding) @ np.abs(m.C).T
@@ -305,8 +313,9 @@ class CondensedWindowLP(RecordsPath):
         hi = np.where(measured[:, None], yt - m.v_lo - centre + row_pad, self.inf)
         idle = np.zeros((H - L) * self.nw)
         z_lo, z_hi = round_outward(prior_lo - mid, prior_hi - mid)
-        self.col_lo = np.concatenate([z_lo, w_lo.ravel(), idle])
-        self.col_hi = np.concatenate([z_hi, w_hi.ravel(), idle])
+        beta = np.zeros(0) if m.shared_dB is None else m.shared_dB.radius[tuple(self.dB_entries.T)]
+        self.col_lo = np.concatenate([z_lo, w_lo.ravel(), idle, -beta])
+        self.col_hi = np.concatenate([z_hi, w_hi.ravel(), idle, beta])
         self.row_lo, self.row_hi = lo.ravel(), hi.ravel()  # exact: what the certificates are evaluated on
         self.row_scale = 1.0 + np.maximum(np.abs(self.row_lo), np.abs(self.row_hi))  # of the relative widenings
         relax = MEASUREMENT_RELAX * self.row_scale
@@ -315,6 +324,28 @@ class CondensedWindowLP(RecordsPath):
             solver.changeColsBounds(self.ncol, self._cols, self.col_lo, self.col_hi)
             solver.changeRowsBounds(self.nrow, self._rows, self.solve_lo, self.solve_hi)
         return q[L], x_error[L] + rounding[L]
+
+    def _set_shared_dB(self, u: FloatArray) -> FloatArray:
+        """Set the β columns of the objectives, rows and both solvers for the window's inputs ``u`` (shape
+        (L, m)); returns the bound ``|Ψ| r |u_i|`` of each step's ``Ψβu_i`` (zeros without a shared β)."""
+        shared, n, nz = self.model.shared_dB, self.n, self.nz
+        if shared is None:
+            return np.zeros((u.shape[0], n))
+        H, L = self.horizon, u.shape[0]
+        rows, inputs = self.dB_entries[:, 0], self.dB_entries[:, 1]
+        steps = np.zeros((H, n, rows.size))
+        steps[:L] = shared.map[:, rows][None, :, :] * u[:, None, inputs]  # Ψ e_a u_b for each entry (a, b) of β
+        state = (self.transfer @ steps.reshape(H * n, rows.size)).reshape(H + 1, n, rows.size)
+        self.objectives[:, :, nz:] = state
+        block = np.einsum("pn,jnq->jpq", self.model.C, state).reshape(self.nrow, rows.size)
+        self.matrix_t[nz:] = block.T
+        self.abs_matrix_t[nz:] = np.abs(block.T)
+        for dense in self.dense:
+            dense.matrix_t[nz:] = block.T
+        for solver in self.solvers:
+            for (r, q), value in np.ndenumerate(block):
+                solver.changeCoeff(r, nz + q, float(value))
+        return np.abs(u) @ (np.abs(shared.map) @ shared.radius).T
 
     def forget_bases(self) -> None:
         """Drop the bases kept for warm starts and the solvers' own (the next solves start from scratch)."""
@@ -479,11 +510,12 @@ class CondensedWindowLP(RecordsPath):
         if kept is None:
             return None
         codes, valid, start = kept
-        n, nw, p, ncol = self.n, self.nw, self.p, self.ncol
-        if start + 1 == self.start:
-            entering = np.where(costs[:, ncol - nw :] >= 0.0, _LOWER, _UPPER).astype(np.int8)
+        n, nw, p, nz, ncol = self.n, self.nw, self.p, self.nz, self.ncol
+        if start + 1 == self.start:  # the noise columns and the rows shift by one step; x_s and β stay
+            entering = np.where(costs[:, nz - nw : nz] >= 0.0, _LOWER, _UPPER).astype(np.int8)
             fresh_rows = np.full((codes.shape[0], p), _BASIC, dtype=np.int8)
-            codes = np.hstack([codes[:, :n], codes[:, n + nw : ncol], entering, codes[:, ncol + p :], fresh_rows])
+            parts = [codes[:, :n], codes[:, n + nw : nz], entering, codes[:, nz:ncol], codes[:, ncol + p :], fresh_rows]
+            codes = np.hstack(parts)
         return codes, valid
 
     def _start_basis(self, starts: tuple[NDArray[np.int8], NDArray[np.bool_]] | None, r: int) -> Any:

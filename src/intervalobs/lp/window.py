@@ -22,9 +22,44 @@ from .certified import centred_bounds, dual_bounds, highs_model, new_highs, run_
 from .chain import RecordsPath, SolverPath
 from .compensated import RowProducts
 
-__all__ = ["SparseWindow", "SparseWindowLP", "WindowModel", "window_state_maps"]
+__all__ = ["SharedDeltaB", "SparseWindow", "SparseWindowLP", "WindowModel", "window_state_maps"]
 
 FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SharedDeltaB:
+    r"""An input-matrix error that is one unknown for the whole window: step ``j`` adds :math:`\Psi\beta u_j`.
+
+    With :math:`B + \Delta B` and :math:`\Delta B = \Delta B_c + \beta` constant in time, the sampled model's
+    :math:`\Gamma` holds :math:`\Delta B_c` and every step adds :math:`\Psi\beta u_j` with
+    :math:`\Psi = \int_0^h e^{As}ds` (the identity in discrete time): linear in the entries of :math:`\beta`
+    for known :math:`u_j`, so the window LP takes them as unknowns shared by all its steps
+    (:class:`SparseWindowLP`).
+
+    Parameters
+    ----------
+    map : numpy.ndarray, shape (n, n)
+        :math:`\Psi` (the midpoint of its enclosure).
+    radius : numpy.ndarray, shape (n, m)
+        :math:`|\beta| \le` ``radius`` entry by entry (zero entries are not unknowns).
+    residual : numpy.ndarray, shape (n, m)
+        What the shared unknowns leave out (the radius of :math:`\Psi` times ``radius``, and the rounding of
+        :math:`\Psi`): step ``j``'s noise box is widened by ``residual @ |u_j|``.
+    """
+
+    map: FloatArray
+    radius: FloatArray
+    residual: FloatArray
+
+    def entries(self) -> NDArray[np.intp]:
+        """The entries ``(a, b)`` of :math:`\beta` that are unknowns (nonzero radius), row-major.
+
+        Returns
+        -------
+        numpy.ndarray, shape (count, 2)
+        """
+        return np.argwhere(self.radius > 0)
 
 
 @dataclass(frozen=True)
@@ -53,6 +88,10 @@ class WindowModel:
         Elementwise radius of an interval input matrix ``Γ ± δΓ`` (an uncertain ``B``): step ``j``'s noise box
         is widened by ``δΓ|u_j|`` (:meth:`noise_box`), i.e. ``ΔΓ`` is free at every step. Box noise only
         (``G`` None).
+    shared_dB : SharedDeltaB, optional
+        With ``dGamma``: keep one input-matrix error for the whole window (:class:`SparseWindowLP` only); the
+        window's noise rows are then widened by its ``residual`` only (:meth:`window_noise_box`), while
+        :meth:`propagate` (one step, no memory) keeps ``dGamma``.
     """
 
     Phi: FloatArray
@@ -65,10 +104,30 @@ class WindowModel:
     v_lo: FloatArray
     v_hi: FloatArray
     dGamma: FloatArray | None = None
+    shared_dB: SharedDeltaB | None = None
 
     def __post_init__(self) -> None:
         if self.dGamma is not None and self.G is not None:
             raise AssumptionError("WindowModel: an interval input matrix (dGamma) needs box process noise (G None)")
+        if self.shared_dB is not None and self.dGamma is None:
+            raise AssumptionError("WindowModel: a shared input-matrix error (shared_dB) needs its dGamma")
+
+    def window_noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Box of the process noise in a window LP: :meth:`noise_box`, or with ``shared_dB`` only its residual.
+
+        Parameters
+        ----------
+        u : numpy.ndarray, shape (..., m)
+            The known inputs of the steps.
+
+        Returns
+        -------
+        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+        """
+        if self.shared_dB is None:
+            return self.noise_box(u)
+        spread = np.abs(u) @ self.shared_dB.residual.T
+        return inflate(self.w_lo - spread, self.w_hi + spread, scale=np.abs(self.w_lo) + np.abs(self.w_hi) + spread)
 
     def noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Box of ``x+ - Φx - Γu`` (``G`` None) or of ``w`` for the inputs ``u`` (shape (..., m)).
@@ -124,6 +183,11 @@ class SparseWindowLP(RecordsPath):
     kept and restored at the next step: the extremal trajectory seen from ``x_k`` changes little when
     the window moves, so the dual simplex restarts close to the optimum.
 
+    With ``model.shared_dB`` the entries of ``β`` (:class:`SharedDeltaB`) are the last columns, one set for the
+    whole window, in their box; slot ``i``'s dynamics rows get ``-Ψ β u_i``, coefficients that move with the
+    inputs and are set at every step (:meth:`set_inputs`). The true ``ΔB`` is constant over the record, hence
+    over every window, so the LP's set still contains the truth.
+
     %(window)s
     """
 
@@ -137,14 +201,17 @@ class SparseWindowLP(RecordsPath):
         self.w0 = S * n
         self.v0 = self.w0 + S * nq
         self.l0 = self.v0 + S * nv
-        self.ncol = self.l0 + points
+        self.b0 = self.l0 + points
+        self.dB_entries = np.zeros((0, 2), dtype=np.intp) if model.shared_dB is None else model.shared_dB.entries()
+        nb = self.dB_entries.shape[0]
+        self.ncol = self.b0 + nb
         self.y0 = S * n
         self.p0 = self.y0 + S * p
         self.nrow = self.p0 + (n + 1 if points else 0)
         cycle = sparse.eye(S, S, k=1, format="lil")
         cycle[S - 1, 0] = 1.0
         dyn_x = sparse.kron(cycle.tocsr(), sparse.eye(n)) - sparse.kron(sparse.eye(S), sparse.csr_matrix(model.Phi))
-        blocks: list[list[Any]] = [[dyn_x, None, None, None], [None, None, None, None], [None, None, None, None]]
+        blocks: list[list[Any]] = [[dyn_x, None, None, None, None], [None] * 5, [None] * 5]
         if nq:
             assert model.G is not None
             blocks[0][1] = -sparse.kron(sparse.eye(S), sparse.csr_matrix(model.G))
@@ -156,7 +223,11 @@ class SparseWindowLP(RecordsPath):
             prior = sparse.hstack([sparse.eye(n), sparse.csr_matrix((n, (S - 1) * n))])
             blocks[2][0] = sparse.vstack([prior, sparse.csr_matrix((1, S * n))])
             blocks[2][3] = sparse.csr_matrix(np.ones((n + 1, points)))
-        widths = [S * n, S * nq, S * nv, points]
+        if nb:
+            assert model.shared_dB is not None  # the pattern of -Ψβu_i with u_i = 1 (values set by set_inputs)
+            psi_columns = model.shared_dB.map[:, self.dB_entries[:, 0]]
+            blocks[0][4] = -sparse.kron(np.ones((S, 1)), sparse.csr_matrix(psi_columns))
+        widths = [S * n, S * nq, S * nv, points, nb]
         heights = [S * n, S * p, n + 1 if points else 0]
         rows = []
         for r, hgt in enumerate(heights):
@@ -171,9 +242,11 @@ class SparseWindowLP(RecordsPath):
             )
         matrix = sparse.csc_matrix(sparse.bmat(rows, format="csc"))
         matrix.eliminate_zeros()
+        matrix.sort_indices()
         self.matrix = matrix
         self.matrix_t = matrix.T.tocsr()
         self.abs_matrix_t = abs(self.matrix_t)
+        self._dB_pattern(model)
         self.col_nnz = int(np.max(np.diff(matrix.indptr))) if matrix.nnz else 0
         self.solver = new_highs()
         self.inf = float(self.solver.getInfinity())
@@ -189,6 +262,37 @@ class SparseWindowLP(RecordsPath):
         self.centre = np.zeros(self.ncol)
         self._bases: dict[tuple[int, float], Any] = {}
         self.path = SolverPath()
+
+    def _dB_pattern(self, model: WindowModel) -> None:
+        """Where the coefficients of the shared ``β`` sit: the last entries of the CSC data (and of the CSR data
+        of the transpose, in the same order), with the ``-Ψ`` entry, the slot and the input each one takes."""
+        first = int(self.matrix.indptr[self.b0])
+        rows = self.matrix.indices[first:].astype(np.intp)
+        columns = np.repeat(np.arange(self.dB_entries.shape[0]), np.diff(self.matrix.indptr[self.b0 :]))
+        assert np.array_equal(self.matrix_t.indices[first:], rows)  # the transpose keeps the order
+        self._dB_first, self._dB_rows = first, rows
+        self._dB_cols = (self.b0 + columns).astype(np.int32)
+        self._dB_slot = rows // self.n
+        self._dB_input = self.dB_entries[columns, 1]
+        self._dB_base = np.asarray(self.matrix.data[first:]).copy()
+
+    def set_inputs(self, u: FloatArray) -> None:
+        """Coefficients of the shared ``β`` for the inputs of the window's slots (no-op without ``shared_dB``).
+
+        Parameters
+        ----------
+        u : numpy.ndarray, shape (slots, m)
+            Row ``i``: the input of the step out of slot ``i`` (zero for a step outside the window).
+        """
+        if self._dB_rows.size == 0:
+            return
+        values = self._dB_base * u[self._dB_slot, self._dB_input]
+        first = self._dB_first
+        self.matrix.data[first:] = values
+        self.matrix_t.data[first:] = values
+        self.abs_matrix_t.data[first:] = np.abs(values)
+        for row, col, value in zip(self._dB_rows.tolist(), self._dB_cols.tolist(), values.tolist()):
+            self.solver.changeCoeff(row, col, value)
 
     def forget_bases(self) -> None:
         """Drop the bases kept for warm starts and the solver's own (the next solves start from scratch)."""
@@ -238,7 +342,7 @@ class SparseWindowLP(RecordsPath):
         lo, hi = col_lo[states], col_hi[states]
         box = np.isfinite(lo) & np.isfinite(hi)
         centre[states][box] = 0.5 * lo[box] + 0.5 * hi[box]
-        if self._products is None:
+        if self._products is None:  # the β columns' coefficients change, but their centre is always 0
             self._products = RowProducts(self.matrix_t)
         self.centre = centre
         shifted = centred_bounds((col_lo, col_hi, row_lo, row_hi), self._products, centre)
@@ -348,6 +452,8 @@ class SparseWindow:
         ``boxes_*`` bound ``x_τ`` for ``τ < k`` (None: free, for inner hulls); ``last_*`` bounds
         ``x_k``; ``first_*`` is the prior of the window's first state when it is time 0 (the ``x_0``
         box) — for a later first state the caller sets the points prior or relies on ``boxes``.
+        With a shared input-matrix error (``model.shared_dB``) it also sets that error's coefficients for the
+        window's inputs (:meth:`SparseWindowLP.set_inputs`) and its box.
         With ``window_boxes`` False only the first state of the window gets its box (the prior); the
         others get a tenfold-widened copy (sound and finite, as the certificate needs, but inactive:
         fewer degenerate pivots).
@@ -403,13 +509,17 @@ class SparseWindow:
         ut = np.zeros((S, u.shape[-1]))
         ut[step_valid] = u[times[step_valid] - offset]
         drive = ut @ m.Gamma.T
+        if m.shared_dB is not None:
+            lp.set_inputs(ut)
+            radius = m.shared_dB.radius[lp.dB_entries[:, 0], lp.dB_entries[:, 1]]
+            col_lo[lp.b0 :], col_hi[lp.b0 :] = -radius, radius
         if nq:
             wl = np.where(step_valid[:, None], m.w_lo, 0.0)
             wh = np.where(step_valid[:, None], m.w_hi, 0.0)
             col_lo[lp.w0 : lp.v0], col_hi[lp.w0 : lp.v0] = wl.ravel(), wh.ravel()
             d_lo, d_hi = drive, drive.copy()
         else:
-            w_lo, w_hi = m.noise_box(ut)
+            w_lo, w_hi = m.window_noise_box(ut)
             d_lo, d_hi = drive + w_lo, drive + w_hi
         d_lo = np.where(step_valid[:, None], d_lo, -inf)
         d_hi = np.where(step_valid[:, None], d_hi, inf)

@@ -30,12 +30,19 @@ is exact for that model (whose per-step noise set is a box around the true, non-
 sound for the continuous system and slightly wider than its true hull.
 :func:`~intervalobs.tightness.hull_lower_bound` gives the matching inner value.
 
-**Interval** :math:`\Delta B` (an uncertain input matrix, ``dB``): with :math:`u` known,
-:math:`\Delta\Gamma u_j` is an additive term of step :math:`j` in the box :math:`\pm\delta\Gamma|u_j|`
-(:mod:`intervalobs.systems.sampling`, section 7), which widens that step's noise box (the process noise is
-then taken as a box of the states, :math:`E[\underline w, \overline w]` in discrete time). The hull is exact
-for :math:`\Delta B` free at every step; the true :math:`\Delta B` is constant, so the hull of that smaller
-set can be narrower (``tests/test_uncertain_input.py`` measures both).
+**Interval** :math:`\Delta B` (an uncertain input matrix, ``dB``), constant in time (``constant_dB``, the
+default): with :math:`\Delta B = \Delta B_c + \beta`, the sampled model's :math:`\Gamma` holds
+:math:`\Delta B_c` and step :math:`j` adds :math:`\Psi\beta u_j`, :math:`\Psi = \int_0^h e^{As}ds` (the
+identity in discrete time; :mod:`intervalobs.systems.sampling`, section 7). With :math:`u` known this is linear
+in the entries of :math:`\beta`, which are LP unknowns in their box shared by all steps of the window (the
+true :math:`\Delta B` is constant over the record, hence over the window); their coefficients move with
+:math:`u` and are set at every step in both window LPs (:class:`~intervalobs.lp.window.SharedDeltaB`). The
+hull of the window is then exact for a constant :math:`\Delta B` (the process noise is taken as a box of the
+states, :math:`E[\underline w, \overline w]` in discrete time; in continuous time the rounding of
+:math:`\Psi` widens each step's noise box by a relative 1e-12 of :math:`|\Psi||\beta||u_j|`). With
+``constant_dB=False``, :math:`\Delta\Gamma u_j` is a term of step :math:`j` alone in the box
+:math:`\pm\delta\Gamma|u_j|`, which widens that step's noise box: the exact hull for :math:`\Delta B` free
+at every step, wider (``tests/test_uncertain_input.py`` and ``benchmarks/hull_dB_cost.py`` measure both).
 
 **Interval** :math:`\Delta A` makes :math:`S_k` non-convex. :class:`HullEstimator` refuses it;
 :func:`~intervalobs.tightness.hull_lower_bound` computes, for a few fixed samples of :math:`\Delta A`,
@@ -60,11 +67,11 @@ from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds
 from ..lp.chain import RecordsPath, Solver, SolverPath, as_solver
 from ..lp.condensed import CondensedWindowLP
-from ..lp.window import SparseWindow, WindowModel
+from ..lp.window import SharedDeltaB, SparseWindow, WindowModel
 from ..systems.balancing import balanced, state_scales
 from ..systems.bounds import Bounds, ResolvedBounds
 from ..systems.lti import LTISystem
-from ..systems.sampling import sampled_model
+from ..systems.sampling import SampledModel, sampled_model
 from ..validation import as_positive
 from .base import Observer, ObserverState, _one_blas_thread, options_after_bounds
 
@@ -78,17 +85,30 @@ def _single_support(matrix: FloatArray) -> bool:
     return bool(np.all(np.count_nonzero(matrix, axis=0) <= 1))
 
 
-def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None) -> WindowModel:
+def _outer_model(system: LTISystem, full: ResolvedBounds, h: float | None, constant_dB: bool) -> WindowModel:
     """The exact (discrete) or sound sampled (continuous) model of a system without ``ΔA``; with an interval
-    ``ΔB`` its ``ΔΓ u_j`` widens each step's noise box (the noise then a box of the states)."""
+    ``ΔB`` one error shared by the window (``constant_dB``) or ``ΔΓ u_j`` widening each step's noise box (the
+    noise is then a box of the states either way)."""
     model = sampled_model(system, full, h)
     d_gamma = model.dGamma if system.uncertain_input else None
+    shared = _shared_dB(model, system.continuous) if d_gamma is not None and constant_dB else None
     if system.continuous or _single_support(system.E) or d_gamma is not None:
         G, w_lo, w_hi = None, model.noise_center - model.noise_radius, model.noise_center + model.noise_radius
     else:
         G, w_lo, w_hi = system.E, full.w[0], full.w[1]
     F, v_lo, v_hi = _measurement_noise(system, full)
-    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi, d_gamma)
+    return WindowModel(model.Phi, model.Gamma, G, w_lo, w_hi, system.C, F, v_lo, v_hi, d_gamma, shared)
+
+
+def _shared_dB(model: SampledModel, continuous: bool) -> SharedDeltaB:
+    """``β = ΔB - ΔB_c`` as one unknown of the window: ``Ψ`` the midpoint of ``∫e^{As}ds`` (the identity in
+    discrete time); its radius times ``|β|`` and, in continuous time, a relative rounding margin of ``|Ψ||β|``
+    (the product ``Ψβu`` with a computed ``Ψ``) are left to each step's noise box."""
+    psi, d_psi, radius = model.input_integral, model.d_input_integral, model.dB_radius
+    assert psi is not None and d_psi is not None and radius is not None
+    spread = d_psi @ radius
+    scale = np.abs(psi) @ radius + spread if continuous else spread  # Ψ = I is exact in discrete time
+    return SharedDeltaB(psi, radius, inflate(-spread, spread, scale=scale, floor=0.0)[1])
 
 
 def inner_model(
@@ -144,7 +164,8 @@ class HullEstimator(Observer):
     ----------
     system : LTISystem
         Discrete- or continuous-time model without ``dA`` (for interval ``ΔA`` see
-        :func:`~intervalobs.tightness.hull_lower_bound`); an interval ``dB`` is bounded at every step.
+        :func:`~intervalobs.tightness.hull_lower_bound`); an interval ``dB`` is one unknown of each window
+        (``constant_dB``).
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
     horizon : int or None
@@ -171,6 +192,11 @@ class HullEstimator(Observer):
     solver : {"auto", "highs"}
         ``"auto"`` (default): the condensed LP's chain by the dense simplex first, HiGHS for what it gives up on;
         ``"highs"``: every LP by HiGHS. The boxes agree to the certificates' tolerance (both are certified).
+    constant_dB : bool
+        With an interval ``dB``: True (default) when the input matrix is constant in time (a motor's torque
+        constant): its error is then one set of unknowns shared by the steps of a window (module docstring),
+        which costs more per step; False when it may change from step to step: each step's noise box is then
+        widened by ``δΓ|u_j|`` (wider boxes). No effect without ``dB``.
 
     Notes
     -----
@@ -205,6 +231,7 @@ class HullEstimator(Observer):
         workers: int = 1,
         processes: int = 1,
         solver: Solver = "auto",
+        constant_dB: bool = True,
     ) -> None:
         if not isinstance(system, LTISystem):
             raise ArgumentTypeError(f"system: expected an LTISystem, got {type(system).__name__}")
@@ -230,14 +257,15 @@ class HullEstimator(Observer):
             raise DataError(f"processes: expected a positive integer, got {processes!r}")
         self.processes = int(processes)
         self.solver = as_solver(solver)
-        self._given = (system, bounds, horizon, h, filtered, window_boxes, workers, 1, self.solver)
+        self.constant_dB = bool(constant_dB)
+        self._given = (system, bounds, horizon, h, filtered, window_boxes, workers, 1, self.solver, self.constant_dB)
         # States in very different units: the LPs are solved in balanced coordinates x_b = S x (exact: S is
         # a diagonal of powers of two, systems/balancing.py); every box crosses between the two in _step.
         scales = state_scales(system, self.bounds)
         self.scales = np.ones(self.n) if scales is None else scales
         """``s`` of the balanced coordinates ``x_b = diag(s) x`` the LPs are solved in (ones: none)."""
         solved = (system, self.bounds) if scales is None else balanced(system, self.bounds, scales)
-        self.model = _outer_model(*solved, h)
+        self.model = _outer_model(*solved, h, self.constant_dB)
         self.h = float(h) if system.continuous and h is not None else float(system.dt or 1.0)
         self._windows: dict[int, SparseWindow] = {}
         self._condensed: CondensedWindowLP | None = None
@@ -261,6 +289,7 @@ class HullEstimator(Observer):
         workers: int = 1,
         processes: int = 1,
         solver: Solver = "auto",
+        constant_dB: bool = True,
     ) -> HullEstimator:
         """Build the estimator (there is no gain: the window LP of each step is the estimator).
 
@@ -284,6 +313,9 @@ class HullEstimator(Observer):
             Worker processes for the Monte Carlo runs of :meth:`run`.
         solver : {"auto", "highs"}
             ``"highs"``: every LP by HiGHS, the dense simplex bypassed (class docstring).
+        constant_dB : bool
+            With an interval ``dB``: one input-matrix error shared by each window (True) or free at every
+            step (class docstring).
 
         Returns
         -------
@@ -304,6 +336,7 @@ class HullEstimator(Observer):
             workers=workers,
             processes=processes,
             solver=solver,
+            constant_dB=constant_dB,
         )
 
     def condensed_allowed(self) -> bool:
@@ -546,6 +579,11 @@ class HullEstimator(Observer):
                 "certificates: needs the condensed window LP (finite horizon, box measurement noise, stable Φ, "
                 "window_boxes=False); see condensed_allowed()"
             )
+        if self.model.shared_dB is not None:
+            raise AssumptionError(
+                "certificates: with one constant ΔB for each window (constant_dB=True) a bound also rests on the "
+                "shared ΔB, so its multipliers are not a filter of the measurements alone; use constant_dB=False"
+            )
         times, ys, us = self._signals(t, y, u)
         if ys.ndim != 2:
             raise DimensionError(f"y: expected one record of shape (T, {self.p}), got shape {ys.shape}")
@@ -583,6 +621,7 @@ class HullEstimator(Observer):
             "window_boxes": self.window_boxes,
             "workers": self.workers,
             "solver": self.solver,
+            "constant_dB": self.constant_dB,
             "solver_path": [dict(path) for path in self._paths],
             "h": self.h,
             "transient_s": 0.0,

@@ -158,10 +158,14 @@ exponential is taken with the input columns :math:`[B_c, I]` (:math:`n` more uni
 which is the ``dGamma`` returned. Without :math:`\Delta A` (:math:`\delta\Gamma_I = 0`) each entry
 :math:`\sum_j (\Gamma_I)_{ij}\beta_{jk}` reaches :math:`\pm(|\Gamma_I|B_r)_{ik}` at a vertex of the
 :math:`\Delta B` box, so the radius is exact entry by entry. In discrete time :math:`\Gamma = B_c` and
-:math:`\delta\Gamma = B_r` exactly. The observers use :math:`(\Gamma \pm \delta\Gamma)u_k` at every
-step as a box for that step alone, i.e. as if :math:`\Delta B` could change from one step to the next:
-sound, but it forgets that the true :math:`\Delta B` is constant (a window estimator that kept one
-:math:`\Delta B` for the whole window could be narrower).
+:math:`\delta\Gamma = B_r` exactly. The recursive observers use :math:`(\Gamma \pm \delta\Gamma)u_k` at
+every step as a box for that step alone, i.e. as if :math:`\Delta B` could change from one step to the next:
+sound, but it forgets that the true :math:`\Delta B` is constant. A window estimator can keep one
+:math:`\beta = \Delta B - \Delta B_c` for the whole window: step :math:`k` adds :math:`\Gamma_I(\Delta A)\beta
+u_k`, linear in :math:`\beta` for known :math:`u`. For that the model also returns ``input_integral``
+:math:`= \Gamma_I` (the identity in discrete time) and ``d_input_integral`` :math:`= \delta\Gamma_I` (zero
+without :math:`\Delta A` and in discrete time), with :math:`|\Gamma_I(\Delta A) - \Gamma_I| \le
+\delta\Gamma_I`, and ``dB_radius`` :math:`= B_r` (rounded up by the rounding of :math:`B_c`).
 
 **Why not interval scaling and squaring.** The verified exponentials of interval matrices
 (Oppenheimer & Michel 1988: Taylor series with a norm remainder; Goldsztejn & Neumaier 2014: scaling
@@ -245,6 +249,12 @@ class SampledModel:
     first_order : object, optional
         The first-order data behind :meth:`dphi_in` (set by :func:`sampled_model` for a
         continuous-time system with interval ``dA``; None otherwise).
+    input_integral, d_input_integral : numpy.ndarray, shape (n, n), optional
+        With an interval ``dB``: :math:`\Gamma_I = \int_0^h e^{As}ds` (the identity in discrete time) and its
+        elementwise radius under :math:`\Delta A`, so that one step adds :math:`\Gamma_I(\Delta A)\beta u_k`
+        for :math:`\beta = \Delta B - \Delta B_c` (section 7 of the module docstring); None without.
+    dB_radius : numpy.ndarray, shape (n, m), optional
+        With an interval ``dB``: the radius :math:`B_r` of :math:`\beta`, rounded up; None without.
     """
 
     Phi: FloatArray
@@ -255,6 +265,9 @@ class SampledModel:
     noise_radius: FloatArray
     h: float
     first_order: _FirstOrder | None = field(default=None, repr=False, compare=False)
+    input_integral: FloatArray | None = field(default=None, repr=False, compare=False)
+    d_input_integral: FloatArray | None = field(default=None, repr=False, compare=False)
+    dB_radius: FloatArray | None = field(default=None, repr=False, compare=False)
 
     @property
     def uncertain(self) -> bool:
@@ -607,6 +620,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         b_rad = 0.5 * (system.dB[1] - system.dB[0])
     # Section 7: with an interval ΔB, the unit columns [B_c, I] give ∫e^{(A+ΔA)s}ds as well.
     unit = n if np.any(b_rad > 0) and system.continuous else 0
+    integral: tuple[FloatArray, FloatArray] | None = (np.eye(n), np.zeros((n, n))) if np.any(b_rad > 0) else None
     if not system.continuous:
         system.sampling_period(h)  # refuses an h other than dt
         first_order: _FirstOrder | None = None
@@ -644,6 +658,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
             m = m - unit
             gamma_i, d_gamma_i = gamma[:, m:], d_gamma[:, m:]
             gamma, d_gamma = gamma[:, :m], d_gamma[:, :m] + (np.abs(gamma_i) + d_gamma_i) @ b_rad
+            integral = (gamma_i, inflate(-d_gamma_i, d_gamma_i, floor=0.0)[1])
         _check_finite("dPhi", d_phi, step, a_mid)
         _check_finite("dGamma", d_gamma, step, a_mid)
         _check_finite("noise_radius", radius, step, a_mid)
@@ -652,7 +667,12 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     d_phi = inflate(-d_phi, d_phi, floor=0.0)[1]
     d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
     radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
-    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order)
+    if integral is None:
+        return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order)
+    # β = ΔB - ΔB_c lies in ±b_rad up to the rounding of the centre B + ΔB_c: pad relative to its terms
+    scale = np.abs(system.B) + np.abs(system.dB[0]) + np.abs(system.dB[1]) if system.dB is not None else b_rad
+    dB_radius = inflate(-b_rad, b_rad, scale=scale, floor=0.0)[1]
+    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order, *integral, dB_radius)
 
 
 @dataclass(frozen=True)
