@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+from pathlib import Path
 
 import pytest
 
@@ -40,3 +41,9 @@ def test_an_unknown_name_fails_at_decoration() -> None:
 def test_no_public_docstring_keeps_a_placeholder() -> None:
     left = [name for name, obj in public_objects().items() if "%(" in (inspect.getdoc(obj) or "")]
     assert left == []
+
+
+def test_every_shared_description_is_used() -> None:
+    package = Path(__file__).resolve().parents[1] / "src" / "intervalobs"
+    source = "\n".join(path.read_text(encoding="utf-8") for path in package.rglob("*.py"))
+    assert [name for name in DESCRIPTIONS if f"%({name})s" not in source] == []

@@ -102,7 +102,10 @@ DESCRIPTIONS: dict[str, str] = {
         "Returns\n-------\nnumpy.ndarray, shape (..., m)"
     ),
     "samples": "Parameters\n----------\nsteps : int\n    Number of samples.",
-    "meta": "Facts recorded in every :class:`~intervalobs.estimate.Estimate`.\n\nReturns\n-------\ndict",
+    "step_inputs": (
+        "Parameters\n----------\nu : numpy.ndarray, shape (..., m)\n    The known inputs of the steps.\n\n"
+        "Returns\n-------\nlower, upper : numpy.ndarray, shape (..., n) or (..., nw)"
+    ),
 }
 """Shared descriptions by name; a value is numpydoc text without indentation."""
 

@@ -112,34 +112,22 @@ class WindowModel:
         if self.shared_dB is not None and self.dGamma is None:
             raise AssumptionError("WindowModel: a shared input-matrix error (shared_dB) needs its dGamma")
 
+    @shared_docs
     def window_noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Box of the process noise in a window LP: :meth:`noise_box`, or with ``shared_dB`` only its residual.
 
-        Parameters
-        ----------
-        u : numpy.ndarray, shape (..., m)
-            The known inputs of the steps.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+        %(step_inputs)s
         """
         if self.shared_dB is None:
             return self.noise_box(u)
         spread = np.abs(u) @ self.shared_dB.residual.T
         return inflate(self.w_lo - spread, self.w_hi + spread, scale=np.abs(self.w_lo) + np.abs(self.w_hi) + spread)
 
+    @shared_docs
     def noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Box of ``x+ - Φx - Γu`` (``G`` None) or of ``w`` for the inputs ``u`` (shape (..., m)).
 
-        Parameters
-        ----------
-        u : numpy.ndarray, shape (..., m)
-            The known inputs of the steps.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+        %(step_inputs)s
             ``[w_lo - δΓ|u|, w_hi + δΓ|u|]`` rounded outward; ``[w_lo, w_hi]`` broadcast without ``dGamma``.
         """
         shape = (*np.shape(u)[:-1], self.w_lo.shape[0])
