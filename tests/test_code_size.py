@@ -83,6 +83,18 @@ def test_the_top_level_namespace_is_short_and_sorted() -> None:
     assert names == sorted(names, key=lambda s: (0 if s.isupper() else 1 if s[0].isupper() else 2, s))
 
 
+def test_the_top_level_namespace_has_no_per_paper_blocks() -> None:
+    """``__all__`` is one sorted list: no comment lines that group its names (by paper or otherwise)."""
+    source = (PACKAGE / "__init__.py").read_text(encoding="utf-8")
+    node = next(
+        n
+        for n in ast.parse(source).body
+        if isinstance(n, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__" for t in n.targets)
+    )
+    lines = source.splitlines()[node.lineno - 1 : node.end_lineno]
+    assert [line for line in lines if line.strip().startswith("#")] == []
+
+
 def test_the_measures_see_what_they_measure(tmp_path: Path) -> None:
     """The helpers find a long function, a nested one and both forms of a highspy import."""
     body = "\n".join(f"    x{i} = {i}" for i in range(FUNCTION_LINES))

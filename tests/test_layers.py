@@ -15,6 +15,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "intervalobs"
 LAYERS: dict[str, int] = {
     "errors": 0,
     "references": 0,
+    "_docstrings": 0,
     "interval": 1,
     "complex_interval": 1,
     "validation": 1,

@@ -3,7 +3,7 @@ import pytest
 
 from intervalobs import ContinuousNonlinearSystem, IntervalObserverError, LPVSystem, LTISystem, NonlinearSystem
 from intervalobs.errors import ArgumentError, BoundsError, DimensionError
-from intervalobs.systems import SampledSystem
+from intervalobs.systems import ReactionSystem, SampledSystem
 from intervalobs.systems.dimensions import ModelDimensions
 
 
@@ -57,12 +57,14 @@ def _models():
         lambda x, u, p: (x[1], -p[0] * x[0] + u[0]), lambda x, u: (x[0], x[1], x[0]), n=2, m=1, n_params=1, E=np.eye(2)
     )
     sampled = SampledSystem(np.zeros((4, 4)), np.eye(4)[:1], m=2)
+    reaction = ReactionSystem([[1.0, 0.0], [-2.0, 1.0], [0.0, -1.0]], measured=[1, 2], inlet=[0.0, 5.0, 1.0])
     return [
         ("lti", lti, (3, 1, 2, 0, 2, 4)),
         ("lpv", lpv, (3, 1, 2, 1, 3, 0)),
         ("nonlinear", nonlinear, (2, 2, 1, 1, 2, 1)),
         ("continuous-nonlinear", continuous, (2, 1, 3, 0, 2, 3)),
         ("sampled", sampled, (4, 2, 1, 0, 4, 1)),
+        ("reaction", reaction, (3, 1, 2, 2, 0, 2)),
     ]
 
 

@@ -141,23 +141,18 @@ def _campaigns(examples: dict[str, Example]) -> dict[str, Campaign]:
     return {name: c for name, c in found.items() if isinstance(c, Campaign)}
 
 
+_CAMPAIGN_OPTIONS = ("runs", "levels", "magnitudes", "scheduler", "workers", "seed")
+"""Options of ``intervalobs campaign`` passed on, by the same names, to :func:`~intervalobs.diagnosis.run_campaign`."""
+
+
 def _campaign(args: argparse.Namespace, campaign: Campaign) -> int:
     from .diagnosis import run_campaign
 
     out = args.out / args.name / "campaign"
     with warnings.catch_warnings():  # failed cells: one line each below
         warnings.filterwarnings("ignore", message=r"\d+ task\(s\) of .* raised", category=RuntimeWarning)
-        result = run_campaign(
-            campaign,
-            out,
-            runs=args.runs,
-            levels=args.levels,
-            magnitudes=args.magnitudes,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            seed=args.seed,
-            plots=not args.no_plots,
-        )
+        options = {name: getattr(args, name) for name in _CAMPAIGN_OPTIONS}
+        result = run_campaign(campaign, out, plots=not args.no_plots, **options)
     print(
         f"{args.name}: campaign of {result.runs} runs per cell, {result.computed} computed, {result.reused} reused, "
         f"{result.seconds:.1f} s ({result.tasks} tasks on {result.workers} workers) -> {out / 'psi.json'}"

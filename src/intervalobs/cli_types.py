@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any, TypeVar
 
 from .errors import IntervalObserverError
@@ -34,94 +33,50 @@ def _convert(check: Callable[[str, Any], T], text: str, parse: Callable[[str], A
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def count(text: str) -> int:
-    """A count of at least 1 (``--runs``, ``--workers``).
+def _option(
+    name: str, summary: str, check: Callable[[str, Any], T], parse: Callable[[str], Any] = str, kind: str = "str"
+) -> Callable[[str], T]:
+    """The converter ``name``: ``check`` applied to the parsed text, documented by ``summary`` and ``kind``."""
 
-    Parameters
-    ----------
-    text : str
-        The option's text.
+    def convert(text: str) -> T:
+        return _convert(check, text, parse)
 
-    Returns
-    -------
-    int
-    """
-    return _convert(as_count, text, int)
-
-
-def seed(text: str) -> int:
-    """A random seed: an integer of at least 0 (``--seed``).
-
-    Parameters
-    ----------
-    text : str
-        The option's text.
-
-    Returns
-    -------
-    int
-    """
-    return _convert(lambda name, value: as_count(name, value, minimum=0), text, int)
+    convert.__name__ = convert.__qualname__ = name
+    convert.__annotations__["return"] = kind  # what the signature shows (T is known only here)
+    convert.__doc__ = (
+        f"{summary}\n\nParameters\n----------\ntext : str\n    The option's text.\n\nReturns\n-------\n{kind}\n"
+    )
+    return convert
 
 
-def fraction(text: str) -> float:
-    """A fraction in [0, 1): a relative uncertainty level, 0.05 for ±5 % (``--levels``).
-
-    Parameters
-    ----------
-    text : str
-        The option's text.
-
-    Returns
-    -------
-    float
-    """
-    return _convert(as_fraction, text, float)
-
-
-def output_folder(text: str) -> Path:
-    """A folder results can be written into, checked before anything is computed (``--out``).
-
-    Parameters
-    ----------
-    text : str
-        The option's text.
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    return _convert(as_output_folder, text)
-
-
-def input_folder(text: str) -> Path:
-    """An existing folder to read from (``--results``).
-
-    Parameters
-    ----------
-    text : str
-        The option's text.
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    return _convert(lambda name, value: as_input_path(name, value, "folder"), text)
-
-
-def input_file(text: str) -> Path:
-    """An existing file to read.
-
-    Parameters
-    ----------
-    text : str
-        The option's text.
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    return _convert(as_input_path, text)
+count = _option("count", "A count of at least 1 (``--runs``, ``--workers``).", as_count, int, "int")
+seed = _option(
+    "seed",
+    "A random seed: an integer of at least 0 (``--seed``).",
+    lambda name, value: as_count(name, value, minimum=0),
+    int,
+    "int",
+)
+fraction = _option(
+    "fraction",
+    "A fraction in [0, 1): a relative uncertainty level, 0.05 for ±5 % (``--levels``).",
+    as_fraction,
+    float,
+    "float",
+)
+output_folder = _option(
+    "output_folder",
+    "A folder results can be written into, checked before anything is computed (``--out``).",
+    as_output_folder,
+    kind="pathlib.Path",
+)
+input_folder = _option(
+    "input_folder",
+    "An existing folder to read from (``--results``).",
+    lambda name, value: as_input_path(name, value, "folder"),
+    kind="pathlib.Path",
+)
+input_file = _option("input_file", "An existing file to read.", as_input_path, kind="pathlib.Path")
 
 
 def choice(choices: Sequence[str]) -> Callable[[str], str]:

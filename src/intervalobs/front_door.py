@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
+from ._docstrings import shared_docs
 from .errors import ArgumentError, AssumptionError, DesignError
 from .estimate import Estimate
 from .interval import matvec_bounds
@@ -61,15 +62,13 @@ HORIZON_RANGE = (10, 60)
 
 
 @dataclass(frozen=True)
+@shared_docs
 class Problem:
     """What :func:`observe` was given, checked: the model, its bounds and the record.
 
     Parameters
     ----------
-    system : LTISystem, LPVSystem or NonlinearSystem
-        The model.
-    bounds : Bounds
-        Boxes of the initial state and the noises.
+    %(model_bounds)s
     t : numpy.ndarray, shape (T,)
         Sample times.
     h : float or None
@@ -281,6 +280,7 @@ ESTIMATORS: tuple[Suitable, ...] = (
 uncertain input matrix (``dB``) only the rows marked ``uncertain_input`` fit."""
 
 
+@shared_docs
 def suggest(
     system: Any, bounds: Bounds, *, unknown_input: ArrayLike | None = None, h: float | None = None
 ) -> list[dict[str, str]]:
@@ -288,10 +288,7 @@ def suggest(
 
     Parameters
     ----------
-    system : LTISystem, LPVSystem or NonlinearSystem
-        The model.
-    bounds : Bounds
-        Boxes of the initial state and the noises.
+    %(model_bounds)s
     unknown_input : array_like, shape (n, q), optional
         Matrix through which unknown inputs enter an LTI model.
     h : float, optional

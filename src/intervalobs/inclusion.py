@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import interval
+from ._docstrings import shared_docs
 from .errors import DimensionError, IntervalObserverError
 
 __all__ = [
@@ -50,6 +51,7 @@ def _stack(values: Sequence[Any], lead: tuple[int, ...], name: str, size: int | 
     return np.stack([np.broadcast_to(np.asarray(v, dtype=float), lead) for v in values], axis=-1)
 
 
+@shared_docs
 def evaluate_function(
     func: VectorFunction, x: ArrayLike, size: int | None = None, name: str = "function"
 ) -> FloatArray:
@@ -62,10 +64,7 @@ def evaluate_function(
         flattened), returns a sequence of m components; a matrix product ``A @ x`` is such a function.
     x : array_like, shape (..., n)
         Points; leading axes are carried through.
-    size : int, optional
-        Expected number of returned components.
-    name : str
-        Name used in error messages.
+    %(size_name)s
 
     Returns
     -------
@@ -91,6 +90,7 @@ def evaluate_function(
     return values.reshape(*xa.shape[:-1], values.shape[-1])
 
 
+@shared_docs
 def interval_function(
     func: VectorFunction, lower: ArrayLike, upper: ArrayLike, size: int | None = None, name: str = "function"
 ) -> tuple[FloatArray, FloatArray]:
@@ -101,12 +101,8 @@ def interval_function(
     func : callable
         Component-convention vector function, written with the operations
         :class:`~intervalobs.interval.Interval` supports.
-    lower, upper : array_like, shape (..., n)
-        Boxes; leading axes are carried through.
-    size : int, optional
-        Expected number of returned components.
-    name : str
-        Name used in error messages.
+    %(boxes)s
+    %(size_name)s
 
     Returns
     -------
@@ -123,6 +119,7 @@ def interval_function(
     )
 
 
+@shared_docs
 def evaluate_matrix(
     func: MatrixFunction, x: ArrayLike, shape: tuple[int, int] | None = None, name: str = "jacobian"
 ) -> FloatArray:
@@ -134,10 +131,7 @@ def evaluate_matrix(
         Component convention: a sequence of n components to m rows of entries.
     x : array_like, shape (..., n)
         Points.
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(shape_name)s
 
     Returns
     -------
@@ -151,6 +145,7 @@ def evaluate_matrix(
     return np.stack([_stack(list(r), xa.shape[:-1], name, cols) for r in rows], axis=-2)
 
 
+@shared_docs
 def interval_matrix(
     func: MatrixFunction,
     lower: ArrayLike,
@@ -166,10 +161,7 @@ def interval_matrix(
         Component convention: a sequence of n components to m rows of entries.
     lower, upper : array_like, shape (..., n)
         Boxes.
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(shape_name)s
 
     Returns
     -------

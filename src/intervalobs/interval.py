@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._docstrings import shared_docs
 from .errors import AssumptionError, BoundsError, DimensionError
 
 __all__ = [
@@ -193,13 +194,11 @@ def recursion_margin(n: int, amplification: float = 1.0, contraction: float = 0.
     return max(ROUNDING_MARGIN, 8 * int(n) * _EPS * float(amplification) / (1.0 - float(contraction)))
 
 
+@shared_docs
 def pos(a: ArrayLike) -> FloatArray:
     """Positive part :math:`A^+ = \\max(A, 0)` (elementwise).
 
-    Parameters
-    ----------
-    a : array_like
-        Matrix or vector (any shape).
+    %(any_array)s
 
     Returns
     -------
@@ -209,13 +208,11 @@ def pos(a: ArrayLike) -> FloatArray:
     return np.maximum(np.asarray(a, dtype=float), 0.0)
 
 
+@shared_docs
 def neg(a: ArrayLike) -> FloatArray:
     """Negative part :math:`A^- = \\max(-A, 0)` (elementwise), so that ``A = pos(A) - neg(A)``.
 
-    Parameters
-    ----------
-    a : array_like
-        Matrix or vector (any shape).
+    %(any_array)s
 
     Returns
     -------

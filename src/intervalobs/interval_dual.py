@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._docstrings import shared_docs
 from .errors import DimensionError
 from .inclusion import MatrixFunction, VectorFunction
 from .interval import Interval, round_outward
@@ -101,13 +102,13 @@ class IntervalDual:
         self.derivative = derivative
 
     @classmethod
+    @shared_docs
     def variables(cls, lower: ArrayLike, upper: ArrayLike) -> list[IntervalDual]:
         """Seed the n variables of boxes ``[lower, upper]`` (shape ``(..., n)``): derivative of x_j is e_j.
 
         Parameters
         ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes; leading axes are carried through.
+        %(boxes)s
 
         Returns
         -------

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._docstrings import shared_docs
 from .errors import AssumptionError, BoundsError, DataError, DimensionError
 from .estimate import Estimate
 from .lp.certified import DenseLP, shrink_inward
@@ -77,6 +78,7 @@ class Tightness:
     widths: dict[str, FloatArray]
 
 
+@shared_docs
 def tightness_reference(
     system: LTISystem,
     bounds: Bounds,
@@ -99,12 +101,7 @@ def tightness_reference(
         The model.
     bounds : Bounds
         Its boxes.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
+    %(record)s
     h : float, optional
         Sampling period (continuous time).
     horizon : int or None
@@ -562,6 +559,7 @@ def delta_samples(system: LTISystem, count: int, seed: int) -> FloatArray:
     return np.array(picks).reshape(-1, n, n)
 
 
+@shared_docs
 def hull_lower_bound(
     system: LTISystem,
     bounds: Bounds,
@@ -592,12 +590,7 @@ def hull_lower_bound(
         The model (``dA`` optional: without it one sample, ``ΔA = 0``, is used).
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
+    %(record)s
     h : float, optional
         Sampling period of a continuous-time system.
     samples : int or array_like, shape (S, n, n)
@@ -778,6 +771,7 @@ def _inner_points(
     return values, paths, steps
 
 
+@shared_docs
 def robust_hull_lower_bound(
     system: LTISystem,
     bounds: Bounds,
@@ -811,12 +805,7 @@ def robust_hull_lower_bound(
         Model with an interval ``dA``.
     bounds : Bounds
         Boxes of ``x0``, ``w``, ``v``.
-    t : array_like, shape (T,)
-        Sample times.
-    y : array_like, shape (T, p)
-        Measurements of one run.
-    u : array_like, shape (T, m), optional
-        Known inputs.
+    %(record)s
     h : float, optional
         Sampling period of a continuous-time system.
     candidates : array_like, shape (S, n, n) or (T, S, n, n), optional

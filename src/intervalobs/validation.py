@@ -20,6 +20,7 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._docstrings import shared_docs
 from .errors import ArgumentError, ArgumentTypeError, BoundsError, DataError, DimensionError, FileError
 
 __all__ = [
@@ -53,6 +54,7 @@ def _named(name: str, message: str) -> str:
     return f"{name}: {message}" if name else message
 
 
+@shared_docs
 def as_array(name: str, value: ArrayLike) -> FloatArray:
     """Convert ``value`` to a float array of any shape, refusing what the conversion would lose.
 
@@ -60,10 +62,7 @@ def as_array(name: str, value: ArrayLike) -> FloatArray:
     ``"0.1"`` into numbers; both hide a mistake of the caller, so both are refused. Complex values whose
     imaginary parts are all exactly zero lose nothing and are accepted.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like
         The user's value.
 
@@ -101,15 +100,13 @@ def as_array(name: str, value: ArrayLike) -> FloatArray:
         raise ArgumentTypeError(_named(name, f"expected a numeric array, got {type(value).__name__}")) from exc
 
 
+@shared_docs
 def as_matrix(
     name: str, value: ArrayLike, shape: tuple[int | None, int | None] = (None, None), finite: bool = True
 ) -> FloatArray:
     """Convert ``value`` to a 2-D float array and check its shape.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like
         Matrix; a scalar or a 1-D array is accepted where the expected shape makes it unambiguous
         (a scalar for a 1×1 matrix, a 1-D array for one row or one column).
@@ -140,13 +137,11 @@ def as_matrix(
     return arr
 
 
+@shared_docs
 def as_vector(name: str, value: ArrayLike, size: int | None = None, finite: bool = True) -> FloatArray:
     """Convert ``value`` to a 1-D float array of length ``size`` (a scalar is broadcast).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like
         The user's value.
     size : int, optional
@@ -175,15 +170,13 @@ def as_vector(name: str, value: ArrayLike, size: int | None = None, finite: bool
     return arr
 
 
+@shared_docs
 def as_box(
     name: str, value: Sequence[ArrayLike] | tuple[ArrayLike, ArrayLike], size: int | None = None
 ) -> tuple[FloatArray, FloatArray]:
     """Convert a ``(lower, upper)`` pair to two finite vectors with ``lower <= upper``.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : tuple of array_like
         ``(lower, upper)``; scalars are broadcast to ``size``.
     size : int, optional
@@ -206,16 +199,14 @@ def as_box(
     return lower, upper
 
 
+@shared_docs
 def as_time(name: str, value: ArrayLike) -> FloatArray:
     """Convert a time vector: 1-D, finite, strictly increasing, at least one sample.
 
     Datetimes and durations (NumPy ``datetime64``/``timedelta64``, a pandas ``DatetimeIndex`` or
     ``TimedeltaIndex``) become seconds, datetimes counted from the first sample.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like
         The user's time vector.
 
@@ -240,6 +231,7 @@ def as_time(name: str, value: ArrayLike) -> FloatArray:
     return arr
 
 
+@shared_docs
 def as_signal(
     name: str,
     value: ArrayLike,
@@ -257,10 +249,7 @@ def as_signal(
     ignored; a model whose names are the defaults ``y1``, ``y2`` … takes as many columns by
     position), in order otherwise, and its time index, when it has one, must be ``t``.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like, pandas.Series, pandas.DataFrame or xarray.DataArray
         The user's signal.
     steps : int
@@ -296,13 +285,11 @@ def as_signal(
     return arr
 
 
+@shared_docs
 def check_finite(name: str, values: FloatArray, missing: bool = False) -> None:
     """Refuse NaN and inf in a signal; with ``missing``, a row (last axis) entirely NaN is a missing sample.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     values : numpy.ndarray, shape (..., width)
         The signal (one sample or a record).
     missing : bool
@@ -323,6 +310,7 @@ def check_finite(name: str, values: FloatArray, missing: bool = False) -> None:
         raise DataError(f"{name}: expected finite values{allowed}, got NaN or inf at index {where}")
 
 
+@shared_docs
 def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> FloatArray:
     """The true state of a record, time-first, from an array, a simulation or a python-control response.
 
@@ -333,10 +321,7 @@ def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> Floa
     three carry times, which must be ``t``, and state labels, which select
     the states by ``names`` when they are all there (in order otherwise).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : array_like, Simulation, control.TimeResponseData, pandas.DataFrame or xarray.DataArray
         The truth.
     t : numpy.ndarray, shape (T,)
@@ -374,13 +359,11 @@ def as_truth(name: str, value: Any, t: FloatArray, names: Sequence[str]) -> Floa
     return as_array(name, _select_channels(name, values, times, channels, t=t, names=names))
 
 
+@shared_docs
 def as_names(name: str, value: Sequence[str] | None, size: int, prefix: str) -> tuple[str, ...]:
     """Names of ``size`` channels: the given ones, or ``prefix1 … prefixN`` when None.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : sequence of str or None
         The user's names: distinct, non-empty strings, one per channel.
     size : int
@@ -536,13 +519,11 @@ def _describe(value: object) -> str:
     )
 
 
+@shared_docs
 def as_count(name: str, value: object, minimum: int = 1) -> int:
     """Check that ``value`` is an integer of at least ``minimum`` (runs, workers, a seed, a batch size).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : object
         The user's value; a ``bool`` or a float is refused even when it is integral.
     minimum : int
@@ -572,24 +553,15 @@ def _as_real(name: str, value: object, expected: str) -> float:
     return float(value)
 
 
+@shared_docs
 def as_fraction(name: str, value: object) -> float:
     """Check that ``value`` is a fraction in [0, 1) (a relative uncertainty level: 0.05 means ±5 %).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : object
         The user's value.
 
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ArgumentTypeError
-        When ``value`` is not a real number.
+    %(not_real)s
     ArgumentError
         When ``value`` is outside [0, 1).
     """
@@ -600,26 +572,17 @@ def as_fraction(name: str, value: object) -> float:
     return fraction
 
 
+@shared_docs
 def as_positive(name: str, value: object, what: str = "a positive number") -> float:
     """Check that ``value`` is a finite real number > 0 (a sampling period, a step, a time-out).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : object
         The user's value; text such as ``"0.1"`` is refused.
     what : str
         What the value is, for the message ("a positive sampling period").
 
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ArgumentTypeError
-        When ``value`` is not a real number.
+    %(not_real)s
     ArgumentError
         When ``value`` is not finite and positive.
     """
@@ -629,13 +592,11 @@ def as_positive(name: str, value: object, what: str = "a positive number") -> fl
     return number
 
 
+@shared_docs
 def as_choice(name: str, value: T, choices: Sequence[T]) -> T:
     """Check that ``value`` is one of ``choices`` (a method name, an objective, an example).
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : object
         The user's value.
     choices : sequence
@@ -644,7 +605,7 @@ def as_choice(name: str, value: T, choices: Sequence[T]) -> T:
     Returns
     -------
     object
-        ``value``.
+        ``value``, one of ``choices``.
 
     Raises
     ------
@@ -656,13 +617,11 @@ def as_choice(name: str, value: T, choices: Sequence[T]) -> T:
     return value
 
 
+@shared_docs
 def as_instance(name: str, value: object, kind: type[T], what: str) -> T:
     """Check that ``value`` is an instance of ``kind``.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     value : object
         The user's value.
     kind : type
@@ -673,7 +632,7 @@ def as_instance(name: str, value: object, kind: type[T], what: str) -> T:
     Returns
     -------
     object
-        ``value``.
+        ``value``, an instance of ``kind``.
 
     Raises
     ------
@@ -704,22 +663,21 @@ def check_both_or_neither(first: tuple[str, object], second: tuple[str, object])
         raise ArgumentError(f"{name1}, {name2}: expected both or neither, got {given} without {missing}")
 
 
+@shared_docs
 def as_output_folder(name: str, path: str | Path) -> Path:
     """Check, before anything is computed, that results can be written into the folder ``path``.
 
     The folder need not exist: its nearest existing ancestor must be a folder in which a file can
     be created (tried with a temporary file, which is removed). Nothing is created.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     path : str or pathlib.Path
         The output folder.
 
     Returns
     -------
     pathlib.Path
+        ``path``, which may not exist yet.
 
     Raises
     ------
@@ -742,13 +700,11 @@ def as_output_folder(name: str, path: str | Path) -> Path:
     return folder
 
 
+@shared_docs
 def as_input_path(name: str, path: str | Path, kind: Literal["file", "folder"] = "file") -> Path:
     """Check that the file (or folder) ``path`` exists.
 
-    Parameters
-    ----------
-    name : str
-        Argument name used in error messages.
+    %(argument_name)s
     path : str or pathlib.Path
         A file or folder to read.
     kind : {"file", "folder"}
@@ -757,6 +713,7 @@ def as_input_path(name: str, path: str | Path, kind: Literal["file", "folder"] =
     Returns
     -------
     pathlib.Path
+        ``path``.
 
     Raises
     ------

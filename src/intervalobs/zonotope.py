@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._docstrings import shared_docs
 from .errors import BoundsError, DimensionError
 from .validation import as_matrix, as_vector
 
@@ -258,35 +259,23 @@ class Zonotope:
         r = hull_radius(self.generators)
         return self.center - r, self.center + r
 
+    @shared_docs
     def frobenius_radius(self, weight: ArrayLike | None = None) -> float:
         r"""Weighted Frobenius radius :math:`\|R\|_{F,W} = \sqrt{\mathrm{tr}(R^\top W R)}` (Definition A.3).
 
-        Parameters
-        ----------
-        weight : array_like, shape (n, n), optional
-            Symmetric positive definite :math:`W` (default identity).
-
-        Returns
-        -------
-        float
+        %(weight)s
         """
         w = self._weight(weight)
         return float(np.sqrt(max(np.trace(self.generators.T @ w @ self.generators), 0.0)))
 
+    @shared_docs
     def w_radius(self, weight: ArrayLike | None = None) -> float:
         r"""W-radius :math:`\max_{s \in [-1,1]^m} s^\top R^\top W R s`: the zonotope's size in the weight ``W``.
 
         The maximum of a convex quadratic over a box is attained at a vertex; the vertices are
         enumerated, so this is exact and limited to 20 generators (reduce first).
 
-        Parameters
-        ----------
-        weight : array_like, shape (n, n), optional
-            Symmetric positive definite :math:`W` (default identity).
-
-        Returns
-        -------
-        float
+        %(weight)s
 
         References
         ----------

@@ -31,6 +31,7 @@ from scipy import sparse
 from scipy.optimize import linprog
 from scipy.signal import place_poles
 
+from .._docstrings import shared_docs
 from ..errors import DesignError
 from ..lp.certified import LP_OPTIONS
 from ..systems.sampling import SampledModel
@@ -404,6 +405,7 @@ def _noise_floor(model: SampledModel, T: FloatArray) -> float:
     return float(np.sum(np.abs(np.linalg.inv(T)) @ (np.abs(T) @ model.noise_radius)))
 
 
+@shared_docs
 def design_framer(
     model: SampledModel,
     C: FloatArray,
@@ -415,12 +417,7 @@ def design_framer(
 
     Parameters
     ----------
-    model : SampledModel
-        Sampled interval model.
-    C, F : numpy.ndarray
-        Output and measurement-noise matrices.
-    v_radius : numpy.ndarray
-        Radius of the measurement-noise box.
+    %(sampled_model)s
     candidates : dict of str to numpy.ndarray, optional
         Coordinate changes to try (default :func:`coordinate_candidates`).
 

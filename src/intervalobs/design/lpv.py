@@ -39,7 +39,7 @@ from __future__ import annotations
 import itertools
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import cvxpy as cp
@@ -853,19 +853,7 @@ def verify_boundedness(
             fl[sl], fu[sl], dl[sl][None, None], du[sl][None, None], masks[:, None, None, :], masks[None, :, None, :]
         )
         worst = max(worst, float(np.max(_block_max_eig(cert.P, cert.Q, cert.gamma, cert.eps1 + cert.eps2, g, eta))))
-    return BoundednessCertificate(
-        P=cert.P,
-        Q=cert.Q,
-        gamma=cert.gamma,
-        eps1=cert.eps1,
-        eps2=cert.eps2,
-        solver_status=cert.solver_status,
-        coarse_margin=cert.coarse_margin,
-        second_block_margin=cert.second_block_margin,
-        fine_margin=worst,
-        fine_points=int(dl.shape[0]),
-        subsets=len(masks) ** 2,
-    )
+    return replace(cert, fine_margin=worst, fine_points=int(dl.shape[0]), subsets=len(masks) ** 2)
 
 
 def __getattr__(name: str) -> Any:

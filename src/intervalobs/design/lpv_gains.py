@@ -251,25 +251,30 @@ def _check_r(r: FloatArray, p: int) -> None:
         raise AssumptionError("R: expected the form ((R11, 0), (R21, I)), the identity on the unmeasured states")
 
 
+def _first_negative(block: FloatArray, points: FloatArray, offset: tuple[int, int]) -> str | None:
+    """``"got <value> at entry (i, j), theta = [...]"`` of the first negative entry over the points, or None."""
+    if not np.any(block < 0):
+        return None
+    k, i, j = np.argwhere(block < 0)[0]
+    return f"got {block[k, i, j]:.3g} at entry ({i + offset[0]}, {j + offset[1]}), theta = {points[k].tolist()}"
+
+
 def _structure_check(a_r: FloatArray, points: FloatArray, p: int) -> None:
     """(17) A_R12 ≥ 0 and (18) A_R22 Metzler at every point."""
-    a12 = a_r[:, :p, p:]
-    if np.any(a12 < 0):
-        k, i, j = np.argwhere(a12 < 0)[0]
+    found = _first_negative(a_r[:, :p, p:], points, (0, p))
+    if found:
         raise DesignError(
-            f"coordinates R: the unmeasured states must push the measured ones up, expected (RA)[:p, p:] >= 0, "
-            f"got {a12[k, i, j]:.3g} at entry ({i}, {j + p}), "
-            f"theta = {points[k].tolist()}; choose R (R11) so that R11 A12 >= 0"
+            "coordinates R: the unmeasured states must push the measured ones up, expected (RA)[:p, p:] >= 0, "
+            f"{found}; choose R (R11) so that R11 A12 >= 0"
         )
     a22 = a_r[:, p:, p:].copy()
     m = a22.shape[-1]
     a22[:, np.arange(m), np.arange(m)] = 0.0
-    if np.any(a22 < 0):
-        k, i, j = np.argwhere(a22 < 0)[0]
+    found = _first_negative(a22, points, (p, p))
+    if found:
         raise DesignError(
-            f"coordinates R: the unmeasured states must stay ordered, expected (RA)[p:, p:] Metzler, "
-            f"got {a22[k, i, j]:.3g} at entry ({i + p}, {j + p}), "
-            f"theta = {points[k].tolist()}; choose R21 so that R21 A12 + A22 is Metzler"
+            f"coordinates R: the unmeasured states must stay ordered, expected (RA)[p:, p:] Metzler, {found}; "
+            "choose R21 so that R21 A12 + A22 is Metzler"
         )
 
 

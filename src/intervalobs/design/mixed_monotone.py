@@ -55,6 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, BoundsError, DimensionError
 from ..inclusion import MatrixFunction, VectorFunction, evaluate_function, interval_matrix
 from ..interval import inflate
@@ -74,6 +75,7 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+@shared_docs
 def jacobian_bounds(
     jacobian: MatrixFunction,
     lower: ArrayLike,
@@ -91,12 +93,8 @@ def jacobian_bounds(
     ----------
     jacobian : callable
         Component-convention matrix function: a sequence of n components to m rows of n entries.
-    lower, upper : array_like, shape (..., n)
-        Boxes; leading axes are carried through.
-    shape : tuple of int, optional
-        Expected (m, n).
-    name : str
-        Name used in error messages.
+    %(boxes)s
+    %(shape_name)s
 
     Returns
     -------
@@ -128,7 +126,7 @@ def lipschitz_bound(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
     Parameters
     ----------
     j_lower, j_upper : array_like, shape (..., m, n)
-        Jacobian bounds.
+        The interval matrix (Jacobian bounds).
 
     Returns
     -------
@@ -181,7 +179,7 @@ def width_matrix(j_lower: ArrayLike, j_upper: ArrayLike) -> FloatArray:
     Parameters
     ----------
     j_lower, j_upper : array_like, shape (..., m, n)
-        Jacobian bounds.
+        Jacobian bounds, as from :func:`jacobian_bounds`.
 
     Returns
     -------
@@ -355,16 +353,11 @@ class JacobianDecomposition:
         """:math:`\\|W_q\\|_2`."""
         return float(inflate(0.0, np.linalg.norm(self.W, ord=2), floor=0.0)[1])
 
+    @shared_docs
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         r"""Evaluate :math:`q_d(x, y)` (no rounding margin; for analysis and tests).
 
-        Parameters
-        ----------
-        x, y : array_like, shape (..., n)
-
-        Returns
-        -------
-        numpy.ndarray, shape (..., m)
+        %(pair_arguments)s
         """
         xa = np.asarray(x, dtype=float)
         ya = np.asarray(y, dtype=float)
@@ -372,17 +365,11 @@ class JacobianDecomposition:
         zeta = np.where(first, xa[..., None, :], ya[..., None, :])
         return _diagonal_evaluate(self.func, zeta, first.shape[0], "function") + (xa - ya) @ c.T
 
+    @shared_docs
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Outward-rounded :math:`(q_d(\\underline x, \\overline x), q_d(\\overline x, \\underline x))`.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes; leading axes are carried through.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., m)
+        %(boxes_range)s
         """
         return decomposition_bounds(self.func, lower, upper, self.j_lower, self.j_upper)
 
@@ -434,32 +421,21 @@ class VertexDecomposition:
             )
         return cls(func, np.where(a >= 0, np.where(b > 0, 1.0, 0.0), -1.0))
 
+    @shared_docs
     def __call__(self, x: ArrayLike, y: ArrayLike) -> FloatArray:
         """Evaluate :math:`q_d(x, y)`.
 
-        Parameters
-        ----------
-        x, y : array_like, shape (..., n)
-
-        Returns
-        -------
-        numpy.ndarray, shape (..., m)
+        %(pair_arguments)s
         """
         xa = np.asarray(x, dtype=float)
         ya = np.asarray(y, dtype=float)
         zeta = np.where(self.signs >= 0, xa[..., None, :], ya[..., None, :])
         return _diagonal_evaluate(self.func, zeta, self.signs.shape[0], "function")
 
+    @shared_docs
     def bounds(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The exact range of ``func`` over the boxes, outward-rounded.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes; leading axes are carried through.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., m)
+        %(boxes_range)s
         """
         return inflate(self(lower, upper), self(upper, lower))

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linear_sum_assignment
 from scipy.signal import place_poles
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..validation import as_choice, as_matrix
 from .lmi import solve_lmi
@@ -109,33 +110,21 @@ class Disk:
         c = complex(self.center)
         return abs(c) ** 2 - self.radius**2, complex(-c.real, c.imag), 1.0
 
+    @shared_docs
     def characteristic(self, s: complex | ComplexArray) -> Any:
         """The region's function :math:`R_{00} + 2\\operatorname{Re}(R_{10}s) + |s|^2`; negative inside.
 
-        Parameters
-        ----------
-        s : complex or numpy.ndarray
-            Point(s) of the complex plane.
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         r00, r10, r11 = self.R
         s_arr = np.asarray(s, dtype=complex)
         return r00 + 2 * (r10 * s_arr).real + r11 * np.abs(s_arr) ** 2
 
+    @shared_docs
     def margin(self, s: complex | ComplexArray) -> Any:
         """Distance from ``s`` to the disk's boundary, positive inside: ``r - |s - c|``.
 
-        Parameters
-        ----------
-        s : complex or numpy.ndarray
-            Point(s) of the complex plane.
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         return self.radius - np.abs(np.asarray(s, dtype=complex) - complex(self.center))
 
@@ -158,17 +147,11 @@ class _LinearRegion:
         """
         raise NotImplementedError
 
+    @shared_docs
     def characteristic(self, s: complex | ComplexArray) -> Any:
         """Largest eigenvalue of :math:`R_{00} + R_{10}s + (R_{10}s)^H` (eq. (6)); negative inside.
 
-        Parameters
-        ----------
-        s : complex or numpy.ndarray
-            Point(s) of the complex plane.
-
-        Returns
-        -------
-        float or numpy.ndarray
+        %(complex_value)s
         """
         r00, r10 = self.matrices()
         s_arr = np.asarray(s, dtype=complex)
@@ -176,17 +159,11 @@ class _LinearRegion:
         value = r00 + term + np.conj(np.swapaxes(term, -1, -2))
         return np.linalg.eigvalsh(value)[..., -1]
 
+    @shared_docs
     def contains(self, s: complex | ComplexArray) -> Any:
         """True strictly inside the region.
 
-        Parameters
-        ----------
-        s : complex or numpy.ndarray
-            Point(s) of the complex plane.
-
-        Returns
-        -------
-        bool or numpy.ndarray
+        %(complex_inside)s
         """
         return self.characteristic(s) < 0
 
@@ -410,6 +387,7 @@ def canonical_eigenvectors(vectors: ArrayLike) -> ComplexArray:
     return np.asarray(vecs, dtype=complex)
 
 
+@shared_docs
 def modal_decomposition(
     A: ArrayLike, C: ArrayLike, L: ArrayLike, order: Sequence[complex] | None = None
 ) -> ModalDecomposition:
@@ -417,10 +395,7 @@ def modal_decomposition(
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-        State matrix.
-    C : array_like, shape (p, n)
-        Output matrix.
+    %(state_output)s
     L : array_like, shape (n, p)
         Gain.
     order : sequence of complex, optional
@@ -669,6 +644,7 @@ def _place_block(
     return gain, block, steps
 
 
+@shared_docs
 def place_in_disks(
     A: ArrayLike, C: ArrayLike, disks: Sequence[Disk | tuple[complex, float]], objective: str = "min_gain"
 ) -> RegionPlacement:
@@ -684,10 +660,7 @@ def place_in_disks(
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-        State matrix.
-    C : array_like, shape (p, n)
-        Output matrix.
+    %(state_output)s
     disks : sequence of Disk or (centre, radius)
         ``n`` disks, closed under complex conjugation, each in the open left half-plane
         (``Re c + r <= 0``).

@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 from scipy.linalg import solve_discrete_are
 from scipy.optimize import minimize
 
+from .._docstrings import shared_docs
 from ..errors import ArgumentError
 from ..systems.sampling import SampledModel
 from .cooperative import real_modal_form
@@ -384,6 +385,7 @@ def _kalman_gain(model: SampledModel, C: FloatArray, q: FloatArray, r: FloatArra
     return np.asarray(model.Phi @ p @ C.T @ np.linalg.inv(C @ p @ C.T + r))
 
 
+@shared_docs
 def design_tube_gain(
     model: SampledModel,
     C: FloatArray,
@@ -409,12 +411,7 @@ def design_tube_gain(
 
     Parameters
     ----------
-    model : SampledModel
-        Sampled interval model.
-    C, F : numpy.ndarray
-        Output and measurement-noise matrices.
-    v_radius : numpy.ndarray
-        Measurement-noise radius.
+    %(sampled_model)s
     extra : dict of str to numpy.ndarray, optional
         More gains to compare.
 

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import place_poles
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, DesignError, DimensionError
 from ..validation import as_matrix, as_vector
 from .regions import canonical_eigenvectors
@@ -145,6 +146,12 @@ class UIOCoordinates:
     tried: dict[str, float] = field(default_factory=dict)
 
 
+def _state_and_output(A: ArrayLike, C: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """``A`` and ``C`` as float matrices, ``C`` checked to have as many columns as ``A`` has rows."""
+    a = as_matrix("A", A)
+    return a, as_matrix("C", C, (None, a.shape[0]))
+
+
 def _rank(m: FloatArray) -> int:
     if m.size == 0:
         return 0
@@ -175,15 +182,13 @@ def _undetectable_modes(a: FloatArray, c: FloatArray) -> list[complex]:
     return bad
 
 
+@shared_docs
 def uio_decoupling(A: ArrayLike, C: ArrayLike, D: ArrayLike, W: ArrayLike | None = None) -> UIODecoupling:
     r"""Decoupling matrices ``E``, ``P`` that remove the unknown input from the error, their conditions checked.
 
     Parameters
     ----------
-    A : array_like, shape (n, n)
-        State matrix.
-    C : array_like, shape (p, n)
-        Output matrix.
+    %(state_output)s
     D : array_like, shape (n, q)
         Unknown-input matrix.
     W : array_like, shape (n, p), optional
@@ -271,9 +276,8 @@ def uio_constraint_matrices(A: ArrayLike, C: ArrayLike, D: ArrayLike) -> tuple[F
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): eqs. (23)–(24); Hypothesis 4.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     d = as_matrix("D", D, (n, None))
     p, q = c.shape[0], d.shape[1]
     cd = c @ d
@@ -486,6 +490,7 @@ def asymptotic_state_width(
     return np.asarray(np.abs(coords.S) @ rho_w + 2 * np.abs(decoupling.E) @ delta_radius)
 
 
+@shared_docs
 def check_cooperative(
     A: ArrayLike, C: ArrayLike, decoupling: UIODecoupling, K: ArrayLike, T: ArrayLike | None = None
 ) -> UIOCoordinates:
@@ -496,10 +501,7 @@ def check_cooperative(
 
     Parameters
     ----------
-    A, C : array_like
-        System matrices.
-    decoupling : UIODecoupling
-        From :func:`uio_decoupling`.
+    %(uio_decoupled)s
     K : array_like, shape (n, p)
         Output-injection gain.
     T : array_like, shape (n, n), optional
@@ -519,9 +521,8 @@ def check_cooperative(
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     k = as_matrix("K", K, (n, c.shape[0]))
     t = None if T is None else as_matrix("T", T, (n, n))
     if t is not None and np.linalg.cond(t) > 1e12:
@@ -578,6 +579,7 @@ def _placed(
     return UIOCoordinates(**{**coords.__dict__, "score": score})
 
 
+@shared_docs
 def design_uio_coordinates(
     A: ArrayLike,
     C: ArrayLike,
@@ -598,10 +600,7 @@ def design_uio_coordinates(
 
     Parameters
     ----------
-    A, C : array_like
-        System matrices.
-    decoupling : UIODecoupling
-        From :func:`uio_decoupling`.
+    %(uio_decoupled)s
     omega_radius : array_like, shape (n,)
         Radius of the state-noise box, used to score candidates.
     delta_radius : array_like, shape (p,)
@@ -623,9 +622,8 @@ def design_uio_coordinates(
     ----------
     The aircraft UIO paper (:mod:`intervalobs.references`): Hypothesis 6.
     """
-    a = as_matrix("A", A)
+    a, c = _state_and_output(A, C)
     n = a.shape[0]
-    c = as_matrix("C", C, (None, n))
     om = as_vector("omega_radius", omega_radius, n)
     de = as_vector("delta_radius", delta_radius, c.shape[0])
     pa = decoupling.P @ a

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._docstrings import shared_docs
 from ..systems.bounds import Bounds
 from ..systems.nonlinear import NonlinearSystem
 
@@ -118,20 +119,19 @@ def paper_bounds() -> Bounds:
     return Bounds(x0=X0_BOX, w=(-NOISE, NOISE), v=(-NOISE, NOISE))
 
 
+@shared_docs
 def paper_input(steps: int = STEPS) -> FloatArray:
     """Our unknown input for the paper's system, shape (steps, 2): a sinusoid with a step, and a ramp-sine.
 
     The paper shows its inputs only in Fig. 1; these are of similar size and shape. The observer is not
     told any bound on them.
 
-    Parameters
-    ----------
-    steps : int
-        Number of samples.
+    %(samples)s
 
     Returns
     -------
     numpy.ndarray, shape (steps, 2)
+        One row per sample.
     """
     k = np.arange(steps, dtype=float)
     d1 = 1.5 * np.sin(0.05 * k) + np.where(k >= steps // 2, 1.0, 0.0)
@@ -191,17 +191,16 @@ def fullrank_bounds() -> Bounds:
     return Bounds(x0=FULLRANK_X0_BOX, w=(-w, w), v=(-v, v))
 
 
+@shared_docs
 def fullrank_input(steps: int = 200) -> FloatArray:
     """Unknown input for :func:`fullrank_system`.
 
-    Parameters
-    ----------
-    steps : int
-        Number of samples.
+    %(samples)s
 
     Returns
     -------
     numpy.ndarray, shape (steps, 1)
+        The input, sample by sample.
     """
     k = np.arange(steps, dtype=float)
     return (2.0 * np.sin(0.07 * k) + np.where((k > 60) & (k < 120), 1.5, 0.0))[:, None]
@@ -255,17 +254,16 @@ def two_hidden_bounds() -> Bounds:
     )
 
 
+@shared_docs
 def two_hidden_input(steps: int = 150) -> FloatArray:
     """Unknown inputs for :func:`two_hidden_system`: a sinusoid, a step and a slow cosine (unbounded for the observer).
 
-    Parameters
-    ----------
-    steps : int
-        Number of samples.
+    %(samples)s
 
     Returns
     -------
     numpy.ndarray, shape (steps, 3)
+        The sinusoid, the step and the cosine, one column each.
     """
     k = np.arange(steps, dtype=float)
     return np.stack([1.5 * np.sin(0.1 * k), np.where(k > 60, 1.0, -0.5), 0.8 * np.cos(0.05 * k)], axis=1)

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import sparse
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError
 from ..interval import ROUNDING_MARGIN, inflate, matvec_bounds
 from .certified import centred_bounds, dual_bounds, highs_model, new_highs, run_highs
@@ -111,34 +112,22 @@ class WindowModel:
         if self.shared_dB is not None and self.dGamma is None:
             raise AssumptionError("WindowModel: a shared input-matrix error (shared_dB) needs its dGamma")
 
+    @shared_docs
     def window_noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Box of the process noise in a window LP: :meth:`noise_box`, or with ``shared_dB`` only its residual.
 
-        Parameters
-        ----------
-        u : numpy.ndarray, shape (..., m)
-            The known inputs of the steps.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+        %(step_inputs)s
         """
         if self.shared_dB is None:
             return self.noise_box(u)
         spread = np.abs(u) @ self.shared_dB.residual.T
         return inflate(self.w_lo - spread, self.w_hi + spread, scale=np.abs(self.w_lo) + np.abs(self.w_hi) + spread)
 
+    @shared_docs
     def noise_box(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Box of ``x+ - Φx - Γu`` (``G`` None) or of ``w`` for the inputs ``u`` (shape (..., m)).
 
-        Parameters
-        ----------
-        u : numpy.ndarray, shape (..., m)
-            The known inputs of the steps.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray, shape (..., n) or (..., nw)
+        %(step_inputs)s
             ``[w_lo - δΓ|u|, w_hi + δΓ|u|]`` rounded outward; ``[w_lo, w_hi]`` broadcast without ``dGamma``.
         """
         shape = (*np.shape(u)[:-1], self.w_lo.shape[0])
@@ -172,6 +161,7 @@ class WindowModel:
         return inflate(lo + drive, hi + drive, 8 * ROUNDING_MARGIN)
 
 
+@shared_docs
 class SparseWindowLP(RecordsPath):
     """The hull LP over a window of ``H`` steps, built once; each step changes only bounds and costs.
 
@@ -186,13 +176,7 @@ class SparseWindowLP(RecordsPath):
     inputs and are set at every step (:meth:`set_inputs`). The true ``ΔB`` is constant over the record, hence
     over every window, so the LP's set still contains the truth.
 
-    Parameters
-    ----------
-    model : WindowModel
-    horizon : int
-        Window length ``H`` (steps).
-    points : int
-        Points of the prior's convex hull (0: the prior is a box).
+    %(window)s
     """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:
@@ -424,16 +408,11 @@ class SparseWindowLP(RecordsPath):
         return ok, x + self.centre if x.size == self.ncol else x
 
 
+@shared_docs
 class SparseWindow:
     """Fills the bounds of a :class:`SparseWindowLP` for step ``k`` from the record and the stored boxes.
 
-    Parameters
-    ----------
-    model : WindowModel
-    horizon : int
-        Window length ``H`` (steps).
-    points : int
-        Points of the prior's convex hull (0: the prior is a box).
+    %(window)s
     """
 
     def __init__(self, model: WindowModel, horizon: int, points: int = 0) -> None:

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import ThreadpoolController
 
-from ..errors import ArgumentTypeError, DataError, DivergenceWarning, InconsistentDataError
+from ..errors import ArgumentTypeError, BoundsError, DataError, DivergenceWarning, InconsistentDataError
 from ..estimate import Estimate
 from ..validation import as_array, as_box, as_instance, as_signal, as_time, check_both_or_neither, check_finite
 
@@ -514,6 +514,21 @@ class Observer(ABC):
         if x0_lower is None or x0_upper is None:
             return default
         return as_box("x0", (x0_lower, x0_upper), self.n)
+
+    def _prior_boxes(
+        self, default: tuple[FloatArray, FloatArray], x0_lower: ArrayLike | None, x0_upper: ArrayLike | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """As :meth:`_prior_box`, also accepting one box a run (leading axes); copies, never views of ``default``."""
+        if x0_lower is None and x0_upper is None:
+            return default[0].copy(), default[1].copy()
+        if x0_lower is None or x0_upper is None:
+            raise BoundsError("x0_lower, x0_upper: give both or neither")
+        lo, hi = np.array(x0_lower, dtype=float), np.array(x0_upper, dtype=float)
+        if lo.ndim == 1:
+            return as_box("x0", (lo, hi), self.n)
+        if lo.shape != hi.shape or lo.shape[-1] != self.n or np.any(lo > hi) or not np.all(np.isfinite(lo + hi)):
+            raise BoundsError(f"x0: expected finite boxes of shape (..., {self.n}) with lower <= upper")
+        return lo, hi
 
     def _check_spacing(self, times: FloatArray, h: float) -> None:
         """A record must be sampled every ``h``, the period the design assumed (``dt`` in discrete time)."""

@@ -62,6 +62,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.fir_bank import _Coverage, _noise_channels, _worst_case_gains
 from ..errors import AssumptionError, DataError
 from ..estimate import Estimate
@@ -434,15 +435,13 @@ class FiniteMemoryObserver(Observer):
         internal.update(fallback=inner, k=old["k"] + 1, ys=ys, us=us, rows=rows)
         return ObserverState(lower, upper, internal=internal)
 
+    @shared_docs
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record, vectorised over Monte Carlo runs (and over the bank).
 
         Parameters
         ----------
-        t : array_like, shape (T,)
-            Sample times (spacing ``h`` for a continuous-time system).
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements; a leading axis holds Monte Carlo runs.
+        %(runs)s
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs.
 

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.abstraction import AffineAbstraction, abstraction_sigma, affine_abstraction
 from ..design.composed_range import ComposedRange
 from ..design.gsisio import GSISIODesign, gsisio_design
@@ -241,17 +242,11 @@ class GSISIO(Observer):
         return f_b, g_b
 
     # ---- protocol ----------------------------------------------------------------------------------
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at k = 0: the initial box, no input bound yet (``[-inf, inf]``).
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, shape (n,), optional
-            Initial box (default: the design's).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         unbounded = np.full(self.system.q, np.inf)

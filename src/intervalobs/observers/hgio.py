@@ -48,13 +48,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..complex_interval import real_part_radius
 from ..errors import AssumptionError, BoundsError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds, neg, pos
 from ..systems.bounds import Bounds
 from ..systems.sampled import SampledSystem
-from ..validation import as_box, as_choice, as_matrix, as_positive
+from ..validation import as_choice, as_matrix, as_positive
 from .base import Observer, ObserverState, options_after_bounds
 
 if TYPE_CHECKING:
@@ -329,6 +330,7 @@ class HighGainIntervalObserver(Observer):
 
     @classmethod
     @options_after_bounds("disks", "h")
+    @shared_docs
     def design(
         cls,
         system: SampledSystem,
@@ -351,10 +353,7 @@ class HighGainIntervalObserver(Observer):
 
         Parameters
         ----------
-        system : SampledSystem
-            The partially linear model with sampled outputs.
-        bounds : Bounds
-            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        %(sampled_system_bounds)s
         disks : sequence of Disk or (centre, radius)
             One disk per eigenvalue of ``A - L1 C`` (conjugate pairs for complex ones).
         h : float
@@ -419,6 +418,7 @@ class HighGainIntervalObserver(Observer):
 
     @classmethod
     @options_after_bounds("h")
+    @shared_docs
     def design_for_width(
         cls,
         system: SampledSystem,
@@ -437,10 +437,7 @@ class HighGainIntervalObserver(Observer):
 
         Parameters
         ----------
-        system : SampledSystem
-            The partially linear model with sampled outputs.
-        bounds : Bounds
-            Boxes of ``x0``, ``d`` (``w``) and ``V`` (``v``).
+        %(sampled_system_bounds)s
         h : float
             Grid step.
         phi_radius : array_like, shape (n,)
@@ -516,18 +513,8 @@ class HighGainIntervalObserver(Observer):
         -------
         ObserverState
         """
-        if x0_lower is None and x0_upper is None:
-            lo, hi = self.bounds.x0
-        elif x0_lower is None or x0_upper is None:
-            raise BoundsError("init: give both x0_lower and x0_upper or neither")
-        else:
-            lo = np.asarray(x0_lower, dtype=float)
-            hi = np.asarray(x0_upper, dtype=float)
-            if lo.ndim == 1:
-                lo, hi = as_box("x0", (lo, hi), self.n)
-            elif lo.shape != hi.shape or lo.shape[-1] != self.n or np.any(lo > hi) or not np.all(np.isfinite(lo + hi)):
-                raise BoundsError(f"x0: expected finite boxes of shape (M, {self.n}) with lower <= upper")
-        return self._initial(np.asarray(lo, dtype=float), np.asarray(hi, dtype=float), float(t0))
+        lo, hi = self._prior_boxes(self.bounds.x0, x0_lower, x0_upper)
+        return self._initial(lo, hi, float(t0))
 
     def _initial(self, lo: FloatArray, hi: FloatArray, t0: float) -> ObserverState:
         lo, hi = self.system.in_domain(lo, hi)

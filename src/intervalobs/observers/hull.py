@@ -61,6 +61,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import expm
 
+from .._docstrings import shared_docs
 from ..errors import ArgumentTypeError, AssumptionError, DataError, DimensionError, InconsistentDataError
 from ..estimate import Estimate
 from ..interval import inflate, matvec_bounds
@@ -362,20 +363,14 @@ class HullEstimator(Observer):
         return self._windows[size]
 
     # -- protocol ------------------------------------------------------------------------------
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: the prior box of ``x_0`` and an empty record.
 
         Also drops the LP bases kept for warm starts, so that a record started here gives the same
         boxes whatever the estimator solved before.
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, optional
-            Prior box of ``x(t_0)`` (default ``bounds.x0``).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
             ``internal`` holds the step ``k``, the prior box ``x0`` and the record a window needs:
             ``y``, ``u`` and the boxes ``box_lo``/``box_hi`` of the last ``horizon`` samples (all of
             them for the full history), row ``i`` at time ``start + i``.
@@ -540,6 +535,7 @@ class HullEstimator(Observer):
         return lower, upper
 
     @_one_blas_thread
+    @shared_docs
     def certificates(
         self,
         t: ArrayLike,
@@ -557,12 +553,7 @@ class HullEstimator(Observer):
 
         Parameters
         ----------
-        t : array_like, shape (T,)
-            Sample times.
-        y : array_like, shape (T, p)
-            Measurements of one record.
-        u : array_like, shape (T, m), optional
-            Known inputs.
+        %(record)s
         first_rows : bool
             Also return the certificates of the first rows' windows (``k ≤ H``: the ``L = k`` steps from
             the prior of ``x_0``; row ``j`` is the weight of ``y_j``).

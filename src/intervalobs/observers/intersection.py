@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.cooperative import coordinate_candidates
 from ..errors import ArgumentTypeError, DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate, matvec_bounds
@@ -217,17 +218,11 @@ class IntersectionObserver(Observer):
         return cls(members, system, full, contract, sweeps)
 
     # -- protocol ------------------------------------------------------------------------------
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: every member started from the prior box.
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, optional
-            Prior box of ``x(t_0)`` (default ``bounds.x0``).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         states = [obs.init(lo, hi) for obs in self.members]

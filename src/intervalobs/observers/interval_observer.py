@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable, unstable_vertex
 from ..design.tube import BlockNorms, TubeDesign, abs_powers, coupling, design_tube_gain, tube_horizon, tube_stability
 from ..errors import ArgumentTypeError, DesignError, DimensionError
@@ -301,6 +302,7 @@ class IntervalObserver(Observer):
         lower, upper = self._x_box(internal["z_center"], internal["z_radius"], internal["drive"])
         return ObserverState(lower, upper, internal=internal)
 
+    @shared_docs
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
         """Bounds over a whole record: the compiled recursion for long records, :meth:`step` for short ones.
 
@@ -312,10 +314,7 @@ class IntervalObserver(Observer):
 
         Parameters
         ----------
-        t : array_like, shape (T,)
-            Sample times (spacing ``h`` for a continuous-time system).
-        y : array_like, shape (T, p) or (M, T, p)
-            Measurements; a leading axis holds Monte Carlo runs.
+        %(runs)s
         u : array_like, shape (T, m) or (M, T, m), optional
             Known inputs, held over each sampling interval.
 

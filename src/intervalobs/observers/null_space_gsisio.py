@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.composed_range import ComposedRange
 from ..design.gsisio import CERTIFICATE_FLOOR, CERTIFICATE_MARGIN
 from ..design.mixed_monotone import jacobian_bounds, width_matrix
@@ -616,17 +617,11 @@ class NullSpaceGSISIO(Observer):
                                 z_steady, x_steady, _round_up(d_steady), d_matrix, offset, self.Zinv)  # fmt: skip
 
     # ---- protocol ----------------------------------------------------------------------------------
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State before the first measurement: the prior box of :math:`x_0` (in z: its interval hull).
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, shape (n,), optional
-            Initial box (default: the design's).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         zlo, zhi = inflate(*matvec_bounds(self.Z, lo, hi))

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import BoundsError, DataError
 from ..estimate import Estimate
 from ..interval import Interval
@@ -83,23 +84,26 @@ class ReactionInvariantObserver(Observer):
         inlet = system.inlet
         self._z_inlet = inlet[system.unmeasured] + self._gain @ inlet[system.measured]
 
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The prior box of ``x(t_0)`` and its invariants, before the first measurement.
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, shape (n,), optional
-            Prior box of the state (default: the bounds' ``x0``).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         prior = Interval(lo, hi)
         z = prior[self.system.unmeasured] + self._gain @ prior[self.system.measured]
         internal = {"z_lower": z.lower, "z_upper": z.upper, "started": False, "u": None, "consistent": np.ones(1)}
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
+
+    def meta(self) -> dict[str, Any]:
+        """Design facts: method, sampling period, measured components.
+
+        Returns
+        -------
+        dict
+        """
+        return {"method": type(self).__name__, "h": self.h, "measured": self.system.measured.tolist()}
 
     def _decay(self, u: FloatArray) -> Interval:
         """Enclosure of :math:`e^{-D h}` for the dilution held over the last interval."""
@@ -141,7 +145,7 @@ class ReactionInvariantObserver(Observer):
         Parameters
         ----------
         t : array_like, shape (T,)
-            Sample times, spaced by ``h``.
+            Sample times of the record, every ``h``.
         y : array_like, shape (T, p) or (M, T, p)
             Measured components (a leading axis of Monte Carlo runs).
         u : array_like, shape (T, 1) or (M, T, 1), optional
@@ -167,12 +171,3 @@ class ReactionInvariantObserver(Observer):
                 stacklevel=3,
             )
         return estimate
-
-    def meta(self) -> dict[str, Any]:
-        """Design facts: method, sampling period, measured components.
-
-        Returns
-        -------
-        dict
-        """
-        return {"method": type(self).__name__, "h": self.h, "measured": self.system.measured.tolist()}

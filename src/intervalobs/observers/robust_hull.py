@@ -75,6 +75,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import ArgumentTypeError, AssumptionError, DataError, DesignError, DimensionError, InconsistentDataError
 from ..interval import inflate
 from ..lp.certified import DenseLP
@@ -95,6 +96,7 @@ FloatArray = NDArray[np.float64]
 _EPS = float(np.finfo(float).eps)
 
 
+@shared_docs
 class RobustHullEstimator(Observer):
     r"""Sound, data-dependent boxes for an LTI system with interval ``ΔA``: window LP with ``ΔA`` shared.
 
@@ -102,10 +104,7 @@ class RobustHullEstimator(Observer):
 
     Parameters
     ----------
-    system : LTISystem
-        Discrete- or continuous-time model with an interval ``dA``.
-    bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``.
+    %(uncertain_system_bounds)s
     horizon : int
         Window length ``H`` in steps (the prior is the estimator's own box ``H`` steps back).
     h : float, optional
@@ -179,6 +178,7 @@ class RobustHullEstimator(Observer):
 
     @classmethod
     @options_after_bounds("h")
+    @shared_docs
     def design(
         cls,
         system: LTISystem,
@@ -195,10 +195,7 @@ class RobustHullEstimator(Observer):
 
         Parameters
         ----------
-        system : LTISystem
-            Discrete- or continuous-time model with an interval ``dA``.
-        bounds : Bounds
-            Boxes of ``x0``, ``w``, ``v``.
+        %(uncertain_system_bounds)s
         h : float, optional
             Sampling period of a continuous-time system (required there).
         horizon : int
@@ -338,17 +335,11 @@ class RobustHullEstimator(Observer):
         return self.sampled.image(lo, hi, u, transition)
 
     # -- protocol ------------------------------------------------------------------------------
+    @shared_docs
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """State at the first sample: the prior box, an empty record and the full ``ΔA`` box.
 
-        Parameters
-        ----------
-        x0_lower, x0_upper : array_like, optional
-            Prior box of ``x(t_0)`` (default ``bounds.x0``).
-
-        Returns
-        -------
-        ObserverState
+        %(prior_box)s
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         self.delta_box = (-self.model.radius.copy(), self.model.radius.copy())

@@ -110,7 +110,7 @@ from ..interval import ROUNDING_MARGIN, matvec_bounds
 from ..recursion import LinearRecursion
 from ..systems.bounds import Bounds
 from ..systems.lti import LTISystem, refuse_uncertain_input
-from ..validation import as_array, as_box, as_matrix, as_positive, as_signal, as_vector
+from ..validation import as_array, as_matrix, as_positive, as_signal, as_vector
 from .base import SPACING_TOLERANCE, Observer, ObserverState, options_after_bounds
 
 __all__ = ["UnknownInputIntervalObserver"]
@@ -587,21 +587,8 @@ class UnknownInputIntervalObserver(Observer):
         -------
         ObserverState
         """
-        lo, hi = self._prior(x0_lower, x0_upper)
+        lo, hi = self._prior_boxes(self.bounds.x0, x0_lower, x0_upper)
         return ObserverState(lo, hi, None, None, {"started": False})
-
-    def _prior(self, x0_lower: ArrayLike | None, x0_upper: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
-        if x0_lower is None and x0_upper is None:
-            return self.bounds.x0[0].copy(), self.bounds.x0[1].copy()
-        if x0_lower is None or x0_upper is None:
-            raise BoundsError("x0_lower, x0_upper: give both or neither")
-        lo = np.array(x0_lower, dtype=float)
-        hi = np.array(x0_upper, dtype=float)
-        if lo.ndim == 1:
-            lo, hi = as_box("x0", (lo, hi), self.n)
-        elif lo.shape != hi.shape or lo.shape[-1] != self.n or np.any(lo > hi) or not np.all(np.isfinite(lo + hi)):
-            raise BoundsError(f"x0: expected finite boxes of shape (..., {self.n}) with lower <= upper")
-        return lo, hi
 
     def step(self, state: ObserverState, y: ArrayLike, u: KnownInput = None) -> ObserverState:
         """Consume the next measurement ``y_k`` (and ``u_k``) and return the box at ``t_k``.
@@ -643,36 +630,25 @@ class UnknownInputIntervalObserver(Observer):
             else:  # no derivative bound before a second sample: no input bound yet
                 xi_lo = np.full((*w_lo.shape[:-1], self.decoupling.M0.shape[0]), -np.inf)
                 xi_hi = -xi_lo
-            internal = {
-                "started": True,
-                "w_lo": w_lo,
-                "w_hi": w_hi,
-                "s": s,
-                "w_run": w_run,
-                "y": yk.copy(),
-                "u_lo": np.array(u_lo),
-                "u_hi": np.array(u_hi),
-                "cb_integral": np.zeros_like(yk),
-                "hosm": hosm_q,
-            }
-            return ObserverState(x_lo, x_hi, xi_lo, xi_hi, internal)
-        y_prev = it["y"]
-        g_lo, g_hi = self._forcing(self._tl_bounds(y_prev), self._tl_bounds(yk), it["u_lo"], it["u_hi"])
-        w_lo = _rmul(it["w_lo"], c.Phi) + g_lo
-        w_hi = _rmul(it["w_hi"], c.Phi) + g_hi
-        w_run = np.maximum(it["w_run"], np.maximum(np.abs(w_lo), np.abs(w_hi)))
-        s = self._majorant_step(it["s"], self._pad_input(it["w_lo"], it["w_hi"], (w_lo, w_hi), (g_lo, g_hi), w_run))
-        e = s[..., None] * c.v
-        x_lo, x_hi = self._state_box(w_lo - e, w_hi + e, yk)
-        cb_integral = it["cb_integral"] + _rmul(it["u_lo"], c.CB) * self.h
-        hosm_q = None
-        if self.hosm is not None:
-            hosm_q = self.hosm.step(it["hosm"], y_prev - it["cb_integral"], self.h)
-        if self.derivative == "hosm" and hosm_q is not None:
-            d_lo, d_hi = hosm_q[..., 1] - self.beta, hosm_q[..., 1] + self.beta
+            cb_integral = np.zeros_like(yk)
         else:
-            d_lo, d_hi = self._derivative_pair(y_prev, yk, it["u_lo"], it["u_hi"])
-        xi_lo, xi_hi = self._input_box(w_lo - e, w_hi + e, yk, d_lo, d_hi)
+            y_prev = it["y"]
+            g_lo, g_hi = self._forcing(self._tl_bounds(y_prev), self._tl_bounds(yk), it["u_lo"], it["u_hi"])
+            w_lo = _rmul(it["w_lo"], c.Phi) + g_lo
+            w_hi = _rmul(it["w_hi"], c.Phi) + g_hi
+            w_run = np.maximum(it["w_run"], np.maximum(np.abs(w_lo), np.abs(w_hi)))
+            s = self._majorant_step(it["s"], self._pad_input(it["w_lo"], it["w_hi"], (w_lo, w_hi), (g_lo, g_hi), w_run))
+            e = s[..., None] * c.v
+            x_lo, x_hi = self._state_box(w_lo - e, w_hi + e, yk)
+            cb_integral = it["cb_integral"] + _rmul(it["u_lo"], c.CB) * self.h
+            hosm_q = None
+            if self.hosm is not None:
+                hosm_q = self.hosm.step(it["hosm"], y_prev - it["cb_integral"], self.h)
+            if self.derivative == "hosm" and hosm_q is not None:
+                d_lo, d_hi = hosm_q[..., 1] - self.beta, hosm_q[..., 1] + self.beta
+            else:
+                d_lo, d_hi = self._derivative_pair(y_prev, yk, it["u_lo"], it["u_hi"])
+            xi_lo, xi_hi = self._input_box(w_lo - e, w_hi + e, yk, d_lo, d_hi)
         internal = {
             "started": True,
             "w_lo": w_lo,
@@ -723,7 +699,7 @@ class UnknownInputIntervalObserver(Observer):
         u_lo, u_hi = self._input_signal(u, ys.shape[:-1], times.size)
         if self.derivative == "hosm" and np.any(u_lo != u_hi):
             raise DataError("u: derivative='hosm' needs a point-known input (lower == upper)")
-        x0_lo, x0_hi = self._prior(x0_lower, x0_upper)
+        x0_lo, x0_hi = self._prior_boxes(self.bounds.x0, x0_lower, x0_upper)
         lead = np.broadcast_shapes(ys.shape[:-2], u_lo.shape[:-2])
         ys = np.broadcast_to(ys, (*lead, *ys.shape[-2:]))
         u_lo = np.broadcast_to(u_lo, (*lead, *u_lo.shape[-2:]))

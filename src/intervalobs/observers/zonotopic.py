@@ -35,6 +35,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import ArgumentTypeError, AssumptionError, DesignError
 from ..interval import inflate
@@ -160,15 +161,13 @@ class ZonotopicObserver(Observer):
         self.gain_design: GainDesign | None = None
 
     @classmethod
+    @shared_docs
     def design(cls, system: LTISystem, bounds: Bounds, **options: Any) -> ZonotopicObserver:
         """Gain that keeps the zonotope small (default) or bounds the noise-to-error gain, then the observer.
 
         Parameters
         ----------
-        system : LTISystem
-            Discrete-time model.
-        bounds : Bounds
-            Boxes of ``x0``, ``w``, ``v``.
+        %(lti_system_bounds)s
         **options
             ``lmi`` (``"(26)"`` default: the zonotope-size LMI, or ``"(19)"``: the H∞ LMI), ``rho``
             (contraction factor the zonotope-size LMI asks of the error, default 0.9), ``E_theta``
@@ -271,6 +270,7 @@ class ZonotopicObserver(Observer):
         return inflate(c - r, c + r)
 
 
+@shared_docs
 class IntegratedObserver(IntervalObserver):
     r"""Integrated interval observer: a centre and a radius propagated separately, sound for any gain.
 
@@ -290,10 +290,7 @@ class IntegratedObserver(IntervalObserver):
 
     Parameters
     ----------
-    system : LTISystem
-        Discrete-time model.
-    bounds : Bounds
-        Boxes of ``x0``, ``w``, ``v``.
+    %(lti_system_bounds)s
     L : array_like, shape (n, p)
         Gain; :meth:`design` computes it from the H∞ and monotonicity LMIs.
 
@@ -312,6 +309,7 @@ class IntegratedObserver(IntervalObserver):
 
     @classmethod
     @options_after_bounds("h")
+    @shared_docs
     def design(
         cls,
         system: LTISystem,
@@ -324,10 +322,7 @@ class IntegratedObserver(IntervalObserver):
 
         Parameters
         ----------
-        system : LTISystem
-            Discrete-time model.
-        bounds : Bounds
-            Boxes of ``x0``, ``w``, ``v``.
+        %(lti_system_bounds)s
         h : float, optional
             None or the system's ``dt`` (discrete time); present for signature compatibility.
         **options

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .._docstrings import shared_docs
 from ..design.differentiator import HOSMDifferentiator, levant_gains, settling_time
 from ..estimate import Estimate
 from ..examples import aircraft as ac
@@ -136,24 +137,15 @@ def _single(est: Estimate, i: int) -> Estimate:
     return Estimate(est.t, est.lower[i], est.upper[i], est.input_lower[i], est.input_upper[i], est.meta)
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Run the example and write summary.json, trajectories.npz and the figures into ``out_dir``.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder.
-    seed : int
-        Seed of the noise realisations.
-    plots : bool
-        Write the PNG figures.
+    %(reproduction_run)s
     full : bool
         Also run the study with the rudder and aileron commands known (:func:`_known_inputs`).
 
-    Returns
-    -------
-    dict
-        The summary.
+    %(reproduction_summary)s
     """
     start = time.perf_counter()
     observer = _observer()
@@ -450,35 +442,22 @@ def _figures(
     window = slice(int(5.0 / ac.TE), int(5.05 / ac.TE))
     paper = hosm_estimates["paper_lambda100"]
     levant = hosm_estimates["levant_gains"]
-    assert paper.input_lower is not None and paper.input_upper is not None
-    assert levant.input_lower is not None and levant.input_upper is not None
-    ax.fill_between(
-        t[window],
-        paper.input_lower[window, 0],
-        paper.input_upper[window, 0],
-        color="tab:red",
-        alpha=0.2,
-        lw=0,
-        label="HOSM λ=100, µ1=1.1 (paper)",
+    enclosures = (
+        (paper, "tab:red", 0.2, "HOSM λ=100, µ1=1.1 (paper)"),
+        (levant, "tab:green", 0.3, "HOSM Levant gains, µ1=1.1"),
+        (est, "tab:blue", 0.4, "difference enclosure (recommended)"),
     )
-    ax.fill_between(
-        t[window],
-        levant.input_lower[window, 0],
-        levant.input_upper[window, 0],
-        color="tab:green",
-        alpha=0.3,
-        lw=0,
-        label="HOSM Levant gains, µ1=1.1",
-    )
-    ax.fill_between(
-        t[window],
-        est.input_lower[window, 0],
-        est.input_upper[window, 0],
-        color="tab:blue",
-        alpha=0.4,
-        lw=0,
-        label="difference enclosure (recommended)",
-    )
+    for enclosure, colour, alpha, label in enclosures:
+        assert enclosure.input_lower is not None and enclosure.input_upper is not None
+        ax.fill_between(
+            t[window],
+            enclosure.input_lower[window, 0],
+            enclosure.input_upper[window, 0],
+            color=colour,
+            alpha=alpha,
+            lw=0,
+            label=label,
+        )
     ax.plot(t[window], rec.xi[window, 0], color="black", lw=1.0, label=r"truth $\xi_1$")
     ax.set_xlabel("t [s]")
     ax.set_title(r"Fig. 9: $\xi_1$ bounds from three derivative enclosures (50 ms window)")

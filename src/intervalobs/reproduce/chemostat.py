@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
+from .._docstrings import shared_docs
 from ..estimate import Estimate
 from ..interval import Interval
 from ..observers.continuous_nonlinear import ContinuousNonlinearObserver
@@ -302,19 +303,13 @@ def _direct_run(t: FloatArray, y: FloatArray, bounds: Bounds) -> dict[str, Any]:
     }
 
 
+@shared_docs
 def run(
     out_dir: Path, seed: int, plots: bool, full: bool = True, t_final: float = T_FINAL, sweep: tuple[int, ...] = ()
 ) -> dict[str, Any]:
     """Simulate the chemostat, bound it in both coordinates, write the contract files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder for this example.
-    seed : int
-        Seed of the noise realisation.
-    plots : bool
-        Also write ``states.png`` and ``widths.png``.
+    %(reproduction_run)s
     full : bool
         Also compute the consistent-set reference (the inner hull) and the ``tightness`` ratios.
     t_final : float
@@ -322,10 +317,7 @@ def run(
     sweep : tuple of int
         Bundle sizes (``refine``; 0: one zonotope) also run, their widths and cost in ``design.bundle_sweep``.
 
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(reproduction_summary)s
     """
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, t_final + 1e-9, STEP)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._docstrings import shared_docs
 from ..design.high_gain import ThetaDesign, euler_radius_factor, theta_design
 from ..design.regions import HalfPlane, HorizontalStrip, ModalDecomposition, modal_decomposition, place_in_disks
 from ..estimate import Estimate, enclosure_report
@@ -284,24 +285,15 @@ def paper_design_facts(
     }
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design both observers, simulate with bang-bang disturbances, write the contract files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder.
-    seed : int
-        Random seed of the simulation.
-    plots : bool
-        Write the PNG figures.
+    %(reproduction_run)s
     full : bool
         Also run the short-horizon studies (:func:`_short_horizon_studies`).
 
-    Returns
-    -------
-    dict
-        The summary.
+    %(reproduction_summary)s
     """
     system = example.system()
     bounds = example.bounds().resolve(system)

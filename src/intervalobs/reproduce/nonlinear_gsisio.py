@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._docstrings import shared_docs
 from ..design.gsisio import gsisio_design
 from ..design.mixed_monotone import jacobian_bounds, lipschitz_bound
 from ..errors import AssumptionError
@@ -484,25 +485,16 @@ def _two_hidden_demo(seed: int) -> tuple[dict[str, Any], dict[str, FloatArray], 
     return facts, arrays, {"est": est, "x": x, "d": d_rows, "x_bound": x_bound, "cert": cert}
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Recompute the paper's design, run the sound variant on its example and the paper's on ours.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder.
-    seed : int
-        Random seed of the simulations.
-    plots : bool
-        Write the PNG figures.
+    %(reproduction_run)s
     full : bool
         Also run our two-hidden-input example (:func:`_two_hidden_demo`) and the tightness report (widths
         against the known-state and consistent-set inner hulls).
 
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(reproduction_summary)s
     """
     system = ex.paper_system()
     bounds = ex.paper_bounds().resolve(system)

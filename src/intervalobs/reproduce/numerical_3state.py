@@ -25,14 +25,18 @@ from typing import Any
 
 import numpy as np
 
-from ..design.hinf import hinf_gain, zonotope_size_gain
+from .._docstrings import shared_docs
+from ..design.hinf import GainDesign, hinf_gain, zonotope_size_gain
 from ..errors import AssumptionError
+from ..estimate import Estimate
 from ..examples import numerical3
 from ..observers import IntervalObserver
 from ..observers.base import Observer
 from ..observers.zonotopic import IntegratedObserver, ZonotopicObserver
 from ..plotting import plot_widths, save_figure
-from ..simulate import simulate
+from ..simulate import Simulation, simulate
+from ..systems.bounds import Bounds
+from ..systems.lti import LTISystem
 from ._seed002 import (
     add_seed002_tightness,
     gain_entries,
@@ -59,24 +63,11 @@ MONTE_CARLO_RUNS = 20
 LABELS = ["$x_1$", "$x_2$", "$x_3$"]
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design, simulate (bang-bang noise, vertex θ), run every observer on (68) and (70), write files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder for this example.
-    seed : int
-        Seed of the noise realisation.
-    plots : bool
-        Also write the PNG figures.
-    full : bool
-        Also write the tightness report (window LPs, the ΔA lower bound, the IntersectionObserver).
-
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(tightness_run)s
     """
     t = numerical3.time_grid()
     u = numerical3.input_signal(t)
@@ -91,8 +82,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     start = time.perf_counter()
     args68 = (sys68.A, sys68.C, sys68.E, sys68.F)
     gains68 = {
-        "(19)": hinf_gain(*args68),
-        "(26)": zonotope_size_gain(*args68, rho=0.9),
+        **_hinf_and_size_gains(args68),
         "(54)-(55)": hinf_gain(*args68, monotone=True),
     }
     observers68: dict[str, Observer] = {
@@ -103,10 +93,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
         "tube": IntervalObserver(sys68, bounds, gains68["(54)-(55)"].gain),
     }
     timing["design"] += time.perf_counter() - start
-    sim68 = simulate(sys68, bounds, t, u=u, noise="extreme", seed=seed)
-    start = time.perf_counter()
-    est68 = {name: obs.run(t, sim68.y, u) for name, obs in observers68.items()}
-    timing["run"] += time.perf_counter() - start
+    sim68, est68 = _simulate_and_run(sys68, bounds, observers68, (t, u, seed), timing)
     trajectories["x"] = sim68.x
     trajectories["x_lower"], trajectories["x_upper"] = est68["interval"].lower, est68["interval"].upper
     for name, est in est68.items():
@@ -128,8 +115,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     start = time.perf_counter()
     args70 = (sys70.A, sys70.C, sys70.E, sys70.F)
     gains70 = {
-        "(19)": hinf_gain(*args70),
-        "(26)": zonotope_size_gain(*args70, rho=0.9),
+        **_hinf_and_size_gains(args70),
         "(54) with full P (printed form)": hinf_gain(*args70, monotone=True, p_structure="full"),
     }
     try:
@@ -145,10 +131,7 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
         "tube": IntervalObserver(sys70, bounds, gains70["(19)"].gain),
     }
     timing["design"] += time.perf_counter() - start
-    sim70 = simulate(sys70, bounds, t, u=u, noise="extreme", seed=seed)
-    start = time.perf_counter()
-    est70 = {name: obs.run(t, sim70.y, u) for name, obs in observers70.items()}
-    timing["run"] += time.perf_counter() - start
+    sim70, est70 = _simulate_and_run(sys70, bounds, observers70, (t, u, seed), timing)
     printed70 = numerical3.PRINTED_GAINS["70"]
     naive70 = {
         "naive_interval_printed_(54a)": naive_framer(sys70, bounds, printed70["interval_(54a)-(55a)"], t, sim70.y, u),
@@ -274,6 +257,27 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
         for name, fig in figures.items():
             save_figure(fig, out_dir / name)
     return summary
+
+
+def _hinf_and_size_gains(matrices: tuple[Any, Any, Any, Any]) -> dict[str, GainDesign]:
+    """The gains both systems compare: the H∞ LMI (19) and the zonotope-size LMI (26) with ρ = 0.9."""
+    return {"(19)": hinf_gain(*matrices), "(26)": zonotope_size_gain(*matrices, rho=0.9)}
+
+
+def _simulate_and_run(
+    system: LTISystem,
+    bounds: Bounds,
+    observers: dict[str, Observer],
+    record: tuple[Any, Any, int],
+    timing: dict[str, float],
+) -> tuple[Simulation, dict[str, Estimate]]:
+    """One bang-bang record of ``system`` (times, input, seed in ``record``), every observer run on it (timed)."""
+    t, u, seed = record
+    sim = simulate(system, bounds, t, u=u, noise="extreme", seed=seed)
+    start = time.perf_counter()
+    estimates = {name: obs.run(t, sim.y, u) for name, obs in observers.items()}
+    timing["run"] += time.perf_counter() - start
+    return sim, estimates
 
 
 def _observer_facts(observers: dict[str, Observer]) -> dict[str, dict[str, Any]]:

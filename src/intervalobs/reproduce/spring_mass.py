@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .._docstrings import shared_docs
 from ..design.cooperative import FramerDesign
 from ..design.tube import TubeDesign
 from ..estimate import Estimate
@@ -36,24 +37,11 @@ MCCORMICK_STEPS = 151
 (n_δ n products per step) costs about 30 times the split LP's per step."""
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design the observer automatically, simulate with bang-bang noise, write the contract files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder for this example.
-    seed : int
-        Seed of the noise realisation.
-    plots : bool
-        Also write ``states.png`` and ``widths.png``.
-    full : bool
-        Also write the tightness report (window LPs, the ΔA lower bound, the IntersectionObserver).
-
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(tightness_run)s
     """
     system, bounds = spring_mass.system(), spring_mass.bounds()
     start = time.perf_counter()

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .._docstrings import shared_docs
 from ..design.hinf import hinf_gain, zonotope_size_gain
 from ..examples import two_tank
 from ..observers import IntervalObserver
@@ -56,24 +57,11 @@ MONTE_CARLO_RUNS = 20
 LABELS = ["$h_1$ (cm)", "$h_2$ (cm)"]
 
 
+@shared_docs
 def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, Any]:
     """Design, simulate (bang-bang noise, vertex θ), run every observer, write the contract files.
 
-    Parameters
-    ----------
-    out_dir : pathlib.Path
-        Output folder for this example.
-    seed : int
-        Seed of the noise realisation.
-    plots : bool
-        Also write the PNG figures.
-    full : bool
-        Also write the tightness report (window LPs, the ΔA lower bound, the IntersectionObserver).
-
-    Returns
-    -------
-    dict
-        The summary written to ``summary.json``.
+    %(tightness_run)s
     """
     system, bounds = two_tank.system(), two_tank.bounds()
     t = two_tank.time_grid()

@@ -55,9 +55,9 @@ def state_scales(system: LTISystem, bounds: ResolvedBounds, powers_of_two: bool 
     Parameters
     ----------
     system : LTISystem
-        The model.
+        The model whose states are measured.
     bounds : ResolvedBounds
-        Its boxes.
+        Its boxes (the prior and the process noise give the magnitudes).
     powers_of_two : bool
         Round the scales to powers of two (default), so that the balanced model is exactly the original
         (module docstring). False gives ``1 / magnitude`` itself (relative to the median state): a model and
@@ -92,7 +92,7 @@ def balanced(system: LTISystem, bounds: ResolvedBounds, scales: FloatArray) -> t
     Parameters
     ----------
     system : LTISystem
-        The model.
+        The model to rewrite.
     bounds : ResolvedBounds
         Its boxes.
     scales : numpy.ndarray, shape (n,)

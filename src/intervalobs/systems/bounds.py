@@ -25,6 +25,7 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import BoundsError, DimensionError
 
 __all__ = ["Bounds", "BoxPair", "ResolvedBounds"]
@@ -148,17 +149,11 @@ class Bounds:
         object.__setattr__(self, "v", None if v is None else _pair("v", v))
         object.__setattr__(self, "p", None if p is None else _pair("p", p))
 
+    @shared_docs
     def resolve(self, system: _UnknownSizes) -> ResolvedBounds:
         """The boxes for ``system``: scalars broadcast, absent noises zero, every size checked.
 
-        Parameters
-        ----------
-        system : LTISystem, SampledSystem, NonlinearSystem or LPVSystem
-            Any model with the sizes ``n``, ``nw`` and ``nv`` of its unknowns.
-
-        Returns
-        -------
-        ResolvedBounds
+        %(resolve)s
 
         Raises
         ------
@@ -217,48 +212,30 @@ class ResolvedBounds(Bounds):
                 raise DimensionError(f"{name}: expected vectors for a resolved box, got shape {lower.shape}")
             object.__setattr__(self, name, (lower, upper))
 
+    @shared_docs
     def resolve(self, system: _UnknownSizes) -> ResolvedBounds:
         """Check the sizes against ``system`` and return ``self``.
 
-        Parameters
-        ----------
-        system : LTISystem, SampledSystem, NonlinearSystem or LPVSystem
-            Any model with the sizes ``n``, ``nw`` and ``nv`` of its unknowns.
-
-        Returns
-        -------
-        ResolvedBounds
+        %(resolve)s
         """
         for name, box in (("x0", self.x0), ("w", self.w), ("v", self.v), ("p", self.p)):
             _size(system, name, box[0].size)
         return self
 
+    @shared_docs
     def centre(self, name: BoxName) -> FloatArray:
         """Midpoint ``(lower + upper) / 2`` of one box.
 
-        Parameters
-        ----------
-        name : {"x0", "w", "v", "p"}
-            Which box.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(box_name)s
         """
         lower, upper = getattr(self, name)
         return np.asarray(0.5 * (lower + upper))
 
+    @shared_docs
     def radius(self, name: BoxName) -> FloatArray:
         """Half-width ``(upper - lower) / 2`` of one box.
 
-        Parameters
-        ----------
-        name : {"x0", "w", "v", "p"}
-            Which box.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(box_name)s
         """
         lower, upper = getattr(self, name)
         return np.asarray(0.5 * (upper - lower))

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import BoundsError, DimensionError
 from ..inclusion import MatrixFunction, VectorFunction, evaluate_function
 from ..interval_dual import automatic_jacobian
@@ -203,15 +204,13 @@ class ContinuousNonlinearSystem(ModelDimensions):
         size = self.n + self.n_params
         return automatic_jacobian(self.augmented_field(u), size), automatic_jacobian(self.output_map(u), size)
 
+    @shared_docs
     def evaluate_f(self, x: ArrayLike, u: ArrayLike, p: ArrayLike) -> FloatArray:
         """:math:`f(x, u, \\theta)` at points.
 
         Parameters
         ----------
-        x : array_like, shape (..., n)
-            States.
-        u : array_like, shape (..., m)
-            Inputs.
+        %(states_inputs)s
         p : array_like, shape (..., n_params)
             Parameters.
 
@@ -230,15 +229,13 @@ class ContinuousNonlinearSystem(ModelDimensions):
         lead = np.broadcast_shapes(xa.shape[:-1], ua.shape[:-1], pa.shape[:-1])
         return np.stack([np.broadcast_to(np.asarray(c, dtype=float), lead) for c in out], axis=-1)
 
+    @shared_docs
     def evaluate_g(self, x: ArrayLike, u: ArrayLike) -> FloatArray:
         """:math:`g(x, u)` at points.
 
         Parameters
         ----------
-        x : array_like, shape (..., n)
-            States.
-        u : array_like, shape (..., m)
-            Inputs.
+        %(states_inputs)s
 
         Returns
         -------

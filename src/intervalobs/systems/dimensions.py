@@ -11,7 +11,8 @@ class ModelDimensions:
     The model classes (:class:`~intervalobs.systems.lti.LTISystem`,
     :class:`~intervalobs.systems.lpv.LPVSystem`, :class:`~intervalobs.systems.nonlinear.NonlinearSystem`,
     :class:`~intervalobs.systems.continuous_nonlinear.ContinuousNonlinearSystem`,
-    :class:`~intervalobs.systems.sampled.SampledSystem`) derive from it: each constructor validates its
+    :class:`~intervalobs.systems.sampled.SampledSystem`,
+    :class:`~intervalobs.systems.reaction.ReactionSystem`) derive from it: each constructor validates its
     matrices or functions, then states the sizes once with :meth:`_set_dimensions`. They are read-only
     afterwards; the boxes of :class:`~intervalobs.systems.bounds.Bounds` are checked against ``n``, ``nw``
     and ``nv``. What each size counts in a given model (``nw = n`` where the disturbance enters every

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._docstrings import shared_docs
 from ..errors import AssumptionError, BoundsError, DataError, DimensionError
 from ..inclusion import (
     MatrixFunction,
@@ -133,59 +134,35 @@ class NonlinearSystem(ModelDimensions):
         if check_jacobians:
             self._check_jacobians()
 
+    @shared_docs
     def evaluate_f(self, x: ArrayLike) -> FloatArray:
         """:math:`f(x)` at points.
 
-        Parameters
-        ----------
-        x : array_like, shape (..., n)
-            Points.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(points)s
         """
         return evaluate_function(self.f, x, self.n, "f")
 
+    @shared_docs
     def evaluate_g(self, x: ArrayLike) -> FloatArray:
         """:math:`g(x)` at points.
 
-        Parameters
-        ----------
-        x : array_like, shape (..., n)
-            Points.
-
-        Returns
-        -------
-        numpy.ndarray
+        %(points)s
         """
         return evaluate_function(self.g, x, self.p, "g")
 
+    @shared_docs
     def f_range(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Natural interval extension of ``f`` over boxes.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray
+        %(natural_extension)s
         """
         return interval_function(self.f, lower, upper, self.n, "f")
 
+    @shared_docs
     def g_range(self, lower: ArrayLike, upper: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Natural interval extension of ``g`` over boxes.
 
-        Parameters
-        ----------
-        lower, upper : array_like, shape (..., n)
-            Boxes.
-
-        Returns
-        -------
-        lower, upper : numpy.ndarray
+        %(natural_extension)s
         """
         return interval_function(self.g, lower, upper, self.p, "g")
 

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import AssumptionError, DimensionError
 from ..interval import Interval
 from ..validation import as_box
+from .dimensions import ModelDimensions
 
 __all__ = ["ReactionSystem"]
 
@@ -69,7 +70,7 @@ def _enclose(value: Fraction) -> tuple[float, float]:
     return float(np.nextafter(near, -np.inf)), near
 
 
-class ReactionSystem:
+class ReactionSystem(ModelDimensions):
     r"""A reaction system :math:`\dot x = K r(x, t) + D(t)(x_{in} - x)` with unknown kinetics :math:`r`.
 
     Parameters
@@ -91,6 +92,15 @@ class ReactionSystem:
         :math:`x \ge 0`).
     state_names : sequence of str, optional
         Names of the components.
+
+    Attributes
+    ----------
+    n, m, p, q, nw, nv : int
+        Components, known inputs (one when :math:`D` is the input ``u``, else none), measured components
+        (as many as reactions), reactions (their unknown rates are the unknown inputs), disturbance channels
+        (none: ``nw`` is zero) and measurement-noise channels (one per measured component).
+    n_params : int
+        Always 0: the kinetics are not parametrised.
 
     Raises
     ------
@@ -132,9 +142,8 @@ class ReactionSystem:
             )
         if dilution is not None and not (np.isfinite(dilution) and dilution >= 0):
             raise AssumptionError(f"dilution: expected a nonnegative rate, got {dilution!r}")
-        self.n, self.q, self.nw, self.n_params = n, q, 0, 0
-        self.p = self.nv = q
-        self.m = 1 if dilution is None else 0
+        self._set_dimensions(n=n, m=1 if dilution is None else 0, p=q, nw=0, nv=q, q=q)
+        self.n_params = 0
         self.yields, self.measured = k, np.array(index, dtype=int)
         self.unmeasured = np.array([i for i in range(n) if i not in index], dtype=int)
         self.dilution = None if dilution is None else float(dilution)
