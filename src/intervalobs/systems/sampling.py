@@ -245,6 +245,12 @@ class SampledModel:
     first_order : object, optional
         The first-order data behind :meth:`dphi_in` (set by :func:`sampled_model` for a
         continuous-time system with interval ``dA``; None otherwise).
+    noise_generators : numpy.ndarray, shape (n, q), optional
+        A matrix ``G`` whose image of the unit box is the exact set of the process-noise contribution,
+        :math:`\{c + G\xi : |\xi| \le 1\}`: in discrete time ``E diag(w_r)`` (the noise is ``E w`` with
+        ``w`` in its box, for every ``ΔA``), so ``noise_radius`` is ``|G| 1`` rounded up. None where only the
+        box is known (continuous time: the noise integral over a step is bounded as a box); see
+        :meth:`generators`.
     """
 
     Phi: FloatArray
@@ -255,6 +261,20 @@ class SampledModel:
     noise_radius: FloatArray
     h: float
     first_order: _FirstOrder | None = field(default=None, repr=False, compare=False)
+    noise_generators: FloatArray | None = field(default=None, repr=False, compare=False)
+
+    def generators(self) -> FloatArray:
+        r"""Generators of the process-noise set of one step: ``noise_generators``, or the box ``diag(noise_radius)``.
+
+        Either way the noise lies in :math:`\{c + G\xi : |\xi| \le 1\}`, independently from one step to the next.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, q)
+        """
+        if self.noise_generators is not None:
+            return self.noise_generators
+        return np.diag(self.noise_radius)
 
     @property
     def uncertain(self) -> bool:
@@ -613,9 +633,11 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         phi, gamma, d_phi, d_gamma = a_mid, b_mid, a_rad, b_rad
         center = system.E @ w_center
         radius = np.abs(system.E) @ w_radius
+        generators: FloatArray | None = system.E * w_radius  # E diag(w_r): the exact noise set
         step = 1.0
     else:
         step = as_positive("h", h, "a positive step for a continuous-time system")
+        generators = None  # the noise integral of a step is known as a box only (section 5)
         inputs = np.hstack([b_mid, np.eye(n)[:, :unit]])
         m = m + unit
         size = n + m + nw
@@ -652,7 +674,7 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     d_phi = inflate(-d_phi, d_phi, floor=0.0)[1]
     d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
     radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
-    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order)
+    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order, generators)
 
 
 @dataclass(frozen=True)
