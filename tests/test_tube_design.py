@@ -152,10 +152,13 @@ def test_noise_sums_bound_every_vertex_sequence_and_never_exceed_the_box(sizes):
     horizon = 12
     sums = tube.noise_sums(m, generators, box, horizon, norms)
     powers = [np.linalg.matrix_power(m, i) for i in range(horizon)]
-    boxed = np.cumsum([norms.matrix(p) @ box for p in powers], axis=0)
-    direct = np.cumsum([norms.rows(p @ generators).sum(axis=1) for p in powers], axis=0)
+    boxed_terms = np.array([norms.matrix(p) @ box for p in powers])
+    boxed = np.cumsum(boxed_terms, axis=0)
+    columns = np.array([norms.rows(p @ generators).sum(axis=1) for p in powers])
+    direct = np.cumsum(np.minimum(columns, boxed_terms), axis=0)  # each term: the smaller bound
     np.testing.assert_array_equal(sums[0], 0.0)
-    assert np.all(sums[1:] <= boxed) and np.all(sums[1:] >= direct)
+    # upper bounds, rounded up by at most the library's 1e-12 of the box term they are never above
+    assert np.all(sums[1:] <= boxed * (1 + 1e-12)) and np.all(sums[1:] >= direct)
     assert np.all(sums[-1] < 0.95 * boxed[-1])  # dense generators: the box forgets their cancellations
     for _ in range(200):  # the error of ℓ steps of vertex noise lies inside c_ℓ, block by block
         xi = rng.choice([-1.0, 1.0], size=(horizon, 6))

@@ -316,11 +316,13 @@ def noise_sums(
     from step to step (``G`` holds the process-noise generators and :math:`-LF\,\mathrm{diag}(v_r)`, in the
     tube's coordinates), enters :math:`\ell` steps of the error as :math:`\sum_{i<\ell}M^iG\xi_{k-i}`, whose
     block ``b`` has a norm of at most :math:`\sum_{i<\ell}\sum_j\|(M^iG)_{bj}\|_2` (a column's block norm
-    times :math:`|\xi_j| \le 1`). That is never above the box term :math:`\sum_{i<\ell}|M^i|\,d` of the tube
-    with :math:`d \ge \||G|1\|` the block norms of the box of :math:`G\xi`: the generators keep the
-    cancellations between the columns of :math:`M^iG` that the box forgets. Each sum is rounded up by
-    :math:`(n + q + J + 4)\varepsilon` of :math:`\sum_{i<\ell}|M^i||G|1` (the rounding of the products and of
-    the sums, whatever their order), and is taken no larger than the box term computed from ``box``.
+    times :math:`|\xi_j| \le 1`). With blocks of size 1 that is never above the box term
+    :math:`|M^i|\,d` of the tube with :math:`d \ge |G|1` the box of :math:`G\xi`: the generators keep the
+    cancellations between the columns of :math:`M^iG` that the box forgets. (For a block of size 2 the columns'
+    norms can sum to more than the norm of the box's corner; each term is the smaller of the two bounds.) The
+    sums are rounded up by :math:`(n + q + J + 4)\varepsilon` (at least ``ROUNDING_MARGIN``) of the sum of the
+    magnitudes their rounding is relative to (:math:`|M^i||G|1`, or the box term where it is kept), whatever
+    the order of the sums.
 
     Parameters
     ----------
@@ -345,14 +347,16 @@ def noise_sums(
     powers = _powers(m, horizon)  # M^0 … M^{J-1}
     images = powers @ generators  # (J, n, q)
     columns = norms.rows(images.transpose(1, 0, 2).reshape(n, -1)).reshape(norms.count, horizon, q)
-    terms = columns.sum(axis=-1).T  # (J, nb): the block norms of each M^i G, summed over the columns
+    found = columns.sum(axis=-1).T  # (J, nb): the block norms of each M^i G, summed over the columns
     starts = np.cumsum((0, *norms.sizes[:-1]))
     magnitude = np.add.reduceat(np.abs(powers) @ np.abs(generators).sum(axis=1), starts, axis=-1)  # (J, nb)
+    boxed = norms.matrix(powers) @ box  # the box term's (J, nb); below the columns' for some 2-blocks
+    use_box = boxed < found
+    terms, scale = np.where(use_box, boxed, found), np.where(use_box, boxed, magnitude)
     margin = max(ROUNDING_MARGIN, (n + q + horizon + 4) * _EPS)
-    found = np.cumsum(terms, axis=0)
-    found = inflate(-found, found, margin, scale=np.cumsum(magnitude, axis=0))[1]
-    boxed = np.cumsum(norms.matrix(powers) @ box, axis=0)
-    return np.vstack([np.zeros((1, norms.count)), np.minimum(found, boxed)])
+    total = np.cumsum(terms, axis=0)
+    sums = inflate(-total, total, margin, scale=np.cumsum(scale, axis=0))[1]
+    return np.vstack([np.zeros((1, norms.count)), sums])
 
 
 def coupling(model: SampledModel, T: FloatArray | None, norms: BlockNorms | None = None) -> FloatArray:
