@@ -5,8 +5,7 @@
 (b) Per-run cost of `run` on a batch of M = 1, 100, 1000 Monte Carlo records.
 (c) Issue 36: the observer `IntervalObserver.design` returns by default (the tube, with its companion gains)
     against a compiled loop of the same recursion without outward rounding (`unrounded_loop`: every gain's
-    centre and tube, the noise's constant part of the tube and the disturbance radius of interval dA from the
-    intersected box, no margin, no drive),
+    centre and tube, the disturbance radius of interval dA from the intersected box, no margin, no drive),
     at n = 2, 5, 10, 20, point A and interval dA, one record of `LONG_STEPS` samples and M = 1000 records of
     `BATCH_STEPS`, on extreme-noise simulations; `run` is timed whole (validation, compiled recursion, the
     Estimate), both warmed up first, best of 3 in this one process. Target: ratio <= 3.
