@@ -58,7 +58,7 @@ def plain_loop(observer: IntervalObserver, y: np.ndarray) -> tuple[np.ndarray, n
 
 
 @numba.njit(cache=True)
-def unrounded_loop(y, ms, tl, offset, powers, lags, radius_input, k_phi, z_c0, z_r0, uncertain):
+def unrounded_loop(y, ms, tl, offset, powers, lags, sums, k_phi, z_c0, z_r0, uncertain):
     """The default tube's recursion in identity coordinates, step by step, in round-to-nearest without margins."""
     runs, steps, p = y.shape
     gains, n = z_c0.shape
@@ -76,13 +76,13 @@ def unrounded_loop(y, ms, tl, offset, powers, lags, radius_input, k_phi, z_c0, z
                     upper[r, k, i] = min(upper[r, k, i], z_c[g, i] + radii[k, g, i])
             if k + 1 == steps:
                 break
-            for i in range(n):
-                extra = 0.0
-                if uncertain:
+            if uncertain:  # the data-dependent disturbance; the noise's part is the constant sums[g, ℓ]
+                for i in range(n):
+                    extra = 0.0
                     for j in range(n):
                         extra += k_phi[i, j] * max(abs(lower[r, k, j]), abs(upper[r, k, j]))
-                for g in range(gains):
-                    disturbances[k, g, i] = radius_input[g, i] + extra
+                    for g in range(gains):
+                        disturbances[k, g, i] = extra
             for g in range(gains):
                 for i in range(n):
                     total = offset[g, i]
@@ -94,10 +94,10 @@ def unrounded_loop(y, ms, tl, offset, powers, lags, radius_input, k_phi, z_c0, z
                 z_c[g] = new
                 lag = min(k + 1, lags[g])
                 for i in range(n):
-                    total = 0.0
+                    total = sums[g, lag, i]
                     for j in range(n):
                         total += powers[g, lag, i, j] * radii[k + 1 - lag, g, j]
-                    for h in range(lag):
+                    for h in range(lag if uncertain else 0):
                         for j in range(n):
                             total += powers[g, h, i, j] * disturbances[k - h, g, j]
                     radii[k + 1, g, i] = total
@@ -119,7 +119,7 @@ def compiled_row(n: int, uncertain: bool, runs: int, steps: int) -> dict:
         observer._offset,
         observer._abs_powers,
         observer._lags.astype(np.int64),
-        np.ascontiguousarray(observer._radius_input),
+        np.ascontiguousarray(observer._noise_sums),
         observer._K_phi,
         internal["z_center"],
         internal["z_radius"],

@@ -10,7 +10,7 @@ import pytest
 from scipy.linalg import block_diag, expm
 
 from conftest import simulate_truth, unit_bounds
-from intervalobs import DesignError, IntervalObserver, LTISystem, sampled_model
+from intervalobs import Bounds, DesignError, IntervalObserver, LTISystem, sampled_model
 from intervalobs.design.cooperative import real_modal_basis, unstable_vertex
 from intervalobs.design.tube import BlockNorms, tube_horizon, tube_stability
 from intervalobs.errors import ArgumentTypeError, AssumptionError, DimensionError
@@ -362,3 +362,17 @@ def test_old_examples_never_looser_than_cheap_bound() -> None:
     model = sampled_model(system, unit_bounds(2, 2, 1), h)
     cheap = np.maximum(expm((np.abs(a) + d) * h) - expm(np.abs(a) * h), 0.0)
     assert np.all(model.dPhi <= cheap * (1 + 1e-9))
+
+
+def test_discrete_noise_generators_are_exact_and_continuous_ones_the_box() -> None:
+    rng = np.random.default_rng(7)
+    E = rng.normal(size=(3, 4))
+    w = np.array([0.1, 0.2, 0.05, 0.3])
+    bounds = Bounds((-np.ones(3), np.ones(3)), w=(-w, w), v=([-0.01], [0.01]))
+    A = 0.5 * np.eye(3)
+    discrete = sampled_model(LTISystem(A, np.ones((1, 3)), E=E, dt=1.0), bounds)
+    np.testing.assert_array_equal(discrete.generators(), E * w)  # E diag(w_r): the noise set itself
+    assert np.all(np.abs(discrete.generators()).sum(axis=1) <= discrete.noise_radius)
+    continuous = sampled_model(LTISystem(-A, np.ones((1, 3)), E=E), bounds, h=0.1)
+    assert continuous.noise_generators is None
+    np.testing.assert_array_equal(continuous.generators(), np.diag(continuous.noise_radius))

@@ -139,3 +139,31 @@ def test_descent_narrows_the_six_tank_cascade():
     assert start is not None
     assert np.all(plain.steady_radius <= start.steady_radius)
     assert plain.steady_radius.sum() <= 0.85 * start.steady_radius.sum()
+
+
+@pytest.mark.parametrize("sizes", [(1, 1, 1, 1), (2, 1, 1)], ids=["box", "blocks"])
+def test_noise_sums_bound_every_vertex_sequence_and_never_exceed_the_box(sizes):
+    rng = np.random.default_rng(3)
+    m = rng.normal(size=(4, 4))
+    m *= 0.9 / np.max(np.abs(np.linalg.eigvals(m)))
+    generators = rng.normal(size=(4, 6)) * rng.uniform(0.1, 1.0, 6)
+    norms = tube.BlockNorms(sizes)
+    box = norms.vector(np.abs(generators).sum(axis=1))
+    horizon = 12
+    sums = tube.noise_sums(m, generators, box, horizon, norms)
+    powers = [np.linalg.matrix_power(m, i) for i in range(horizon)]
+    boxed_terms = np.array([norms.matrix(p) @ box for p in powers])
+    boxed = np.cumsum(boxed_terms, axis=0)
+    columns = np.array([norms.rows(p @ generators).sum(axis=1) for p in powers])
+    direct = np.cumsum(np.minimum(columns, boxed_terms), axis=0)  # each term: the smaller bound
+    np.testing.assert_array_equal(sums[0], 0.0)
+    # upper bounds, rounded up by at most the library's 1e-12 of the box term they are never above
+    assert np.all(sums[1:] <= boxed * (1 + 1e-12)) and np.all(sums[1:] >= direct)
+    assert np.all(sums[-1] < 0.95 * boxed[-1])  # dense generators: the box forgets their cancellations
+    for _ in range(200):  # the error of ℓ steps of vertex noise lies inside c_ℓ, block by block
+        xi = rng.choice([-1.0, 1.0], size=(horizon, 6))
+        error = np.cumsum([p @ generators @ x for p, x in zip(powers, xi)], axis=0)
+        assert np.all(norms.vector(error) <= sums[1:])
+    if norms.singleton:  # the bound is attained: ξ_i = sign of the row of M^i G, state by state
+        worst = np.cumsum([np.abs(p @ generators).sum(axis=1) for p in powers], axis=0)
+        np.testing.assert_allclose(sums[1:], worst, rtol=1e-11)

@@ -139,3 +139,19 @@ def test_once_loaded_the_compiled_loop_serves_short_records(monkeypatch):
     assert calls == [1]
     monkeypatch.setattr(interval_observer, "COMPILED_WARM_MIN_SAMPLES", 10**15)
     assert_same_boxes(warm, observer.run(t, y, u))
+
+
+@pytest.mark.parametrize("uncertain", [False, True], ids=["point", "dA"])
+def test_dense_noise_generators_match_the_step_loop(monkeypatch, uncertain):
+    """Process noise through a dense ``E`` (the tube's constant noise sums differ from the box's)."""
+    random, bounds = random_system(3, 4, 2, False, uncertain)
+    E = np.random.default_rng(3).normal(size=(4, 6))
+    system = LTISystem(random.A, random.C, E=E, dt=1.0, dA=random.dA)
+    bounds = Bounds(bounds.x0, w=(-0.1 * np.ones(6), 0.1 * np.ones(6)), v=bounds.v)
+    observer = IntervalObserver.design(system, bounds)
+    t = np.arange(200.0)
+    sim = simulate(system, bounds, t, noise="vertex", seed=4, runs=3)
+    compiled, loop = compiled_and_loop(monkeypatch, observer, t, sim.y)
+    assert_same_boxes(compiled, loop)
+    report = compiled.enclosure(sim.x)
+    assert report.fraction == 1.0 and report.max_violation == 0.0

@@ -513,7 +513,7 @@ def test_widths_against_the_folded_disturbance_and_the_exact_hull() -> None:
     # tube 3.70x of the exact hull with one constant ΔB
     measured = {
         "IntervalObserver dB": 1.631,
-        "IntervalObserver folded": 1.674,
+        "IntervalObserver folded": 1.514,  # 1.674 with L·F·v boxed: its gain [0.94, 1.18] mixes v into both states
         "HullEstimator dB": 0.448,
         "HullEstimator folded": 1.141,
         "HullEstimator dB per step": 0.968,
@@ -521,7 +521,8 @@ def test_widths_against_the_folded_disturbance_and_the_exact_hull() -> None:
         "hull per step": 0.968,
     }
     assert {name: round(value, 3) for name, value in width.items()} == measured
-    assert width["IntervalObserver dB"] < width["IntervalObserver folded"]
+    # the tubes are not ordered: the folded model's design picks another gain (the dB one, [0.9, 0], gains nothing
+    # from propagating L·F·v as a generator), so only the hulls show what keeping ΔB apart is worth
     assert width["HullEstimator dB"] < width["HullEstimator dB per step"] < width["HullEstimator folded"]
     assert width["hull"] <= width["HullEstimator dB"] * (1 + 1e-7)  # no sound box is narrower than the hull
     assert width["hull"] <= width["hull per step"] * (1 + 1e-9) <= width["HullEstimator dB per step"] * (1 + 1e-7)

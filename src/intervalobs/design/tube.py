@@ -15,6 +15,14 @@ after :math:`J` terms without loss of soundness,
 tube is bounded iff :math:`\rho(|M^J| + G\,\delta\Phi) < 1` with :math:`G = \sum_{i<J}|M^i|` (a positive
 system with delays).
 
+**Noise generators.** The noise part of :math:`\eta_k` is often a fixed linear image of a box,
+:math:`G\xi_k` with :math:`|\xi_k| \le 1` independent from step to step (:math:`G = [E\,\mathrm{diag}(w_r),
+-LF\,\mathrm{diag}(v_r)]` in discrete time). Its share of the sum is bounded by
+:math:`c_\ell = \sum_{i<\ell}|M^iG|\,1 \le \sum_{i<\ell}|M^i|\,|G|\,1` (:func:`noise_sums`): the box
+:math:`|G|1` forgets that every channel of :math:`\xi` moves all the states it drives at once. For a constant
+noise box :math:`c_\ell` is a constant, computed once; the recursion keeps only the data-dependent terms
+(:math:`\delta\Phi`, :math:`\delta\Gamma`) in its history. The design still scores gains with the box.
+
 The same recursion holds in coordinates :math:`z = Te` (:math:`M_z = TMT^{-1}`, disturbance radius
 :math:`|T|d_k`, :math:`\delta\Phi_z = |T|\,\delta\Phi\,|T^{-1}|`, :math:`|e| \le |T^{-1}|\rho^z`). A slow
 error mode of a dense :math:`M` (a stiff model sampled fast: :math:`\rho(M) = 1 - 10^{-4}`) needs
@@ -57,10 +65,11 @@ from scipy.optimize import minimize
 
 from .._docstrings import shared_docs
 from ..errors import ArgumentError
+from ..interval import ROUNDING_MARGIN, inflate
 from ..systems.sampling import SampledModel
 from .cooperative import real_modal_form
 
-__all__ = ["BlockNorms", "TubeDesign", "design_tube_gain", "tube_horizon", "tube_stability"]
+__all__ = ["BlockNorms", "TubeDesign", "design_tube_gain", "noise_sums", "tube_horizon", "tube_stability"]
 
 FloatArray = NDArray[np.float64]
 
@@ -86,7 +95,8 @@ _DESCENT_PENALTY = 10.0
 """Extra weight of a state's steady radius above the winner's during the descent (the result must not exceed it)."""
 _DESCENT_UNBOUNDED = 1e3
 """Objective of a gain whose tube is unbounded, in units of the winner's radius sum (the line search backs off)."""
-_NORM_ROUNDING = 16 * float(np.finfo(float).eps)
+_EPS = float(np.finfo(float).eps)
+_NORM_ROUNDING = 16 * _EPS
 """Relative upward rounding of a computed 2-norm of a block of size 2 (a few rounded operations each)."""
 
 
@@ -296,6 +306,58 @@ def abs_powers(m: FloatArray, count: int, norms: BlockNorms | None = None) -> Fl
     """
     powers = _powers(m, count)
     return np.abs(powers) if norms is None else norms.matrix(powers)
+
+
+def noise_sums(
+    m: FloatArray, generators: FloatArray, box: FloatArray, horizon: int, norms: BlockNorms | None = None
+) -> FloatArray:
+    r"""The noise part of the tube, :math:`c_\ell \ge \sum_{i<\ell}\|M^i G\|\,1`, for :math:`\ell = 0 \dots J`.
+
+    The part of a step's disturbance that is a fixed linear image :math:`G\xi_k` of a unit box, independent
+    from step to step (``G`` holds the process-noise generators and :math:`-LF\,\mathrm{diag}(v_r)`, in the
+    tube's coordinates), enters :math:`\ell` steps of the error as :math:`\sum_{i<\ell}M^iG\xi_{k-i}`, whose
+    block ``b`` has a norm of at most :math:`\sum_{i<\ell}\sum_j\|(M^iG)_{bj}\|_2` (a column's block norm
+    times :math:`|\xi_j| \le 1`). With blocks of size 1 that is never above the box term
+    :math:`|M^i|\,d` of the tube with :math:`d \ge |G|1` the box of :math:`G\xi`: the generators keep the
+    cancellations between the columns of :math:`M^iG` that the box forgets. (For a block of size 2 the columns'
+    norms can sum to more than the norm of the box's corner; each term is the smaller of the two bounds.) The
+    sums are rounded up by :math:`(n + q + J + 4)\varepsilon` (at least ``ROUNDING_MARGIN``) of the sum of the
+    magnitudes their rounding is relative to (:math:`|M^i||G|1`, or the box term where it is kept), whatever
+    the order of the sums.
+
+    Parameters
+    ----------
+    m : numpy.ndarray, shape (n, n)
+        Error matrix ``M`` in the tube's coordinates.
+    generators : numpy.ndarray, shape (n, q)
+        Generators ``G`` in the tube's coordinates (columns scaled by their radii).
+    box : numpy.ndarray, shape (nb,)
+        The box term's per-step radius ``d`` (block norms), at least the block norms of ``|G| 1``.
+    horizon : int
+        Horizon ``J``: sums for ``ℓ = 0 … J``.
+    norms : BlockNorms, optional
+        Blocks of the coordinates (default: every block of size 1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (J + 1, nb)
+        ``c_ℓ``, row 0 zero (no step yet).
+    """
+    n, q = generators.shape
+    norms = BlockNorms((1,) * n) if norms is None else norms
+    powers = _powers(m, horizon)  # M^0 … M^{J-1}
+    images = powers @ generators  # (J, n, q)
+    columns = norms.rows(images.transpose(1, 0, 2).reshape(n, -1)).reshape(norms.count, horizon, q)
+    found = columns.sum(axis=-1).T  # (J, nb): the block norms of each M^i G, summed over the columns
+    starts = np.cumsum((0, *norms.sizes[:-1]))
+    magnitude = np.add.reduceat(np.abs(powers) @ np.abs(generators).sum(axis=1), starts, axis=-1)  # (J, nb)
+    boxed = norms.matrix(powers) @ box  # the box term's (J, nb); below the columns' for some 2-blocks
+    use_box = boxed < found
+    terms, scale = np.where(use_box, boxed, found), np.where(use_box, boxed, magnitude)
+    margin = max(ROUNDING_MARGIN, (n + q + horizon + 4) * _EPS)
+    total = np.cumsum(terms, axis=0)
+    sums = inflate(-total, total, margin, scale=np.cumsum(scale, axis=0))[1]
+    return np.vstack([np.zeros((1, norms.count)), sums])
 
 
 def coupling(model: SampledModel, T: FloatArray | None, norms: BlockNorms | None = None) -> FloatArray:

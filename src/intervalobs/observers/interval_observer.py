@@ -17,7 +17,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._docstrings import shared_docs
 from ..design.cooperative import FramerDesign, design_framer, framer_matrices, is_detectable, unstable_vertex
-from ..design.tube import BlockNorms, TubeDesign, abs_powers, coupling, design_tube_gain, tube_horizon, tube_stability
+from ..design.tube import (
+    BlockNorms,
+    TubeDesign,
+    abs_powers,
+    coupling,
+    design_tube_gain,
+    noise_sums,
+    tube_horizon,
+    tube_stability,
+)
 from ..errors import ArgumentTypeError, DesignError, DimensionError
 from ..estimate import Estimate
 from ..interval import inflate, recursion_margin
@@ -94,11 +103,17 @@ class IntervalObserver(Observer):
     :math:`T`: :meth:`design` picks :math:`T = I`, or the real modal basis of :math:`\Phi - LC` for a slow
     error mode),
 
-    .. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
-              \ell = \min(k+1, J),\quad d_k = |T|\big(r + |LF|v_r + \delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
+    .. math:: \rho_{k+1} = |M^{\ell}|\,\rho_{k+1-\ell} + c_\ell + \sum_{i<\ell} |M^i|\, d_{k-i},\quad
+              \ell = \min(k+1, J),\quad d_k = |T|\big(\delta\Gamma|u_k| + \delta\Phi(|x_c| + x_r)\big),
 
     which only needs :math:`\rho(\Phi - LC) < 1` and is never wider than the framer with the same gain and
-    coordinates. Outside the identity coordinates the :math:`\delta\Phi` terms are
+    coordinates. The noise enters as generators, not as its box: with :math:`N` the process noise's
+    generators (:meth:`~intervalobs.systems.sampling.SampledModel.generators`: :math:`E\,\mathrm{diag}(w_r)`
+    in discrete time, the box :math:`\mathrm{diag}(r)` in continuous time) and
+    :math:`G = T[N,\ -LF\,\mathrm{diag}(v_r)]`, the constant :math:`c_\ell \ge \sum_{i<\ell}|M^iG|\,1`
+    (:func:`~intervalobs.design.tube.noise_sums`, computed once) is never above the box term
+    :math:`\sum_{i<\ell}|M^i|\,|T|(r + |LF|v_r)` and keeps the cancellations between the noise channels.
+    Outside the identity coordinates the :math:`\delta\Phi` terms are
     :math:`\min(|T|\delta\Phi|x_c|, S|z_c|) + S\rho` with :math:`S = \min(|T|\delta\Phi|T^{-1}|, B)` and
     :math:`B \ge |T\Delta\Phi T^{-1}|` (:meth:`~intervalobs.systems.sampling.SampledModel.dphi_in`): each
     block column of :math:`T\Delta\Phi T^{-1}z` is bounded by either;
@@ -187,6 +202,11 @@ class IntervalObserver(Observer):
         self._offset = (self.model.noise_center - gains_F @ v_center) @ self.T.T  # (G, n)
         self._radius_input = self.norms.vector(  # (G, count)
             (self.model.noise_radius + np.abs(gains_F) @ v_radius) @ self._abs_T.T
+        )
+        # the same disturbance as generators of a unit box: T[N, -LF diag(v_r)] per gain (G, n, q)
+        noise = self.model.generators()
+        self._generators = self.T @ np.concatenate(
+            [np.broadcast_to(noise, (self.gains.shape[0], *noise.shape)), gains_F * v_radius], axis=-1
         )
         self._back = self.norms.cols(self._abs_T_inv)  # x radius = back @ z radius
         self._K_phi = self._abs_T @ self.model.dPhi
@@ -343,11 +363,12 @@ class IntervalObserver(Observer):
         from . import tube_kernel  # Numba is imported only for a record long enough to pay for it
 
         gains, count = self.gains.shape[0], self.norms.count
-        if self.method == "framer":
+        if self.method == "framer":  # the tube of horizon 1: |M^0| = I, |M^1| = |M|, c_1 = the box d
             powers = np.stack([np.eye(self.n), self._abs_M])[None]
+            sums = np.stack([np.zeros(count), self._radius_input[0]])[None]
             lags, mode = np.ones(1, dtype=np.int64), tube_kernel.FRAMER
         else:
-            powers, lags = self._abs_powers, self._lags.astype(np.int64)
+            powers, lags, sums = self._abs_powers, self._lags.astype(np.int64), self._noise_sums
             mode = tube_kernel.TUBE_IDENTITY if self._identity else tube_kernel.TUBE_COORDINATES
         mode = mode if self._uncertain else tube_kernel.POINT
         coupling = getattr(self, "_S_phi", np.zeros((count, count)))
@@ -356,7 +377,6 @@ class IntervalObserver(Observer):
             for a in (
                 np.reshape(state.internal["z_center"], (gains, self.n)),
                 np.reshape(state.internal["z_radius"], (gains, count)),
-                np.broadcast_to(self._radius_input, (gains, count)),
                 self._K_phi,
                 self._K_gamma,
                 self.T_inv,
@@ -371,8 +391,8 @@ class IntervalObserver(Observer):
             us,
             (dense[0], dense[1]),
             (linear[0], linear[1], linear[2], linear[3]),
-            (np.ascontiguousarray(powers, dtype=float), lags),
-            (dense[2], dense[3], dense[4], dense[5], dense[6], dense[7]),
+            (np.ascontiguousarray(powers, dtype=float), lags, np.ascontiguousarray(sums, dtype=float)),
+            (dense[2], dense[3], dense[4], dense[5], dense[6]),
             np.ascontiguousarray(self._back, dtype=float),
             (np.asarray(self.norms.sizes, dtype=np.int64), self.norms.rounding),
             (margin, float(np.finfo(float).tiny), bool(self._identity), bool(self.norms.singleton)),
@@ -416,32 +436,40 @@ class IntervalObserver(Observer):
         for g, horizon in enumerate(horizons):
             terms[g, horizon:] = 0.0
         self._terms = terms.transpose(0, 1, 3, 2).reshape(len(horizons), longest * count, count)
+        self._noise_sums = np.zeros((len(horizons), longest + 1, count))  # c_ℓ of gain g at [g, ℓ], ℓ ≤ J_g
+        for g, (m, horizon) in enumerate(zip(self._Ms, horizons)):
+            self._noise_sums[g, : horizon + 1] = noise_sums(
+                m, self._generators[g], self._radius_input[g], horizon, self.norms
+            )
         self._lags = np.asarray(horizons)
         self._lag = self._abs_powers[np.arange(len(horizons)), self._lags]  # |M_g^{J_g}|, from step J_g on
         self._oldest = longest - self._lags  # queue position of ρ_{k+1-J_g}
 
-    def _disturbance_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray, drive: FloatArray) -> FloatArray:
-        """Radius of the box of everything unknown that enters one step (in z-coordinates), per gain."""
-        radius = self._radius_input if self.method == "tube" else self._radius_input[0]
+    def _data_radius(self, z_c: FloatArray, z_r: FloatArray, u: FloatArray, drive: FloatArray) -> FloatArray | None:
+        """Radius of the data-dependent part of one step's disturbance (``δΦ``, ``δΓ``; z-coordinates), per gain.
+
+        None for a point model: then the whole disturbance is the noise, whose part of the tube is the
+        constant ``_noise_sums`` (the framer's its box ``_radius_input``).
+        """
         if not self._uncertain:
-            return np.asarray(radius)
+            return None
         inputs = self.norms.vector(np.abs(u) @ self._K_gamma.T)
         if self.method == "framer":
             x_abs = np.abs(z_c @ self.T_inv.T) + z_r @ self._abs_T_inv.T
-            return np.asarray(radius + x_abs @ self._K_phi.T + inputs)
+            return np.asarray(x_abs @ self._K_phi.T + inputs)
         if self._identity:  # |x_k| from the box the observer reports: the gains' boxes intersected
             lower, upper = self._x_box(z_c, z_r, drive)
             x_abs = np.maximum(np.abs(lower), np.abs(upper))
-            return np.asarray(radius + (x_abs @ self._K_phi.T + inputs)[..., None, :])
+            return np.asarray((x_abs @ self._K_phi.T + inputs)[..., None, :])
         # Tube in other coordinates (design/tube.py, block norms): min of two bounds of ‖(TΔΦx_c)_b‖, S ρ.
         centre = np.minimum(
             self.norms.vector(np.abs(z_c @ self.T_inv.T) @ self._K_phi.T), self.norms.vector(z_c) @ self._S_phi.T
         )
-        return np.asarray(radius + inputs[..., None, :] + centre + z_r @ self._S_phi.T)
+        return np.asarray(inputs[..., None, :] + centre + z_r @ self._S_phi.T)
 
     def _advance(self, internal: dict[str, Any], y: FloatArray, u: FloatArray) -> dict[str, Any]:
         z_c, z_r, drive = internal["z_center"], internal["z_radius"], internal["drive"]
-        disturbance = self._disturbance_radius(z_c, z_r, u, drive)
+        data = self._data_radius(z_c, z_r, u, drive)
         known = u @ self._TGamma.T
         # the largest drive so far (the terms added to the centres): the scale of their rounding (_x_box)
         term = np.einsum("gip,...p->...gi", np.abs(self._TL), np.abs(y)) + np.abs(known)[..., None, :]
@@ -449,7 +477,8 @@ class IntervalObserver(Observer):
         if self.method == "framer":
             new_c = z_c @ self.M.T + y @ self._TL[0].T + known + self._offset[0]
             new_drive = np.maximum(drive, term[..., 0, :])
-            return {"z_center": new_c, "z_radius": z_r @ self._abs_M.T + disturbance, "drive": new_drive}
+            new_r = z_r @ self._abs_M.T + self._radius_input[0] + (0.0 if data is None else data)
+            return {"z_center": new_c, "z_radius": new_r, "drive": new_drive}
         # every gain at once: centres and radii carry a gain axis before the state axis
         new_c = (
             np.einsum("gij,...gj->...gi", self._Ms, z_c)
@@ -461,18 +490,19 @@ class IntervalObserver(Observer):
         queue, history = internal["rho_queue"], internal["d_history"]
         # A batched y or u (or state) gives the centres, and then the queues, their leading axes.
         lead, gains = new_c.shape[:-2], self._Ms.shape[0]
-        if np.shape(disturbance)[:-2] != lead:
-            disturbance = np.broadcast_to(disturbance, (*lead, gains, self.norms.count))
         if queue.shape[:-3] != lead:  # the first step of a batch from the shared prior
             history = np.broadcast_to(history, (*lead, *history.shape[-3:]))
             queue = np.broadcast_to(queue, (*lead, *queue.shape[-3:]))
-        # history[i] = d_{k-i}, i < J_max; queue[j] = ρ_{k+1-J_max+j} (ρ₀ before the record)
-        history = np.concatenate([disturbance[..., None, :], history[..., :-1, :]], axis=-2)
+        # queue[j] = ρ_{k+1-J_max+j} (ρ₀ before the record); history[i] = data part d_{k-i}, i < J_max
         index = np.arange(gains)
-        lag = self._lag if k + 1 >= history.shape[-2] else self._abs_powers[index, np.minimum(k + 1, self._lags)]
+        reach = np.minimum(k + 1, self._lags)  # ℓ_g
+        lag = self._lag if k + 1 >= queue.shape[-2] else self._abs_powers[index, reach]
         oldest = queue[..., index, self._oldest, :]
-        flat = history.reshape(*lead, gains, 1, -1)
-        new_r = np.einsum("gjl,...gl->...gj", lag, oldest) + (flat @ self._terms)[..., 0, :]
+        new_r = np.einsum("gjl,...gl->...gj", lag, oldest) + self._noise_sums[index, reach]
+        if data is not None:
+            data = np.broadcast_to(data, (*lead, gains, self.norms.count))
+            history = np.concatenate([data[..., None, :], history[..., :-1, :]], axis=-2)
+            new_r = new_r + (history.reshape(*lead, gains, 1, -1) @ self._terms)[..., 0, :]
         queue = np.concatenate([queue[..., 1:, :], new_r[..., None, :]], axis=-2)
         return {
             "z_center": new_c,

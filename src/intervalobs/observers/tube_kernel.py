@@ -100,25 +100,22 @@ def _disturbance(
     z_c: FloatArray,
     z_r: FloatArray,
     u: FloatArray,
-    box: tuple[FloatArray, FloatArray],
-    data: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
+    data: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
     sizes: NDArray[np.int64],
     rounding: float,
     work: FloatArray,
     out: FloatArray,
 ) -> None:
-    """Radius entering one step per gain, framer or tube outside the identity (``_disturbance_radius``).
+    """Data-dependent radius entering one step per gain, framer or tube outside the identity (``_data_radius``).
 
-    ``work``: (4, n) scratch. The point model and the tube in the identity coordinates are in :func:`run_boxes`.
+    ``work``: (4, n) scratch. The tube in the identity coordinates is in :func:`run_boxes`; a point model has none.
     """
-    radius_input, k_phi, k_gamma, t_inv, abs_t_inv, s_phi = data
+    k_phi, k_gamma, t_inv, abs_t_inv, s_phi = data
     gains, n = z_c.shape
     count = z_r.shape[1]
     for g in range(gains):
         for b in range(count):
-            out[g, b] = radius_input[g, b]
-    if mode == POINT:
-        return
+            out[g, b] = 0.0
     scratch, norms, inputs, x_abs = work[0], work[1, :count], work[2, :count], work[3]
     for i in range(n):
         scratch[i] = 0.0
@@ -186,19 +183,26 @@ def _centres(
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _tube_radius(
-    k: int, powers: FloatArray, lags: NDArray[np.int64], radii: FloatArray, disturbances: FloatArray
+    k: int,
+    tube: tuple[FloatArray, NDArray[np.int64], FloatArray],
+    radii: FloatArray,
+    disturbances: FloatArray,
+    point: bool,
 ) -> None:
-    """``ρ_{k+1} = |M^ℓ|ρ_{k+1-ℓ} + Σ_{i<ℓ}|M^i| d_{k-i}``, ``ℓ = min(k+1, J_g)``, written into ``radii[k+1]``."""
+    """``ρ_{k+1} = |M^ℓ|ρ_{k+1-ℓ} + c_ℓ + Σ_{i<ℓ}|M^i| d_{k-i}``, ``ℓ = min(k+1, J_g)``, written into ``radii[k+1]``:
+    ``c_ℓ`` the noise's constant part, ``d`` the data-dependent disturbances (none for a ``point`` model)."""
+    powers, lags, sums = tube
     gains, count = radii.shape[1], radii.shape[2]
     for g in range(gains):
         lag = min(k + 1, lags[g])
         for b in range(count):
-            total = 0.0
+            total = sums[g, lag, b]
             for c in range(count):
                 total += powers[g, lag, b, c] * radii[k + 1 - lag, g, c]
-            for i in range(lag):
-                for c in range(count):
-                    total += powers[g, i, b, c] * disturbances[k - i, g, c]
+            if not point:
+                for i in range(lag):
+                    for c in range(count):
+                        total += powers[g, i, b, c] * disturbances[k - i, g, c]
             radii[k + 1, g, b] = total
 
 
@@ -208,8 +212,8 @@ def run_boxes(
     u: FloatArray,
     start: tuple[FloatArray, FloatArray],
     linear: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    tube: tuple[FloatArray, NDArray[np.int64]],
-    data: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
+    tube: tuple[FloatArray, NDArray[np.int64], FloatArray],
+    data: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
     back: FloatArray,
     norms: tuple[NDArray[np.int64], float],
     box: tuple[FloatArray, float, bool, bool],
@@ -226,9 +230,10 @@ def run_boxes(
     linear : tuple
         ``M_g`` ``(G, n, n)``, ``TL_g`` ``(G, n, p)``, ``TΓ`` ``(n, m)``, offsets ``(G, n)``.
     tube : tuple
-        ``|M_g^i|`` ``(G, J + 1, count, count)`` (zero beyond ``J_g``) and horizons ``J_g`` ``(G,)``.
+        ``|M_g^i|`` ``(G, J + 1, count, count)`` (zero beyond ``J_g``), horizons ``J_g`` ``(G,)`` and the noise's
+        part ``c_ℓ`` ``(G, J + 1, count)`` (``IntervalObserver._noise_sums``; the framer's ``[0, d]``).
     data : tuple
-        Disturbance radius of a point model ``(G, count)``, ``|T|δΦ``, ``|T|δΓ``, ``T⁻¹``, ``|T⁻¹|``, ``S``.
+        ``|T|δΦ``, ``|T|δΓ``, ``T⁻¹``, ``|T⁻¹|``, ``S``.
     back : numpy.ndarray, shape (n, count)
         Radius in x of a unit block radius in z (``BlockNorms.cols(|T⁻¹|)``).
     norms : tuple
@@ -247,7 +252,7 @@ def run_boxes(
     gains, n = z_c0.shape
     count = z_r0.shape[1]
     sizes, rounding = norms
-    mapping = (data[3], data[4], back)
+    mapping = (data[2], data[3], back)
     lower = np.empty((runs, steps, n))
     upper = np.empty((runs, steps, n))
     radii = np.empty((steps, gains, count))
@@ -264,24 +269,22 @@ def run_boxes(
             _box(z_c, radii, drive, mapping, box, (r, k), lower, upper)
             if k + 1 == steps:
                 break
-            if mode == POINT or mode == TUBE_IDENTITY:  # indexed in place: no views of this step's arrays
-                radius_input, k_phi, k_gamma = data[0], data[1], data[2]
+            if mode == TUBE_IDENTITY:  # indexed in place: no views of this step's arrays
+                k_phi, k_gamma = data[0], data[1]
                 for i in range(count):
-                    total = 0.0
-                    if mode == TUBE_IDENTITY:  # |x_k| from the reported box, the same for every gain
-                        for j in range(u.shape[2]):
-                            total += k_gamma[i, j] * abs(u[r, k, j])
-                        for j in range(n):
-                            total += k_phi[i, j] * max(abs(lower[r, k, j]), abs(upper[r, k, j]))
+                    total = 0.0  # |x_k| from the reported box, the same for every gain
+                    for j in range(u.shape[2]):
+                        total += k_gamma[i, j] * abs(u[r, k, j])
+                    for j in range(n):
+                        total += k_phi[i, j] * max(abs(lower[r, k, j]), abs(upper[r, k, j]))
                     for g in range(gains):
-                        disturbances[k, g, i] = radius_input[g, i] + total
-            else:
+                        disturbances[k, g, i] = total
+            elif mode != POINT:
                 _disturbance(
                     mode,
                     z_c,
                     radii[k],
                     u[r, k],
-                    (lower[r, k], upper[r, k]),
                     data,
                     sizes,
                     rounding,
@@ -289,5 +292,5 @@ def run_boxes(
                     disturbances[k],
                 )
             _centres(z_c, drive, (y, u), (r, k), linear, work)
-            _tube_radius(k, tube[0], tube[1], radii, disturbances)
+            _tube_radius(k, tube, radii, disturbances, mode == POINT)
     return lower, upper

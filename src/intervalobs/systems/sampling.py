@@ -255,6 +255,12 @@ class SampledModel:
         for :math:`\beta = \Delta B - \Delta B_c` (section 7 of the module docstring); None without.
     dB_radius : numpy.ndarray, shape (n, m), optional
         With an interval ``dB``: the radius :math:`B_r` of :math:`\beta`, rounded up; None without.
+    noise_generators : numpy.ndarray, shape (n, q), optional
+        A matrix ``G`` whose image of the unit box is the exact set of the process-noise contribution,
+        :math:`\{c + G\xi : |\xi| \le 1\}`: in discrete time ``E diag(w_r)`` (the noise is ``E w`` with
+        ``w`` in its box, for every ``ΔA``), so ``noise_radius`` is ``|G| 1`` rounded up. None where only the
+        box is known (continuous time: the noise integral over a step is bounded as a box); see
+        :meth:`generators`.
     """
 
     Phi: FloatArray
@@ -268,6 +274,20 @@ class SampledModel:
     input_integral: FloatArray | None = field(default=None, repr=False, compare=False)
     d_input_integral: FloatArray | None = field(default=None, repr=False, compare=False)
     dB_radius: FloatArray | None = field(default=None, repr=False, compare=False)
+    noise_generators: FloatArray | None = field(default=None, repr=False, compare=False)
+
+    def generators(self) -> FloatArray:
+        r"""Generators of the process-noise set of one step: ``noise_generators``, or the box ``diag(noise_radius)``.
+
+        Either way the noise lies in :math:`\{c + G\xi : |\xi| \le 1\}`, independently from one step to the next.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, q)
+        """
+        if self.noise_generators is not None:
+            return self.noise_generators
+        return np.diag(self.noise_radius)
 
     @property
     def uncertain(self) -> bool:
@@ -627,9 +647,11 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
         phi, gamma, d_phi, d_gamma = a_mid, b_mid, a_rad, b_rad
         center = system.E @ w_center
         radius = np.abs(system.E) @ w_radius
+        generators: FloatArray | None = system.E * w_radius  # E diag(w_r): the exact noise set
         step = 1.0
     else:
         step = as_positive("h", h, "a positive step for a continuous-time system")
+        generators = None  # the noise integral of a step is known as a box only (section 5)
         inputs = np.hstack([b_mid, np.eye(n)[:, :unit]])
         m = m + unit
         size = n + m + nw
@@ -668,11 +690,11 @@ def sampled_model(system: LTISystem, bounds: Bounds, h: float | None = None) -> 
     d_gamma = inflate(-d_gamma, d_gamma, floor=0.0)[1]
     radius = inflate(-radius, radius, scale=radius + np.abs(center), floor=0.0)[1]
     if integral is None:
-        return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order)
+        return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order, noise_generators=generators)
     # β = ΔB - ΔB_c lies in ±b_rad up to the rounding of the centre B + ΔB_c: pad relative to its terms
     scale = np.abs(system.B) + np.abs(system.dB[0]) + np.abs(system.dB[1]) if system.dB is not None else b_rad
     dB_radius = inflate(-b_rad, b_rad, scale=scale, floor=0.0)[1]
-    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order, *integral, dB_radius)
+    return SampledModel(phi, d_phi, gamma, d_gamma, center, radius, step, first_order, *integral, dB_radius, generators)
 
 
 @dataclass(frozen=True)
