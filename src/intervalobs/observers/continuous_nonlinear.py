@@ -53,8 +53,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError
 from ..estimate import Estimate
-from ..inclusion import interval_function, interval_matrix
 from ..interval import Interval
+from ..interval_dual import value_and_jacobian
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.flow_enclosure import ORDER_FACTOR, StateZonotope, interval_product, propagate
@@ -314,14 +314,14 @@ class ContinuousNonlinearObserver(Observer):
         empty = np.zeros(y.shape[:-1], dtype=bool)
         zset, empty = self._domain_contract(zset, empty)
         output = self.system.output_map(u)
-        jacobian = self.system.jacobians(u)[1]
-        size = zset.centre.shape[-1]
         for i in range(self.p):
             hull = zset.box()
-            j_lo, j_hi = interval_matrix(jacobian, hull.lower, hull.upper, (self.p, size))
-            slope = Interval._raw(j_lo[..., i, :], j_hi[..., i, :])
+            # one forward-mode pass: the output Jacobian over the set's hull (row 0) and g at its centre (row 1)
+            ends = (np.stack([hull.lower, zset.centre]), np.stack([hull.upper, zset.centre]))
+            values, slopes = value_and_jacobian(output, *ends, self.p)
+            slope = slopes[0][..., i, :]
             a = slope.centre
-            centre = Interval._raw(*interval_function(output, zset.centre, zset.centre, self.p))[..., i]
+            centre = values[1][..., i]
             remainder = _slope_remainder(slope - a, zset)
             level = (Interval._wrap(a[..., None, :]) @ Interval._wrap(zset.centre))[..., 0]
             strip = (y[..., i] - self._v[i]) - centre - remainder + level
