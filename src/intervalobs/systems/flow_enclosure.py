@@ -196,11 +196,20 @@ def hull_box(centre: FloatArray, generators: FloatArray) -> Interval:
     -------
     Interval, shape (..., N)
     """
-    total = np.abs(generators).sum(axis=-1)
-    gamma = (generators.shape[-1] + 2) * _GAMMA_PAD
+    spread = _unit_cube_image(np.abs(generators))
+    return Interval._raw(np.nextafter(spread.lower + centre, -np.inf), np.nextafter(spread.upper + centre, np.inf))
+
+
+def _unit_cube_image(magnitude: FloatArray) -> Interval:
+    r"""``Interval(M_lo, M_hi) @ [-1, 1]^m`` for a matrix whose entries' largest magnitudes are ``magnitude``.
+
+    Each term's hull is :math:`\pm\max(|a|, |b|)` exactly, so the product form's ends are the row sums padded by
+    its dot-product bound and rounded outward; computed here without forming the products (same ends).
+    """
+    total = magnitude.sum(axis=-1)
+    gamma = (magnitude.shape[-1] + 2) * _GAMMA_PAD
     reach = total + (gamma * total + _TINY)
-    low, high = np.nextafter(-reach, -np.inf), np.nextafter(reach, np.inf)
-    return Interval._raw(np.nextafter(low + centre, -np.inf), np.nextafter(high + centre, np.inf))
+    return Interval._raw(np.nextafter(-reach, -np.inf), np.nextafter(reach, np.inf))
 
 
 def _reduce(generators: FloatArray, order: int) -> FloatArray:
@@ -388,10 +397,10 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     phi = jac * tau + interval_product(jac, interval_product(jac, spread)) * half_square + np.eye(size)
     mid = phi.centre
     generators = mid @ zset.generators
-    unit = np.ones(generators.shape[:-2] + generators.shape[-1:])
-    cube = Interval._raw(-unit, unit)
     exact = interval_product(Interval._wrap(mid), Interval._wrap(zset.generators)) - generators
-    error = centre_end - zset.centre + (phi - mid) @ (zset.generators @ cube) + exact @ cube
+    spread_box = _unit_cube_image(np.abs(zset.generators))
+    exact_box = _unit_cube_image(np.maximum(np.abs(exact.lower), np.abs(exact.upper)))
+    error = centre_end - zset.centre + (phi - mid) @ spread_box + exact_box
     return StateZonotope(zset.centre, generators).with_box(error, order), tilde
 
 
