@@ -338,9 +338,12 @@ class _Flow:
     low: FloatArray
     high: FloatArray
     n: int
+    compiled: bool
 
     @classmethod
-    def build(cls, system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, ndim: int) -> _Flow:
+    def build(
+        cls, system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, ndim: int, compiled: bool = False
+    ) -> _Flow:
         """The set's domain (row 0) and the centre's (row 1, none) for centres of ``ndim`` axes."""
         size = system.n + system.n_params
         free = np.full(system.n, np.inf)
@@ -349,7 +352,8 @@ class _Flow:
         high = np.stack([np.concatenate([system.domain[1], params]), np.concatenate([free, params])])
         shape = (2,) + (1,) * (ndim - 1) + (size,)
         disturbance = _disturbance_box(system, w)
-        return cls(system.augmented_field(u), disturbance, low.reshape(shape), high.reshape(shape), system.n)
+        field = system.augmented_field(u)
+        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, compiled)
 
 
 def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
@@ -393,6 +397,8 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     jac, jac_hat = jacs[0], jacs[1]
     half_square = 0.5 * tau * tau
     centre_end = point + rates[1] * tau + (jac_hat @ rates[0]) * half_square
+    if flow.compiled:
+        return _compiled_rest(flow, zset, (centre_end, jac), tau, order), tilde
     spread = _fundamental_a_priori(jac, flow.n, tau)
     phi = jac * tau + interval_product(jac, interval_product(jac, spread)) * half_square + np.eye(size)
     mid = phi.centre
@@ -402,6 +408,30 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     exact_box = _unit_cube_image(np.maximum(np.abs(exact.lower), np.abs(exact.upper)))
     error = centre_end - zset.centre + (phi - mid) @ spread_box + exact_box
     return StateZonotope(zset.centre, generators).with_box(error, order), tilde
+
+
+def _compiled_rest(
+    flow: _Flow, zset: StateZonotope, boxes: tuple[Interval, Interval], tau: float, order: int
+) -> StateZonotope:
+    """Steps 3-4 by :func:`intervalobs.systems.flow_kernel.advance` (the same formulas compiled), all sets flattened."""
+    from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
+
+    centre_end, jac = boxes
+    lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
+
+    def flat(array: FloatArray, axes: int) -> FloatArray:
+        return np.ascontiguousarray(
+            np.broadcast_to(array, (*lead, *array.shape[-axes:])).reshape(-1, *array.shape[-axes:])
+        )
+
+    centre, generators = flow_kernel.advance(
+        flat(zset.centre, 1),
+        flat(zset.generators, 2),
+        (flat(centre_end.lower, 1), flat(centre_end.upper, 1)),
+        (flat(jac.lower, 2), flat(jac.upper, 2)),
+        (float(tau), int(flow.n), int(order)),
+    )
+    return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
 
 
 def _ends(box: Interval) -> tuple[FloatArray, FloatArray]:
@@ -416,6 +446,7 @@ def propagate(
     h: float,
     substeps: int = 1,
     order: int | None = None,
+    compiled: bool = False,
 ) -> tuple[StateZonotope, Interval]:
     """Carry a zonotope of augmented states over ``[0, h]`` (the module's steps, ``substeps`` of them).
 
@@ -434,6 +465,9 @@ def propagate(
         Steps per interval (each halved again where an a priori enclosure is not found).
     order : int, optional
         Most generators kept (default ``ORDER_FACTOR`` times the augmented dimension).
+    compiled : bool
+        Do steps 3-4 in :mod:`intervalobs.systems.flow_kernel` (Numba; the same bounds up to the order of a few
+        sums, several times faster on small sets); False keeps Numba unimported.
 
     Returns
     -------
@@ -449,7 +483,7 @@ def propagate(
         When no a priori enclosure is found even for steps ``2**MAX_HALVINGS`` times shorter (the
         set is too large or the vector field blows up on it).
     """
-    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim)
+    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, compiled)
     kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
     remaining, tau, halvings = float(h), float(h) / substeps, 0
     hull: Interval | None = None
