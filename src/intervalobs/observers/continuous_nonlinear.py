@@ -262,6 +262,11 @@ class ContinuousNonlinearObserver(Observer):
         if compiled not in (None, True, False):
             raise BoundsError(f"compiled: expected None, True or False, got {compiled!r}")
         self.compiled = compiled
+        self._limits = (
+            np.concatenate([system.domain[0], self.bounds.p[0]]),
+            np.concatenate([system.domain[1], self.bounds.p[1]]),
+        )
+        self._limited = np.flatnonzero(np.isfinite(self._limits[0]) | np.isfinite(self._limits[1]))
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
 
@@ -385,11 +390,11 @@ class ContinuousNonlinearObserver(Observer):
 
         A crossing below ``_NEGLIGIBLE`` times the set's width is left (no contraction is needed for soundness).
         """
-        low = np.concatenate([self.system.domain[0], self.bounds.p[0]])
-        high = np.concatenate([self.system.domain[1], self.bounds.p[1]])
+        low, high = self._limits
         size = low.size
-        for i in np.flatnonzero(np.isfinite(low) | np.isfinite(high)):
-            hull = zset.box()
+        hull: Interval | None = None
+        for i in self._limited:
+            hull = zset.box() if hull is None else hull  # the hull changes only where a strip was applied
             slack = _NEGLIGIBLE * (hull.upper[..., i] - hull.lower[..., i])
             if not np.any((hull.lower[..., i] < low[i] - slack) | (hull.upper[..., i] > high[i] + slack)):
                 continue
@@ -398,7 +403,7 @@ class ContinuousNonlinearObserver(Observer):
                 zset, a, Interval._raw(np.asarray(low[i]), np.asarray(high[i])), self.order, compiled
             )
             empty = empty | now_empty
-            zset = _select(~empty, updated, zset)
+            zset, hull = _select(~empty, updated, zset), None
         return zset, empty
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:

@@ -675,7 +675,7 @@ def _figures(
         (
             a45[0][0],
             a45[1][0],
-            "(c) earlier high-gain design (θ = 1000, K = (1, 0, 0)), bounds not refined",
+            "(c) earlier design θ = 1000, K = (1, 0, 0), unrefined",
             "tab:gray",
         ),
     )
