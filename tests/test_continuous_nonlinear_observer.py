@@ -135,6 +135,11 @@ def test_the_compiled_kernels_give_the_numpy_bounds(make: Callable[[], Case]) ->
     for end in ("lower", "upper"):
         assert np.all(np.abs(getattr(estimates[1], end) - getattr(estimates[0], end)) <= 1e-12 * scale)
     assert enclosure_report(t, estimates[1].lower, x, estimates[1].upper).fraction == 1.0
+    assert [e.meta["compiled"] for e in estimates] == [False, True]
+    # by default, once this process has loaded the kernels (the run above), every run and step uses them
+    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h, **case.observer_options)
+    assert observer.run(t[:3], y[:, :3], None if held is None else held[:, :3]).meta["compiled"]
+    assert observer.init().internal["compiled"]
 
 
 def test_contradicting_data_are_reported_not_raised() -> None:

@@ -423,7 +423,7 @@ class ContinuousNonlinearObserver(Observer):
         Estimate
             ``meta`` holds ``consistent`` (bool, or a list per run), ``inconsistent_from`` (the first
             time the record contradicts the model, the earliest over the runs, None when it never does;
-            per run in ``inconsistent_from_runs``) and ``diverging``.
+            per run in ``inconsistent_from_runs``), ``diverging`` and ``compiled`` (whether the compiled kernels ran).
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
@@ -435,6 +435,7 @@ class ContinuousNonlinearObserver(Observer):
         lost = extras["lost_flag"][..., 0] > 0
         record_consistency(estimate, flags)
         estimate.meta["diverging"] = self._diverging(estimate, flags, lost)
+        estimate.meta["compiled"] = bool(state.internal["compiled"])
         return estimate
 
     def _diverging(self, estimate: Estimate, flags: BoolArray, lost: BoolArray) -> bool:

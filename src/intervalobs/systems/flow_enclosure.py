@@ -175,7 +175,8 @@ class StateZonotope:
 
 
 _GAMMA_PAD = float(np.finfo(float).eps)
-"""Unit roundoff, the dot-product bound's unit in :func:`hull_box` (as in ``Interval.__matmul__``)."""
+"""Machine epsilon :math:`\\varepsilon = 2u`: a row of m terms is padded by :math:`(m + 2)\\varepsilon` of its
+magnitude, the dot-product bound of ``Interval.__matmul__``."""
 _TINY = float(np.finfo(float).tiny)
 
 
