@@ -64,10 +64,11 @@ from .base import Observer, ObserverState, record_consistency
 __all__ = ["ContinuousNonlinearObserver"]
 
 _EPS = float(np.finfo(float).eps)
-COMPILED_MIN_STEPS = 500
+COMPILED_MIN_STEPS = 1000
 """Set-steps (samples × runs × parts) from which :meth:`ContinuousNonlinearObserver.run` does the array part of
 each step in :mod:`intervalobs.systems.flow_kernel` when ``compiled`` is None: importing Numba and loading the
-cached kernels costs about half a second, and the kernels save about a millisecond per set-step."""
+cached kernels cost about a second of CPU (the first run after an install compiles them, about 13 s), and the
+kernels save 1.3-1.7 CPU ms per set-step (``benchmarks/continuous_cost.json``)."""
 _NEGLIGIBLE = 1e-9
 """A domain or parameter end is used to contract only where the set crosses it by more than this fraction of its
 width (a parameter's box is crossed by rounding after every step; leaving such a crossing is sound and saves a
