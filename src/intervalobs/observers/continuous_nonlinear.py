@@ -187,17 +187,17 @@ class ContinuousNonlinearObserver(Observer):
         parameters).
     divergence_factor : float
         A width that ends above this many times the prior's (or infinite) warns.
-    compiled : bool, optional
-        Do the array part of each step (the flow step after the user's function, the strip updates) in
-        :mod:`intervalobs.systems.flow_kernel` (Numba, the same bounds up to the order of a few sums). Default:
-        for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
-        process (``init``/``step`` then use them too).
     refine : int
         The bundle (0: off): the most parts carried per run. Whenever the data have dropped at least
         half of them, each live part is bisected along the coordinate (state or parameter) whose
         width is largest relative to the prior box's, so the parts gather where the data leave the
         states and parameters (:func:`_bisect_parts`). Each half is the part cut by a strip, so the
         halves together hold every point the part held.
+    compiled : bool, optional
+        Do the array part of each step (the flow step after the user's function, the strip updates) in
+        :mod:`intervalobs.systems.flow_kernel` (Numba, the same bounds up to the order of a few sums). Default:
+        for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
+        process (``init``/``step`` then use them too).
 
     Attributes
     ----------
