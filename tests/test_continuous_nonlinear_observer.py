@@ -119,6 +119,29 @@ def test_step_and_run_agree(make: Callable[[], Case]) -> None:
         np.testing.assert_allclose(state.upper, estimate.upper[k], rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("make", [pendulum, chemostat_bundle], ids=["pendulum", "chemostat-bundle"])
+def test_the_compiled_kernels_give_the_numpy_bounds(make: Callable[[], Case]) -> None:
+    """compiled=True (flow step and strip updates in Numba) against compiled=False, every run, parts bisected."""
+    case = make()
+    t, u, x, y = _record(case, 1.5)
+    held = np.broadcast_to(u, (*y.shape[:2], case.system.m)) if case.system.m else None
+    estimates = [
+        ContinuousNonlinearObserver(case.system, case.bounds, case.h, compiled=c, **case.observer_options).run(
+            t, y, held
+        )
+        for c in (False, True)
+    ]
+    scale = np.maximum(estimates[0].upper - estimates[0].lower, 1e-300)
+    for end in ("lower", "upper"):
+        assert np.all(np.abs(getattr(estimates[1], end) - getattr(estimates[0], end)) <= 1e-12 * scale)
+    assert enclosure_report(t, estimates[1].lower, x, estimates[1].upper).fraction == 1.0
+    assert [e.meta["compiled"] for e in estimates] == [False, True]
+    # by default, once this process has loaded the kernels (the run above), every run and step uses them
+    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h, **case.observer_options)
+    assert observer.run(t[:3], y[:, :3], None if held is None else held[:, :3]).meta["compiled"]
+    assert observer.init().internal["compiled"]
+
+
 def test_contradicting_data_are_reported_not_raised() -> None:
     case = cstr()
     t, _, _, y = _record(case, 1.0)
@@ -162,3 +185,5 @@ def test_refused_options() -> None:
         ContinuousNonlinearObserver(case.system, case.bounds, -1.0)
     with pytest.raises(BoundsError, match="order"):
         ContinuousNonlinearObserver(case.system, case.bounds, case.h, order=2)
+    with pytest.raises(BoundsError, match="compiled"):
+        ContinuousNonlinearObserver(case.system, case.bounds, case.h, compiled="yes")

@@ -217,7 +217,8 @@ def test_the_reproduction_reports_general_estimators_next_to_the_hgio(monkeypatc
     t = np.arange(0.0, 10.0, 1.0)
     x = np.zeros((2, t.size, 3))
     sim = SimpleNamespace(x=x, y=np.zeros((2, t.size, 1)), u=np.zeros((t.size, 1)))
-    hgio = np.broadcast_to([0.5, 2.0, 4.0], x.shape)
+    hgio_half = np.broadcast_to([0.25, 1.0, 2.0], x.shape)
+    hgio = Estimate(t, -hgio_half, hgio_half)
     monkeypatch.setattr(hgio_sampled, "GENERAL_ESTIMATORS", {})
     empty = hgio_sampled.general_path(t, sim, hgio, 1.0)
     assert empty["estimators"] == {} and "no general estimator" in empty["status"]
@@ -230,6 +231,19 @@ def test_the_reproduction_reports_general_estimators_next_to_the_hgio(monkeypatc
     report = hgio_sampled.general_path(t, sim, hgio, 1.0)["estimators"]["fixed"]
     np.testing.assert_allclose(report["width_over_hgio"], [1.0, 0.5, 0.5])
     assert report["enclosure"]["fraction"] == 1.0 and not report["diverging"]
+    np.testing.assert_allclose(report["intersected_over_hgio"], [1.0, 0.5, 0.5])
+
+    def shifted_and_wide(t: np.ndarray, y: np.ndarray, u: np.ndarray) -> Estimate:
+        centre = np.broadcast_to([0.1, 0.0, 0.0], (y.shape[0], t.size, 3))
+        half = np.broadcast_to([0.25, 4.0, 8.0], centre.shape)
+        return Estimate(t, centre - half, centre + half)
+
+    monkeypatch.setitem(hgio_sampled.GENERAL_ESTIMATORS, "wide", shifted_and_wide)
+    wide = hgio_sampled.general_path(t, sim, hgio, 1.0)["estimators"]["wide"]
+    np.testing.assert_allclose(wide["width_over_hgio"], [1.0, 4.0, 4.0])
+    # the intersection with the HGIO's boxes: never wider than them, narrower where the other estimator cuts
+    np.testing.assert_allclose(wide["intersected_over_hgio"], [0.8, 1.0, 1.0])
+    assert wide["intersected_enclosure"]["fraction"] == 1.0
 
 
 @pytest.mark.parametrize("name", ["continuous_nonlinear_observer", "continuous_nonlinear_observer_phi_as_disturbance"])

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from intervalobs.errors import BoundsError, DimensionError
-from intervalobs.inclusion import evaluate_matrix, interval_matrix
+from intervalobs.inclusion import evaluate_matrix, interval_function, interval_matrix
 from intervalobs.interval import SUPPORTED_UFUNCS, Interval
-from intervalobs.interval_dual import IntervalDual, automatic_jacobian
+from intervalobs.interval_dual import IntervalDual, automatic_jacobian, value_and_jacobian
 
 # The analytic derivative below is evaluated in floating point: a few operations, each with a relative
 # error <= eps/2 and libm functions within 1 ulp, so it differs from the exact derivative by at most
@@ -170,3 +170,18 @@ def test_structural_zeros_stay_exact_through_products_and_quotients():
     assert out.derivative.lower[1] == 0.0 and out.derivative.upper[1] == 0.0
     assert out.derivative.lower[0] < out.derivative.upper[0]
     assert isinstance(y * out, IntervalDual)
+
+
+@pytest.mark.parametrize(("name", "func", "jac", "box"), CASES, ids=[c[0] for c in CASES])
+def test_value_and_jacobian_give_the_two_separate_evaluations_bit_for_bit(name, func, jac, box):
+    """One forward-mode pass: its value box is the natural extension, its Jacobian automatic_jacobian's."""
+    rng = np.random.default_rng(3)
+    lo, hi = (np.asarray(b, dtype=float) for b in box)
+    corners = lo + (hi - lo) * np.sort(rng.uniform(0.0, 1.0, (2, 5, lo.size)), axis=0)
+    value, slope = value_and_jacobian(func, corners[0], corners[1], 2)
+    v_lo, v_hi = interval_function(func, corners[0], corners[1], 2)
+    j_lo, j_hi = interval_matrix(automatic_jacobian(func, 2), corners[0], corners[1], (2, 2))
+    for got, expected in ((value.lower, v_lo), (value.upper, v_hi), (slope.lower, j_lo), (slope.upper, j_hi)):
+        np.testing.assert_array_equal(got, expected)
+    with pytest.raises(DimensionError, match="expected 3 components"):
+        value_and_jacobian(func, corners[0], corners[1], 3)

@@ -48,7 +48,10 @@ MatrixFunction = Callable[[Sequence[Any]], Sequence[Sequence[Any]]]
 def _stack(values: Sequence[Any], lead: tuple[int, ...], name: str, size: int | None) -> FloatArray:
     if size is not None and len(values) != size:
         raise DimensionError(f"{name}: expected {size} components, got {len(values)}")
-    return np.stack([np.broadcast_to(np.asarray(v, dtype=float), lead) for v in values], axis=-1)
+    out = np.empty((*lead, len(values)))
+    for i, v in enumerate(values):
+        out[..., i] = v  # broadcast to the points' shape, as np.broadcast_to would (a wrong shape raises)
+    return out
 
 
 @shared_docs

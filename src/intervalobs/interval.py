@@ -344,10 +344,18 @@ def product_bounds(
 
 
 def _product_hull(alo: FloatArray, ahi: FloatArray, blo: FloatArray, bhi: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """:func:`product_bounds` for ends that may be infinite: ``0 * inf = 0`` (a NaN product)."""
+    """:func:`product_bounds` for ends that may be infinite: ``0 * inf = 0`` (a NaN product).
+
+    A point factor (the same array as both ends, as ``Interval._wrap`` and the seeds of forward-mode
+    differentiation build it) has two distinct products, not four: the same hull with half the operations.
+    """
     with np.errstate(invalid="ignore"):
-        low, high = product_bounds(alo, ahi, blo, bhi)
-    if np.isnan(low).any() or np.isnan(high).any():
+        if alo is ahi or blo is bhi:
+            first, second = (alo * blo, alo * bhi) if alo is ahi else (alo * blo, ahi * blo)
+            low, high = np.minimum(first, second), np.maximum(first, second)
+        else:
+            low, high = product_bounds(alo, ahi, blo, bhi)
+    if np.isnan(low).any():  # np.minimum and np.maximum both propagate a NaN product
         with np.errstate(invalid="ignore"):
             p1, p2, p3, p4 = (np.where(np.isnan(v), 0.0, v) for v in (alo * blo, alo * bhi, ahi * blo, ahi * bhi))
         low = np.minimum(np.minimum(p1, p2), np.minimum(p3, p4))
@@ -509,6 +517,9 @@ class Interval:
         if isinstance(other, Interval):
             return Interval._raw(*round_outward(*_product_hull(self.lower, self.upper, other.lower, other.upper)))
         c = np.asarray(other, dtype=float)
+        if c.ndim == 0 and c != 0.0 and np.isfinite(c):  # a finite nonzero number: no 0 * inf to mend
+            a, b = c * self.lower, c * self.upper
+            return Interval._raw(*round_outward(np.minimum(a, b), np.maximum(a, b)))
         with np.errstate(invalid="ignore"):
             a, b = c * self.lower, c * self.upper
         if not (np.isfinite(a).all() and np.isfinite(b).all()):  # an infinite end: 0 * inf = 0

@@ -33,6 +33,7 @@ and the affine abstraction of :mod:`intervalobs.design` use.
 
 :func:`automatic_jacobian` turns a component-convention vector function (:mod:`intervalobs.inclusion`)
 into a component-convention Jacobian, so it can be used wherever a user-written Jacobian is accepted.
+:func:`value_and_jacobian` returns both boxes as arrays from one pass (the hot loops': no per-entry objects).
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from .errors import DimensionError
 from .inclusion import MatrixFunction, VectorFunction
 from .interval import Interval, round_outward
 
-__all__ = ["IntervalDual", "automatic_jacobian"]
+__all__ = ["IntervalDual", "automatic_jacobian", "value_and_jacobian"]
 
 FloatArray = NDArray[np.float64]
 
@@ -286,3 +287,52 @@ def automatic_jacobian(func: VectorFunction, n: int) -> MatrixFunction:
         return rows
 
     return jacobian
+
+
+def value_and_jacobian(
+    func: VectorFunction, lower: FloatArray, upper: FloatArray, size: int
+) -> tuple[Interval, Interval]:
+    """The boxes of a vector function and of its Jacobian over boxes, from one forward-mode pass.
+
+    The value box is the natural interval extension (each dual's value is computed by the same
+    :class:`~intervalobs.interval.Interval` operations as :func:`intervalobs.inclusion.interval_function`,
+    so the two agree bit for bit); the Jacobian box is :func:`automatic_jacobian`'s, without building an
+    object per entry.
+
+    Parameters
+    ----------
+    func : callable
+        Component-convention vector function of ``lower.shape[-1]`` variables returning ``size`` components.
+    lower, upper : numpy.ndarray, shape (..., n)
+        Boxes (sound ends, not validated again).
+    size : int
+        Number of components ``func`` returns.
+
+    Returns
+    -------
+    value : Interval, shape (..., size)
+    jacobian : Interval, shape (..., size, n)
+
+    Raises
+    ------
+    DimensionError
+        ``func`` returns another number of components.
+    """
+    n = lower.shape[-1]
+    lead = lower.shape[:-1]
+    eye = np.eye(n)
+    seeds = [np.broadcast_to(eye[j], (*lead, n)) for j in range(n)]
+    variables = [
+        IntervalDual(Interval._raw(lower[..., j], upper[..., j]), Interval._raw(seeds[j], seeds[j])) for j in range(n)
+    ]
+    out = list(func(variables))
+    if len(out) != size:
+        raise DimensionError(f"function: expected {size} components, got {len(out)}")
+    ends = [np.empty((*lead, size)) for _ in range(2)]
+    slopes = [np.zeros((*lead, size, n)) for _ in range(2)]
+    for i, component in enumerate(out):
+        value = component.value if isinstance(component, IntervalDual) else Interval._wrap(component)
+        ends[0][..., i], ends[1][..., i] = value.lower, value.upper
+        if isinstance(component, IntervalDual):
+            slopes[0][..., i, :], slopes[1][..., i, :] = component.derivative.lower, component.derivative.upper
+    return Interval._raw(*ends), Interval._raw(*slopes)

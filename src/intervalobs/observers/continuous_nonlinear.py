@@ -45,6 +45,7 @@ warn (``RuntimeWarning``) and set ``meta["diverging"]``.
 
 from __future__ import annotations
 
+import sys
 import warnings
 from typing import Any
 
@@ -53,8 +54,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError
 from ..estimate import Estimate
-from ..inclusion import interval_function, interval_matrix
 from ..interval import Interval
+from ..interval_dual import value_and_jacobian
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.flow_enclosure import ORDER_FACTOR, StateZonotope, interval_product, propagate
@@ -63,6 +64,11 @@ from .base import Observer, ObserverState, record_consistency
 __all__ = ["ContinuousNonlinearObserver"]
 
 _EPS = float(np.finfo(float).eps)
+COMPILED_MIN_STEPS = 1000
+"""Set-steps (samples × runs × parts) from which :meth:`ContinuousNonlinearObserver.run` does the array part of
+each step in :mod:`intervalobs.systems.flow_kernel` when ``compiled`` is None: importing Numba and loading the
+cached kernels cost about a second of CPU (the first run after an install compiles them, about 13 s), and the
+kernels save 1.3-1.7 CPU ms per set-step (``benchmarks/continuous_cost.json``)."""
 _NEGLIGIBLE = 1e-9
 """A domain or parameter end is used to contract only where the set crosses it by more than this fraction of its
 width (a parameter's box is crossed by rounding after every step; leaving such a crossing is sound and saves a
@@ -91,7 +97,9 @@ def _hull_gain(generators: FloatArray, row: FloatArray, sigma: FloatArray) -> Fl
     return np.take_along_axis(sorted_points, index[..., None], axis=-1)[..., 0]
 
 
-def _strip_update(zset: StateZonotope, a: FloatArray, strip: Interval, order: int) -> tuple[StateZonotope, BoolArray]:
+def _strip_update(
+    zset: StateZonotope, a: FloatArray, strip: Interval, order: int, compiled: bool = False
+) -> tuple[StateZonotope, BoolArray]:
     r"""A zonotope containing :math:`\{x \in \langle c, G\rangle : a^\top x \in [s]\}`; also whether that set is empty.
 
     The strip is first cut to the zonotope's support :math:`a^\top c \pm |a^\top G|\mathbf 1`
@@ -103,8 +111,11 @@ def _strip_update(zset: StateZonotope, a: FloatArray, strip: Interval, order: in
 
     a zonotope with one more generator; :math:`\lambda = GG^\top a/(a^\top GG^\top a + \sigma^2)`
     minimises its Frobenius radius (Alamo, Bravo & Camacho 2005). The centre and generators are
-    computed in interval arithmetic; their midpoints are kept and the rest joins the box term.
+    computed in interval arithmetic; their midpoints are kept and the rest joins the box term. ``compiled``:
+    the same in :func:`intervalobs.systems.flow_kernel.strip_update`.
     """
+    if compiled:
+        return _compiled_strip_update(zset, a, strip, order)
     generators = zset.generators
     row = Interval._wrap(a[..., None, :])
     image = interval_product(row, Interval._wrap(generators))[..., 0, :]
@@ -128,6 +139,27 @@ def _strip_update(zset: StateZonotope, a: FloatArray, strip: Interval, order: in
     slack = np.nextafter(slack * (1.0 + 2 * new.shape[-1] * _EPS), np.inf)
     box = Interval._raw(centre.lower - centre.centre - slack, centre.upper - centre.centre + slack)
     return StateZonotope(centre.centre, new).with_box(box, order), empty
+
+
+def _compiled_strip_update(
+    zset: StateZonotope, a: FloatArray, strip: Interval, order: int
+) -> tuple[StateZonotope, BoolArray]:
+    """:func:`_strip_update` by the compiled kernel, every set of the batch flattened."""
+    from ..systems import flow_kernel  # Numba is imported only where a record is long enough to pay for it
+
+    lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
+
+    def flat(array: FloatArray, tail: tuple[int, ...]) -> FloatArray:
+        return np.ascontiguousarray(np.broadcast_to(array, (*lead, *tail)).reshape(-1, *tail), dtype=float)
+
+    centre, generators, empty = flow_kernel.strip_update(
+        flat(zset.centre, (size,)),
+        flat(zset.generators, zset.generators.shape[-2:]),
+        flat(a, (size,)),
+        (flat(strip.lower, ()), flat(strip.upper, ())),
+        int(order),
+    )
+    return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order)), empty.reshape(lead)
 
 
 class ContinuousNonlinearObserver(Observer):
@@ -161,6 +193,11 @@ class ContinuousNonlinearObserver(Observer):
         width is largest relative to the prior box's, so the parts gather where the data leave the
         states and parameters (:func:`_bisect_parts`). Each half is the part cut by a strip, so the
         halves together hold every point the part held.
+    compiled : bool, optional
+        Do the array part of each step (the flow step after the user's function, the strip updates) in
+        :mod:`intervalobs.systems.flow_kernel` (Numba, the same bounds up to the order of a few sums). Default:
+        for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
+        process (``init``/``step`` then use them too).
 
     Attributes
     ----------
@@ -193,6 +230,7 @@ class ContinuousNonlinearObserver(Observer):
         order: int | None = None,
         divergence_factor: float = 10.0,
         refine: int = 0,
+        compiled: bool | None = None,
     ) -> None:
         if not isinstance(system, ContinuousNonlinearSystem):
             raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")
@@ -222,6 +260,14 @@ class ContinuousNonlinearObserver(Observer):
                 f"refine: expected 0 or a number of parts of at least 2 and {count} (splits), got {refine!r}"
             )
         self.refine = int(refine)
+        if compiled not in (None, True, False):
+            raise BoundsError(f"compiled: expected None, True or False, got {compiled!r}")
+        self.compiled = compiled
+        self._limits = (
+            np.concatenate([system.domain[0], self.bounds.p[0]]),
+            np.concatenate([system.domain[1], self.bounds.p[1]]),
+        )
+        self._limited = np.flatnonzero(np.isfinite(self._limits[0]) | np.isfinite(self._limits[1]))
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
 
@@ -256,24 +302,26 @@ class ContinuousNonlinearObserver(Observer):
         internal = {"set": zset, "alive": alive, "lost": np.zeros((), dtype=bool)}
         internal.update(started=False, u=None, lost_flag=np.zeros(1))
         internal["consistent"] = np.ones(1)
+        internal["compiled"] = _kernels_loaded() if self.compiled is None else self.compiled
         return ObserverState(lo.copy(), hi.copy(), internal=internal)
 
     def _step(self, state: ObserverState, y: FloatArray, u: FloatArray) -> ObserverState:
         lead = y.shape[:-1]
+        compiled = bool(state.internal["compiled"])
         zset: StateZonotope = _broadcast(state.internal["set"], lead)
         alive = np.broadcast_to(state.internal["alive"], zset.centre.shape[:-1]).copy()
         lost = np.broadcast_to(state.internal["lost"], lead).copy()
         if state.internal["started"]:
             held = np.broadcast_to(state.internal["u"][..., None, :], (*alive.shape, self.m))
-            zset, failed = self._predict(zset, held)
+            zset, failed = self._predict(zset, held, compiled)
             lost |= (failed & alive).any(-1)
             alive &= ~failed
         parts_y = np.broadcast_to(y[..., None, :], (*alive.shape, self.p))
-        corrected, empty = self._correct(zset, parts_y, u[..., None, :])
+        corrected, empty = self._correct(zset, parts_y, u[..., None, :], compiled)
         alive &= ~empty
         zset = _revive(alive, _select(alive, corrected, zset))
         if self.refine:
-            zset, alive = _bisect_parts(zset, alive, self._scale, self.order)
+            zset, alive = _bisect_parts(zset, alive, self._scale, self.order, compiled)
         consistent = alive.any(-1) | lost
         box = zset.box()
         n = self.n
@@ -282,12 +330,12 @@ class ContinuousNonlinearObserver(Observer):
         bounded = (consistent & ~lost)[..., None]
         lower = np.where(bounded, np.maximum(part_lo, self.system.domain[0]), -np.inf)
         upper = np.where(bounded, np.minimum(part_hi, self.system.domain[1]), np.inf)
-        internal = {"set": zset, "alive": alive, "lost": lost, "started": True, "u": u}
+        internal = {"set": zset, "alive": alive, "lost": lost, "started": True, "u": u, "compiled": compiled}
         internal["consistent"] = consistent[..., None].astype(float)
         internal["lost_flag"] = lost[..., None].astype(float)
         return ObserverState(lower, upper, internal=internal)
 
-    def _predict(self, zset: StateZonotope, held: FloatArray) -> tuple[StateZonotope, BoolArray]:
+    def _predict(self, zset: StateZonotope, held: FloatArray, compiled: bool) -> tuple[StateZonotope, BoolArray]:
         """The flow enclosure of every part; a part whose enclosure is lost becomes a point and is flagged.
 
         All parts go in one batch; only when that fails (some part too wide for a validated step) is
@@ -295,61 +343,68 @@ class ContinuousNonlinearObserver(Observer):
         """
         failed = np.zeros(zset.centre.shape[:-1], dtype=bool)
         try:
-            return propagate(self.system, held, self._w, zset, self._period, self.substeps, self.order)[0], failed
+            batch = propagate(self.system, held, self._w, zset, self._period, self.substeps, self.order, compiled)
+            return batch[0], failed
         except AssumptionError:
             pass
         centre, generators = zset.centre.copy(), np.zeros_like(zset.generators)
         for index in np.ndindex(*failed.shape):
             single = StateZonotope(zset.centre[index], zset.generators[index])
             try:
-                moved = propagate(self.system, held[index], self._w, single, self._period, self.substeps, self.order)[0]
+                moved = propagate(
+                    self.system, held[index], self._w, single, self._period, self.substeps, self.order, compiled
+                )[0]
             except AssumptionError:
                 failed[index] = True
                 continue
             centre[index], generators[index] = moved.centre, moved.generators
         return StateZonotope(centre, generators), failed
 
-    def _correct(self, zset: StateZonotope, y: FloatArray, u: FloatArray) -> tuple[StateZonotope, BoolArray]:
+    def _correct(
+        self, zset: StateZonotope, y: FloatArray, u: FloatArray, compiled: bool
+    ) -> tuple[StateZonotope, BoolArray]:
         """Contract by the state domain and parameter box, then by each output (module docstring)."""
         empty = np.zeros(y.shape[:-1], dtype=bool)
-        zset, empty = self._domain_contract(zset, empty)
+        zset, empty = self._domain_contract(zset, empty, compiled)
         output = self.system.output_map(u)
-        jacobian = self.system.jacobians(u)[1]
-        size = zset.centre.shape[-1]
         for i in range(self.p):
             hull = zset.box()
-            j_lo, j_hi = interval_matrix(jacobian, hull.lower, hull.upper, (self.p, size))
-            slope = Interval._raw(j_lo[..., i, :], j_hi[..., i, :])
+            # one forward-mode pass: the output Jacobian over the set's hull (row 0) and g at its centre (row 1)
+            ends = (np.stack([hull.lower, zset.centre]), np.stack([hull.upper, zset.centre]))
+            values, slopes = value_and_jacobian(output, *ends, self.p)
+            slope = slopes[0][..., i, :]
             a = slope.centre
-            centre = Interval._raw(*interval_function(output, zset.centre, zset.centre, self.p))[..., i]
+            centre = values[1][..., i]
             remainder = _slope_remainder(slope - a, zset)
             level = (Interval._wrap(a[..., None, :]) @ Interval._wrap(zset.centre))[..., 0]
             strip = (y[..., i] - self._v[i]) - centre - remainder + level
-            updated, now_empty = _strip_update(zset, a, strip, self.order)
+            updated, now_empty = _strip_update(zset, a, strip, self.order, compiled)
             empty |= now_empty
             zset = _select(~empty, updated, zset)
-            zset, empty = self._domain_contract(zset, empty)
+            zset, empty = self._domain_contract(zset, empty, compiled)
         return zset, empty
 
-    def _domain_contract(self, zset: StateZonotope, empty: BoolArray) -> tuple[StateZonotope, BoolArray]:
+    def _domain_contract(
+        self, zset: StateZonotope, empty: BoolArray, compiled: bool = False
+    ) -> tuple[StateZonotope, BoolArray]:
         """Contract by the state domain and the parameter box (strips on single coordinates) where they cut.
 
         A crossing below ``_NEGLIGIBLE`` times the set's width is left (no contraction is needed for soundness).
         """
-        low = np.concatenate([self.system.domain[0], self.bounds.p[0]])
-        high = np.concatenate([self.system.domain[1], self.bounds.p[1]])
+        low, high = self._limits
         size = low.size
-        for i in np.flatnonzero(np.isfinite(low) | np.isfinite(high)):
-            hull = zset.box()
+        hull: Interval | None = None
+        for i in self._limited:
+            hull = zset.box() if hull is None else hull  # the hull changes only where a strip was applied
             slack = _NEGLIGIBLE * (hull.upper[..., i] - hull.lower[..., i])
             if not np.any((hull.lower[..., i] < low[i] - slack) | (hull.upper[..., i] > high[i] + slack)):
                 continue
             a = np.broadcast_to(np.eye(size)[i], zset.centre.shape)
             updated, now_empty = _strip_update(
-                zset, a, Interval._raw(np.asarray(low[i]), np.asarray(high[i])), self.order
+                zset, a, Interval._raw(np.asarray(low[i]), np.asarray(high[i])), self.order, compiled
             )
             empty = empty | now_empty
-            zset = _select(~empty, updated, zset)
+            zset, hull = _select(~empty, updated, zset), None
         return zset, empty
 
     def run(self, t: ArrayLike, y: ArrayLike, u: ArrayLike | None = None) -> Estimate:
@@ -369,14 +424,19 @@ class ContinuousNonlinearObserver(Observer):
         Estimate
             ``meta`` holds ``consistent`` (bool, or a list per run), ``inconsistent_from`` (the first
             time the record contradicts the model, the earliest over the runs, None when it never does;
-            per run in ``inconsistent_from_runs``) and ``diverging``.
+            per run in ``inconsistent_from_runs``), ``diverging`` and ``compiled`` (whether the compiled kernels ran).
         """
         times, ys, us = self._signals(t, y, u)
-        estimate, extras = self._loop(times, ys, us, collect=("consistent", "lost_flag"))
+        state = self.init()
+        if self.compiled is None:  # the kernels where the record pays for loading them
+            sets = times.size * int(np.prod(ys.shape[:-2])) * max(int(np.prod(self.splits)), self.refine)
+            state.internal["compiled"] = state.internal["compiled"] or sets >= COMPILED_MIN_STEPS
+        estimate, extras = self._loop(times, ys, us, state=state, collect=("consistent", "lost_flag"))
         flags = extras["consistent"][..., 0] > 0
         lost = extras["lost_flag"][..., 0] > 0
         record_consistency(estimate, flags)
         estimate.meta["diverging"] = self._diverging(estimate, flags, lost)
+        estimate.meta["compiled"] = bool(state.internal["compiled"])
         return estimate
 
     def _diverging(self, estimate: Estimate, flags: BoolArray, lost: BoolArray) -> bool:
@@ -425,7 +485,7 @@ def _slope_remainder(slope: Interval, zset: StateZonotope) -> Interval:
 
 
 def _bisect_parts(
-    zset: StateZonotope, alive: BoolArray, scale: FloatArray, order: int
+    zset: StateZonotope, alive: BoolArray, scale: FloatArray, order: int, compiled: bool = False
 ) -> tuple[StateZonotope, BoolArray]:
     r"""Where at most half the parts of a run live, bisect each live part into its own slot and a dropped one's.
 
@@ -445,8 +505,8 @@ def _bisect_parts(
     low = np.take_along_axis(hull.lower, coordinate[..., None], -1)[..., 0]
     high = np.take_along_axis(hull.upper, coordinate[..., None], -1)[..., 0]
     middle = 0.5 * (low + high)
-    lower_half, lower_empty = _strip_update(zset, row, Interval._raw(low, middle), order)
-    upper_half, upper_empty = _strip_update(zset, row, Interval._raw(middle, high), order)
+    lower_half, lower_empty = _strip_update(zset, row, Interval._raw(low, middle), order, compiled)
+    upper_half, upper_empty = _strip_update(zset, row, Interval._raw(middle, high), order, compiled)
     slots = np.argsort(~alive, axis=-1, kind="stable")
     rank = np.argsort(slots, axis=-1)
     source = np.take_along_axis(slots, np.clip(rank - count, 0, parts - 1), axis=-1)
@@ -460,6 +520,12 @@ def _bisect_parts(
     alive = np.where(keeps, alive & ~lower_empty, alive)
     alive = np.where(takes, ~np.take_along_axis(upper_empty, source, axis=-1), alive)
     return zset, alive
+
+
+def _kernels_loaded() -> bool:
+    """Whether this process has already compiled or loaded the kernels (one signature of each or more)."""
+    module = sys.modules.get("intervalobs.systems.flow_kernel")
+    return module is not None and bool(module.advance.signatures) and bool(module.strip_update.signatures)
 
 
 def _broadcast(zset: StateZonotope, lead: tuple[int, ...]) -> StateZonotope:

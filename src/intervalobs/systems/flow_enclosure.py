@@ -88,8 +88,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import AssumptionError, BoundsError
-from ..inclusion import interval_function, interval_matrix
+from ..inclusion import VectorFunction, interval_function
 from ..interval import Interval
+from ..interval_dual import value_and_jacobian
 from ..zonotope import reduce_order
 from .bounds import Bounds
 from .continuous_nonlinear import ContinuousNonlinearSystem
@@ -149,8 +150,7 @@ class StateZonotope:
         -------
         Interval, shape (..., N)
         """
-        unit = np.ones(self.generators.shape[:-2] + self.generators.shape[-1:])
-        return self.generators @ Interval._raw(-unit, unit) + self.centre
+        return hull_box(self.centre, self.generators)
 
     def with_box(self, extra: Interval, order: int) -> StateZonotope:
         """The sum with a box (its centre moves the centre, its radii are new generators), ``order`` generators.
@@ -172,6 +172,45 @@ class StateZonotope:
         size = centre.shape[-1]
         generators = np.concatenate([self.generators, radius[..., :, None] * np.eye(size)], axis=-1)
         return StateZonotope(centre, _reduce(generators, order))
+
+
+_GAMMA_PAD = float(np.finfo(float).eps)
+"""Machine epsilon :math:`\\varepsilon = 2u`: a row of m terms is padded by :math:`(m + 2)\\varepsilon` of its
+magnitude, the dot-product bound of ``Interval.__matmul__``."""
+_TINY = float(np.finfo(float).tiny)
+
+
+def hull_box(centre: FloatArray, generators: FloatArray) -> Interval:
+    r"""The interval hull :math:`c \pm |G|\mathbf 1`, outward rounded: ``G @ [-1, 1] + c`` without the products.
+
+    The terms of :math:`G[-1, 1]^m` are :math:`\pm|G_{ij}|` exactly, so ``Interval.__matmul__``'s bound reduces to
+    the row sum :math:`s` of :math:`|G|` padded by :math:`\gamma s` + the smallest normal number
+    (:math:`\gamma = 2(m + 2)u`) and rounded outward; then the centre is added (rounded outward). Bit for bit the
+    same ends as the product form.
+
+    Parameters
+    ----------
+    centre : numpy.ndarray, shape (..., N)
+    generators : numpy.ndarray, shape (..., N, m)
+
+    Returns
+    -------
+    Interval, shape (..., N)
+    """
+    spread = _unit_cube_image(np.abs(generators))
+    return Interval._raw(np.nextafter(spread.lower + centre, -np.inf), np.nextafter(spread.upper + centre, np.inf))
+
+
+def _unit_cube_image(magnitude: FloatArray) -> Interval:
+    r"""``Interval(M_lo, M_hi) @ [-1, 1]^m`` for a matrix whose entries' largest magnitudes are ``magnitude``.
+
+    Each term's hull is :math:`\pm\max(|a|, |b|)` exactly, so the product form's ends are the row sums padded by
+    its dot-product bound and rounded outward; computed here without forming the products (same ends).
+    """
+    total = magnitude.sum(axis=-1)
+    gamma = (magnitude.shape[-1] + 2) * _GAMMA_PAD
+    reach = total + (gamma * total + _TINY)
+    return Interval._raw(np.nextafter(-reach, -np.inf), np.nextafter(reach, np.inf))
 
 
 def _reduce(generators: FloatArray, order: int) -> FloatArray:
@@ -209,19 +248,24 @@ def interval_product(a: Interval, b: Interval) -> Interval:
     return Interval._raw(np.swapaxes(rows.lower, -1, -2), np.swapaxes(rows.upper, -1, -2))
 
 
-def _right_side(system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, box: Interval) -> Interval:
+def _disturbance_box(system: ContinuousNonlinearSystem, w: Interval) -> Interval | None:
+    """:math:`E[w]` on the augmented state (zero on the parameters); None without a disturbance."""
+    if system.nw == 0:
+        return None
+    disturbance = system.E @ w
+    pad = np.zeros(system.n_params)
+    return Interval._raw(np.concatenate([disturbance.lower, pad]), np.concatenate([disturbance.upper, pad]))
+
+
+def _right_side(field: VectorFunction, disturbance: Interval | None, box: Interval) -> Interval:
     """:math:`F(Z) = \\tilde f(Z) + E[w]` on the augmented state; non-finite ends where undefined."""
     try:
-        lo, hi = interval_function(system.augmented_field(u), box.lower, box.upper)
+        lo, hi = interval_function(field, box.lower, box.upper)
     except (BoundsError, ZeroDivisionError, FloatingPointError):
         inf = np.full(box.shape, np.inf)
         return Interval._raw(-inf, inf)
     rates = Interval._raw(lo, hi)
-    if system.nw == 0:
-        return rates
-    disturbance = system.E @ w
-    pad = np.zeros(system.n_params)
-    return rates + Interval._raw(np.concatenate([disturbance.lower, pad]), np.concatenate([disturbance.upper, pad]))
+    return rates if disturbance is None else rates + disturbance
 
 
 def _within(box: Interval, low: FloatArray, high: FloatArray) -> Interval:
@@ -259,35 +303,58 @@ def a_priori(
     free = np.full(system.n, np.inf)
     low = np.concatenate([system.domain[0] if domain else -free, np.full(system.n_params, -np.inf)])
     high = np.concatenate([system.domain[1] if domain else free, np.full(system.n_params, np.inf)])
-    return _picard(system, u, w, start, tau, low, high)
+    return _picard(system.augmented_field(u), _disturbance_box(system, w), start, tau, low, high)
 
 
 def _picard(
-    system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, start: Interval, tau: float, low: Any, high: Any
+    field: VectorFunction, disturbance: Interval | None, start: Interval, tau: float, low: Any, high: Any
 ) -> Interval | None:
     """Step 1 of the module for boxes ``start`` with domains ``[low, high]`` (broadcast); None if not found."""
     span = Interval._raw(np.zeros(()), np.asarray(tau, dtype=float))
-    guess = start + span * _right_side(system, u, w, start)
+    guess = start + span * _right_side(field, disturbance, start)
     for _ in range(_PICARD_ITERATIONS):
         if not (np.all(np.isfinite(guess.lower)) and np.all(np.isfinite(guess.upper))):
             return None
         motion = np.maximum(guess.upper - start.upper, start.lower - guess.lower)
         pad = _INFLATION * motion + 1e-12 * (1.0 + np.abs(guess.centre))
         candidate = Interval._raw(guess.lower - pad, guess.upper + pad)
-        image = start + span * _right_side(system, u, w, _within(candidate, low, high))
+        image = start + span * _right_side(field, disturbance, _within(candidate, low, high))
         if np.all(image.lower > candidate.lower) and np.all(image.upper < candidate.upper):
             return _within(image, low, high)
         guess = image
     return None
 
 
-def _stacked(first: Interval, second: Interval) -> Interval:
-    """Two boxes of the same shape as one, along a new leading axis (one evaluation of a function for both)."""
-    return Interval._raw(np.stack([first.lower, second.lower]), np.stack([first.upper, second.upper]))
+def _stacked(*boxes: Interval) -> Interval:
+    """Boxes of the same shape as one, along a new leading axis (one evaluation of a function for all)."""
+    return Interval._raw(np.stack([b.lower for b in boxes]), np.stack([b.upper for b in boxes]))
 
 
-def _bounds(box: Interval) -> tuple[FloatArray, FloatArray]:
-    return box.lower, box.upper
+@dataclass(frozen=True)
+class _Flow:
+    """What stays fixed over one call of :func:`propagate`: the field for the held input, :math:`E[w]`, domains."""
+
+    field: VectorFunction
+    disturbance: Interval | None
+    low: FloatArray
+    high: FloatArray
+    n: int
+    compiled: bool
+
+    @classmethod
+    def build(
+        cls, system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, ndim: int, compiled: bool = False
+    ) -> _Flow:
+        """The set's domain (row 0) and the centre's (row 1, none) for centres of ``ndim`` axes."""
+        size = system.n + system.n_params
+        free = np.full(system.n, np.inf)
+        params = np.full(system.n_params, np.inf)
+        low = np.stack([np.concatenate([system.domain[0], -params]), np.concatenate([-free, -params])])
+        high = np.stack([np.concatenate([system.domain[1], params]), np.concatenate([free, params])])
+        shape = (2,) + (1,) * (ndim - 1) + (size,)
+        disturbance = _disturbance_box(system, w)
+        field = system.augmented_field(u)
+        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, compiled)
 
 
 def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
@@ -316,37 +383,60 @@ def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
     return Interval._raw(np.maximum(box.lower, sweep.lower), np.minimum(box.upper, sweep.upper))
 
 
-def _step(
-    system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, zset: StateZonotope, tau: float, order: int
-) -> tuple[StateZonotope, Interval] | None:
+def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[StateZonotope, Interval] | None:
     """Steps 1-4 of the module over ``[0, tau]``; None when an a priori enclosure is not found."""
     point = Interval._wrap(zset.centre)
     size = zset.centre.shape[-1]
-    free = np.full(size - system.n_params, np.inf)
-    params = np.full(system.n_params, np.inf)
-    low = np.stack([np.concatenate([system.domain[0], -params]), np.concatenate([-free, -params])])
-    high = np.stack([np.concatenate([system.domain[1], params]), np.concatenate([free, params])])
-    shape = (2,) + (1,) * (zset.centre.ndim - 1) + (size,)
-    boxes = _picard(system, u, w, _stacked(zset.box(), point), tau, low.reshape(shape), high.reshape(shape))
+    boxes = _picard(flow.field, flow.disturbance, _stacked(zset.box(), point), tau, flow.low, flow.high)
     if boxes is None:  # the set's trajectories and its centre's, one batch (the centre ignores the domain)
         return None
     tilde, hat = boxes[0], boxes[1]
-    jacobian_function, _ = system.jacobians(u)
     both = Interval._raw(np.minimum(tilde.lower, hat.lower), np.maximum(tilde.upper, hat.upper))
-    jacs = Interval._raw(*interval_matrix(jacobian_function, *_bounds(_stacked(both, hat)), (size, size)))
+    # one forward-mode pass: the Jacobians over both boxes and over the centre's, the rates over it and at the centre
+    values, jacs = value_and_jacobian(flow.field, *_ends(_stacked(both, hat, point)), size)
+    rates = values[1:] if flow.disturbance is None else values[1:] + flow.disturbance
     jac, jac_hat = jacs[0], jacs[1]
     half_square = 0.5 * tau * tau
-    rates = _right_side(system, u, w, _stacked(point, hat))
-    centre_end = point + rates[0] * tau + (jac_hat @ rates[1]) * half_square
-    spread = _fundamental_a_priori(jac, system.n, tau)
+    centre_end = point + rates[1] * tau + (jac_hat @ rates[0]) * half_square
+    if flow.compiled:
+        return _compiled_rest(flow, zset, (centre_end, jac), tau, order), tilde
+    spread = _fundamental_a_priori(jac, flow.n, tau)
     phi = jac * tau + interval_product(jac, interval_product(jac, spread)) * half_square + np.eye(size)
     mid = phi.centre
     generators = mid @ zset.generators
-    unit = np.ones(generators.shape[:-2] + generators.shape[-1:])
-    cube = Interval._raw(-unit, unit)
     exact = interval_product(Interval._wrap(mid), Interval._wrap(zset.generators)) - generators
-    error = centre_end - zset.centre + (phi - mid) @ (zset.generators @ cube) + exact @ cube
+    spread_box = _unit_cube_image(np.abs(zset.generators))
+    exact_box = _unit_cube_image(np.maximum(np.abs(exact.lower), np.abs(exact.upper)))
+    error = centre_end - zset.centre + (phi - mid) @ spread_box + exact_box
     return StateZonotope(zset.centre, generators).with_box(error, order), tilde
+
+
+def _compiled_rest(
+    flow: _Flow, zset: StateZonotope, boxes: tuple[Interval, Interval], tau: float, order: int
+) -> StateZonotope:
+    """Steps 3-4 by :func:`intervalobs.systems.flow_kernel.advance` (the same formulas compiled), all sets flattened."""
+    from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
+
+    centre_end, jac = boxes
+    lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
+
+    def flat(array: FloatArray, axes: int) -> FloatArray:
+        return np.ascontiguousarray(
+            np.broadcast_to(array, (*lead, *array.shape[-axes:])).reshape(-1, *array.shape[-axes:])
+        )
+
+    centre, generators = flow_kernel.advance(
+        flat(zset.centre, 1),
+        flat(zset.generators, 2),
+        (flat(centre_end.lower, 1), flat(centre_end.upper, 1)),
+        (flat(jac.lower, 2), flat(jac.upper, 2)),
+        (float(tau), int(flow.n), int(order)),
+    )
+    return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
+
+
+def _ends(box: Interval) -> tuple[FloatArray, FloatArray]:
+    return box.lower, box.upper
 
 
 def propagate(
@@ -357,6 +447,7 @@ def propagate(
     h: float,
     substeps: int = 1,
     order: int | None = None,
+    compiled: bool = False,
 ) -> tuple[StateZonotope, Interval]:
     """Carry a zonotope of augmented states over ``[0, h]`` (the module's steps, ``substeps`` of them).
 
@@ -375,6 +466,9 @@ def propagate(
         Steps per interval (each halved again where an a priori enclosure is not found).
     order : int, optional
         Most generators kept (default ``ORDER_FACTOR`` times the augmented dimension).
+    compiled : bool
+        Do steps 3-4 in :mod:`intervalobs.systems.flow_kernel` (Numba; the same bounds up to the order of a few
+        sums, several times faster on small sets); False keeps Numba unimported.
 
     Returns
     -------
@@ -390,13 +484,13 @@ def propagate(
         When no a priori enclosure is found even for steps ``2**MAX_HALVINGS`` times shorter (the
         set is too large or the vector field blows up on it).
     """
-    ua = np.asarray(u, dtype=float)
+    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, compiled)
     kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
     remaining, tau, halvings = float(h), float(h) / substeps, 0
     hull: Interval | None = None
     while remaining > 0.0:
         tau = min(tau, remaining)
-        result = _step(system, ua, w, zset, tau, kept)
+        result = _step(flow, zset, tau, kept)
         if result is None:
             halvings += 1
             if halvings > MAX_HALVINGS:

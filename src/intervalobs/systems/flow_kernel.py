@@ -1,0 +1,375 @@
+r"""The compiled array part of one validated flow step (:mod:`intervalobs.systems.flow_enclosure`, steps 3-4).
+
+:func:`advance` takes what the user's vector field gave (the interval Jacobian over the a priori boxes and the
+box of the centre's trajectory) and does the rest of the step in one Numba loop per set: the box of the
+fundamental matrix, :math:`[\Phi]`, the new generators :math:`\mathrm{mid}[\Phi]G`, the remainder box and the
+reduction to ``order`` generators. :func:`strip_update` is the observer's contraction of a zonotope by a
+strip (:func:`intervalobs.observers.continuous_nonlinear._strip_update`, with its hull-keeping gain). Both
+evaluate the same formulas, in the same order, as the NumPy paths of
+:func:`intervalobs.systems.flow_enclosure._step` and of the observer (which stay the reference and are used
+for short records), so the two agree up to the order of a few sums; the user's function is never compiled.
+
+Notes
+-----
+**Soundness.** Every interval operation is the one of :class:`~intervalobs.interval.Interval`: the hull of the
+four products of the ends (``0 * inf = 0``), sums in round-to-nearest, and each end moved one floating-point
+number outward (``nextafter``), a matrix product's row sums first padded by the dot-product bound
+:math:`\gamma_k\sum|t|` with :math:`\gamma_k = (k + 2)\varepsilon` and the smallest normal number, as
+``Interval.__matmul__`` does (policy 1 of :mod:`intervalobs.interval`). That bound holds for any order of
+summation, so the loop's order (not BLAS's or NumPy's pairwise one) changes no guarantee. The point products
+(:math:`\mathrm{mid}[\Phi]G` and the centres) need no rounding: whatever they miss is in the remainder box,
+which is computed in interval arithmetic from them. The reduction boxes the smallest generators with the
+row sums of their magnitudes widened by :math:`2m\varepsilon` relative and rounded up, as
+:func:`intervalobs.systems.flow_enclosure._reduce`.
+
+Importing this module imports Numba; the first call of a fresh install compiles it into Numba's cache
+(``cache=True``), later processes load it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["advance", "strip_update"]
+
+FloatArray = NDArray[np.float64]
+
+_EPS = float(np.finfo(float).eps)
+_TINY = float(np.finfo(float).tiny)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _down(x: float) -> float:
+    return np.nextafter(x, -np.inf)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _up(x: float) -> float:
+    return np.nextafter(x, np.inf)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _hull(a_lo: float, a_hi: float, b_lo: float, b_hi: float) -> tuple[float, float]:
+    """The hull of the four products of the ends, a NaN product (``0 * inf``) counted as 0."""
+    low, high = np.inf, -np.inf
+    for p in (a_lo * b_lo, a_lo * b_hi, a_hi * b_lo, a_hi * b_hi):
+        q = 0.0 if math.isnan(p) else p
+        low, high = min(low, q), max(high, q)
+    return low, high
+
+
+@numba.njit(cache=True, nogil=True)
+def _product(a_lo: FloatArray, a_hi: FloatArray, b_lo: FloatArray, b_hi: FloatArray, out: FloatArray) -> None:
+    """``out[0], out[1]`` = the ends of the interval matrix product ``[a] @ [b]`` (``Interval.__matmul__``'s rule)."""
+    rows, inner = a_lo.shape
+    cols = b_lo.shape[1]
+    gamma = (inner + 2) * _EPS
+    for i in range(rows):
+        for j in range(cols):
+            s_lo, s_hi, m_lo, m_hi = 0.0, 0.0, 0.0, 0.0
+            for k in range(inner):
+                t_lo, t_hi = _hull(a_lo[i, k], a_hi[i, k], b_lo[k, j], b_hi[k, j])
+                s_lo += t_lo
+                s_hi += t_hi
+                m_lo += abs(t_lo)
+                m_hi += abs(t_hi)
+            low = s_lo - (gamma * m_lo + _TINY)
+            high = s_hi + (gamma * m_hi + _TINY)
+            out[0, i, j] = -np.inf if math.isnan(low) else _down(low)
+            out[1, i, j] = np.inf if math.isnan(high) else _up(high)
+
+
+@numba.njit(cache=True, nogil=True)
+def _fundamental(j_lo: FloatArray, j_hi: FloatArray, n: int, tau: float, out: FloatArray) -> None:
+    """The box of :math:`\\Phi(s)`, :math:`s \\in [0, \\tau]` (``flow_enclosure._fundamental_a_priori``), in ``out``."""
+    size = j_lo.shape[0]
+    lipschitz = 0.0
+    for i in range(n):
+        row = 0.0
+        for j in range(n):
+            row += max(-j_lo[i, j], j_hi[i, j])
+        lipschitz = max(lipschitz, row)
+    growth = _up(math.expm1(tau * lipschitz) * (1.0 + 1e-12))
+    for i in range(size):
+        for j in range(size):
+            radius = 0.0
+            if i < n and j < n:
+                radius = growth
+            elif i < n:
+                column = 0.0
+                for r in range(n):
+                    column = max(column, max(-j_lo[r, j], j_hi[r, j]))
+                radius = _up(column * tau * (1.0 + growth) * (1.0 + 1e-12))
+            eye = 1.0 if i == j else 0.0
+            out[0, i, j], out[1, i, j] = eye - radius, eye + radius
+    sweep = np.empty((2, size, size))
+    _product(j_lo, j_hi, out[0], out[1], sweep)
+    for i in range(size):
+        for j in range(size):
+            eye = 1.0 if i == j else 0.0
+            low = _down(_down(min(0.0, tau * sweep[0, i, j])) + eye)
+            high = _up(_up(max(0.0, tau * sweep[1, i, j])) + eye)
+            out[0, i, j], out[1, i, j] = max(out[0, i, j], low), min(out[1, i, j], high)
+
+
+@numba.njit(cache=True, nogil=True)
+def _reduce(generators: FloatArray, order: int, out: FloatArray) -> None:
+    """``order`` generators: the ``order - N`` of largest Euclidean norm, then the box of the others (rounded up)."""
+    size, count = generators.shape
+    out[:] = 0.0
+    if count <= order:
+        out[:, :count] = generators
+        return
+    keep = order - size
+    norms = np.empty(count)
+    for j in range(count):
+        total = 0.0
+        for i in range(size):
+            total += generators[i, j] * generators[i, j]
+        norms[j] = -math.sqrt(total)
+    ranked = np.argsort(norms, kind="mergesort")
+    for c in range(keep):
+        out[:, c] = generators[:, ranked[c]]
+    for i in range(size):
+        box = 0.0
+        for c in range(keep, count):
+            box += abs(generators[i, ranked[c]])
+        out[i, keep + i] = _up(box * (1.0 + 2 * count * _EPS))
+
+
+@numba.njit(cache=True, nogil=True)
+def _advance_one(
+    centre: FloatArray,
+    generators: FloatArray,
+    centre_end: tuple[FloatArray, FloatArray],
+    jacobian: tuple[FloatArray, FloatArray],
+    step: tuple[float, int, int],
+    new_centre: FloatArray,
+    new_generators: FloatArray,
+) -> None:
+    """Steps 3-4 of the flow enclosure for one set (see :func:`advance`)."""
+    tau, n, order = step
+    j_lo, j_hi = jacobian
+    size, count = generators.shape
+    half_square = 0.5 * tau * tau
+    spread = np.empty((2, size, size))
+    _fundamental(j_lo, j_hi, n, tau, spread)
+    inner = np.empty((2, size, size))
+    _product(j_lo, j_hi, spread[0], spread[1], inner)
+    outer = np.empty((2, size, size))
+    _product(j_lo, j_hi, inner[0], inner[1], outer)
+    phi = np.empty((2, size, size))
+    for i in range(size):
+        for j in range(size):
+            eye = 1.0 if i == j else 0.0
+            a_lo, a_hi = min(j_lo[i, j] * tau, j_hi[i, j] * tau), max(j_lo[i, j] * tau, j_hi[i, j] * tau)
+            b_lo = min(outer[0, i, j] * half_square, outer[1, i, j] * half_square)
+            b_hi = max(outer[0, i, j] * half_square, outer[1, i, j] * half_square)
+            low = _down(_down(_down(a_lo) + _down(b_lo)) + eye)
+            high = _up(_up(_up(a_hi) + _up(b_hi)) + eye)
+            phi[0, i, j], phi[1, i, j] = low, high
+    mid = 0.5 * (phi[0] + phi[1])
+    moved = np.zeros((size, count))  # in round-to-nearest: what it misses is in the remainder box
+    for i in range(size):
+        for k in range(size):
+            for j in range(count):
+                moved[i, j] += mid[i, k] * generators[k, j]
+    exact = np.empty((2, size, count))
+    _product(mid, mid, generators, generators, exact)
+    all_generators = np.zeros((size, count + size))
+    all_generators[:, :count] = moved
+    gamma_m = (count + 2) * _EPS
+    gamma_n = (size + 2) * _EPS
+    reach = np.empty(size)  # the unit cube's image under |G| (the set's hull radius), rounded up
+    for k in range(size):
+        total = 0.0
+        for j in range(count):
+            total += abs(generators[k, j])
+        reach[k] = _up(total + (gamma_m * total + _TINY))
+    for i in range(size):
+        total = 0.0  # the box of (exact - moved) @ [-1, 1]^m
+        for j in range(count):
+            total += max(abs(_down(exact[0, i, j] - moved[i, j])), abs(_up(exact[1, i, j] - moved[i, j])))
+        exact_reach = _up(total + (gamma_m * total + _TINY))
+        s_lo, s_hi, m_lo, m_hi = 0.0, 0.0, 0.0, 0.0  # ([phi] - mid) @ [-reach, reach]
+        for k in range(size):
+            t_lo, t_hi = _hull(_down(phi[0, i, k] - mid[i, k]), _up(phi[1, i, k] - mid[i, k]), -reach[k], reach[k])
+            s_lo, s_hi, m_lo, m_hi = s_lo + t_lo, s_hi + t_hi, m_lo + abs(t_lo), m_hi + abs(t_hi)
+        term_lo = _down(s_lo - (gamma_n * m_lo + _TINY))
+        term_hi = _up(s_hi + (gamma_n * m_hi + _TINY))
+        low = _down(_down(_down(centre_end[0][i] - centre[i]) + term_lo) - exact_reach)
+        high = _up(_up(_up(centre_end[1][i] - centre[i]) + term_hi) + exact_reach)
+        low, high = _down(low + centre[i]), _up(high + centre[i])  # the box's centre joins the set's centre
+        middle = 0.5 * (low + high)
+        new_centre[i] = middle
+        all_generators[i, count + i] = _up(max(high - middle, middle - low))
+    _reduce(all_generators, order, new_generators)
+
+
+@numba.njit(cache=True, nogil=True)
+def advance(
+    centre: FloatArray,
+    generators: FloatArray,
+    centre_end: tuple[FloatArray, FloatArray],
+    jacobian: tuple[FloatArray, FloatArray],
+    step: tuple[float, int, int],
+) -> tuple[FloatArray, FloatArray]:
+    """Steps 3-4 of :mod:`intervalobs.systems.flow_enclosure` for a batch of sets.
+
+    Parameters
+    ----------
+    centre : numpy.ndarray, shape (B, N)
+        The sets' centres.
+    generators : numpy.ndarray, shape (B, N, m)
+        Their generators.
+    centre_end : tuple of numpy.ndarray, shape (B, N) each
+        Lower and upper ends of the box of the centre's trajectory at the end of the step.
+    jacobian : tuple of numpy.ndarray, shape (B, N, N) each
+        The interval Jacobian over both a priori boxes.
+    step : tuple
+        ``(tau, n, order)``: step length, number of states (the rest are parameters), generators kept.
+
+    Returns
+    -------
+    centre, generators : numpy.ndarray, shapes (B, N) and (B, N, order)
+    """
+    batch, size, _ = generators.shape
+    order = step[2]
+    new_centre = np.empty((batch, size))
+    new_generators = np.empty((batch, size, order))
+    for b in range(batch):
+        _advance_one(
+            centre[b],
+            generators[b],
+            (centre_end[0][b], centre_end[1][b]),
+            (jacobian[0][b], jacobian[1][b]),
+            step,
+            new_centre[b],
+            new_generators[b],
+        )
+    return new_centre, new_generators
+
+
+@numba.njit(cache=True, nogil=True)
+def _dot(a: FloatArray, x: FloatArray) -> tuple[float, float]:
+    """Ends of ``a @ x`` for point vectors, padded as ``Interval.__matmul__`` pads a row (outward)."""
+    total, magnitude = 0.0, 0.0
+    for i in range(a.size):
+        term = a[i] * x[i]
+        total += term
+        magnitude += abs(term)
+    pad = (a.size + 2) * _EPS * magnitude + _TINY
+    return _down(total - pad), _up(total + pad)
+
+
+@numba.njit(cache=True, nogil=True)
+def _weighted_median(points: FloatArray, weights: FloatArray) -> float:
+    """The smallest point at which the cumulative weight (points sorted) reaches half the total."""
+    ranked = np.argsort(points)
+    total = 0.0
+    for r in range(ranked.size):  # summed in the sorted order, as the running sum below
+        total += weights[ranked[r]]
+    cumulative = 0.0
+    for r in range(ranked.size):
+        cumulative += weights[ranked[r]]
+        if cumulative >= 0.5 * total:
+            return points[ranked[r]]
+    return points[ranked[-1]]
+
+
+@numba.njit(cache=True, nogil=True)
+def _strip_one(
+    centre: FloatArray,
+    generators: FloatArray,
+    a: FloatArray,
+    strip: tuple[float, float],
+    out: tuple[FloatArray, FloatArray],
+) -> bool:
+    """The strip update of one set (see :func:`strip_update`); returns whether the intersection is empty."""
+    size, count = generators.shape
+    image = np.empty((2, count))
+    for j in range(count):
+        image[0, j], image[1, j] = _dot(a, generators[:, j])
+    level_lo, level_hi = _dot(a, centre)
+    reach = 0.0
+    for j in range(count):
+        reach += max(-image[0, j], image[1, j])
+    reach = _up(reach * (1.0 + 2 * count * _EPS))
+    low, high = max(strip[0], level_lo - reach), min(strip[1], level_hi + reach)
+    empty = not (low <= high)
+    if empty:
+        low, high = level_lo, level_hi
+    target = 0.5 * (low + high)
+    sigma = _up(max(high - target, target - low))
+    row = 0.5 * (image[0] + image[1])
+    weights = np.empty(count + 1)
+    points = np.zeros(count + 1)
+    for j in range(count):
+        weights[j] = abs(row[j]) if abs(row[j]) > 0 else 0.0
+    weights[count] = sigma
+    new = np.zeros((size, count + 1 + size))
+    box = np.empty((2, size))
+    shift_lo, shift_hi = _down(target - level_hi), _up(target - level_lo)
+    for i in range(size):
+        for j in range(count):
+            points[j] = generators[i, j] / (row[j] if abs(row[j]) > 0 else 1.0)
+        points[count] = 0.0
+        gain = _weighted_median(points, weights)
+        c_lo = _down(_down(min(gain * shift_lo, gain * shift_hi)) + centre[i])
+        c_hi = _up(_up(max(gain * shift_lo, gain * shift_hi)) + centre[i])
+        slack = 0.0
+        for j in range(count):
+            p_lo, p_hi = _hull(gain, gain, image[0, j], image[1, j])
+            m_lo, m_hi = _down(generators[i, j] - _up(p_hi)), _up(generators[i, j] - _down(p_lo))
+            new[i, j] = 0.5 * (m_lo + m_hi)
+            slack += 0.5 * (m_hi - m_lo)
+        e_lo, e_hi = _down(min(sigma * gain, sigma * gain)), _up(max(sigma * gain, sigma * gain))
+        new[i, count] = 0.5 * (e_lo + e_hi)
+        slack = _up((slack + 0.5 * (e_hi - e_lo)) * (1.0 + 2 * (count + 1) * _EPS))
+        middle = 0.5 * (c_lo + c_hi)
+        box[0, i], box[1, i] = c_lo - middle - slack, c_hi - middle + slack
+        box[0, i], box[1, i] = _down(box[0, i] + middle), _up(box[1, i] + middle)
+    for i in range(size):  # the box joins as one generator per coordinate, its centre moves the centre
+        middle = 0.5 * (box[0, i] + box[1, i])
+        out[0][i] = middle
+        new[i, count + 1 + i] = _up(max(box[1, i] - middle, middle - box[0, i]))
+    _reduce(new, out[1].shape[1], out[1])
+    return empty
+
+
+@numba.njit(cache=True, nogil=True)
+def strip_update(
+    centre: FloatArray, generators: FloatArray, a: FloatArray, strip: tuple[FloatArray, FloatArray], order: int
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """A zonotope containing each set's intersection with the strip :math:`a^\\top x \\in [s]`, for a batch of sets.
+
+    Parameters
+    ----------
+    centre : numpy.ndarray, shape (B, N)
+    generators : numpy.ndarray, shape (B, N, m)
+    a : numpy.ndarray, shape (B, N)
+        The strip's normal, per set.
+    strip : tuple of numpy.ndarray, shape (B,) each
+        Lower and upper ends of :math:`[s]`.
+    order : int
+        Generators kept.
+
+    Returns
+    -------
+    centre, generators : numpy.ndarray, shapes (B, N) and (B, N, order)
+    empty : numpy.ndarray of bool, shape (B,)
+        The set misses the strip (its centre and generators are then those of the set cut to its own support).
+    """
+    batch, size, _ = generators.shape
+    new_centre = np.empty((batch, size))
+    new_generators = np.empty((batch, size, order))
+    empty = np.zeros(batch, dtype=np.bool_)
+    for b in range(batch):
+        empty[b] = _strip_one(
+            centre[b], generators[b], a[b], (strip[0][b], strip[1][b]), (new_centre[b], new_generators[b])
+        )
+    return new_centre, new_generators, empty
