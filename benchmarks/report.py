@@ -343,7 +343,8 @@ def campaign_section() -> list[str]:
     cost = data["task_cost"]
     lines += [
         f"On {data['cores']} cores: one task costs {cost['fixed_s']:.3g} s fixed + {cost['per_run_s']:.3g} s a run, "
-        f"a level's model {cost['design_s']:.3g} s (CPU, one process). Measured ({_cell(data['measured']['runs'])} "
+        f"a level's model {cost['level_s']:.3g} s, a fresh worker's start {cost['start_s']:.3g} s (CPU, one "
+        f"process). Measured ({_cell(data['measured']['runs'])} "
         f"runs a cell, magnitudes {_cell(data['measured']['magnitudes'])}, one level):",
         "",
         *_table(data["measured"]["rows"]),
