@@ -6,8 +6,8 @@
     worker pays the first time it meets that level; and a fresh worker's start (``start_s``: importing the
     task's module, measured in a new interpreter, plus the first task's loading of the compiled kernels).
 (b) ``run_campaign`` on a small grid (``--magnitudes`` cells of ``--runs`` runs, one level) with 1, 2 and
-    all cores of this machine (``os.cpu_count()``): wall seconds (the local cluster's start included), tasks,
-    parallel efficiency ``T1 / (W T_W)``.
+    all cores of this machine (``os.cpu_count()``): wall and CPU seconds (the local cluster's start and its
+    workers included), the load average when it started, tasks, parallel efficiency ``T1 / (W T_W)``.
 (c) No machine with more cores is at hand: the paper's grid (5 levels x 5 magnitudes x 100 runs) and one
     ten times larger (1000 runs a cell) are modelled for W = 1 ... 64 workers from the task sizes alone,
     each task costing ``fixed + per_run * runs`` (from (a)), plus ``level_s`` for a worker's first task of
@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -71,16 +72,23 @@ def task_cost(probe: int) -> dict[str, float]:
     }
 
 
+def _cpu() -> float:
+    """CPU seconds of this process and of its children that have ended (the local cluster's workers)."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
 def measured(workers: int, runs: int, magnitudes: list[float]) -> dict[str, float]:
-    """Wall seconds of the small campaign on ``workers`` local workers (a fresh store)."""
+    """Wall and CPU seconds of the small campaign on ``workers`` local workers (a fresh store)."""
     with tempfile.TemporaryDirectory() as out:
-        load = os.getloadavg()[0]
+        load, cpu = os.getloadavg()[0], _cpu()
         start = time.perf_counter()
         result = run_campaign(
             CAMPAIGN, Path(out), runs=runs, levels=[0.05], magnitudes=magnitudes, workers=workers, progress=False,
             plots=False,
         )  # fmt: skip
-        return {"workers": workers, "wall_s": time.perf_counter() - start, "tasks": result.tasks, "load_1min": load}
+        wall = time.perf_counter() - start
+        return {"workers": workers, "wall_s": wall, "cpu_s": _cpu() - cpu, "tasks": result.tasks, "load_1min": load}
 
 
 def makespan(tasks: list[tuple[float, float, list[int]]], workers: int, cost: dict[str, float], start: float) -> float:
@@ -139,8 +147,8 @@ def main() -> None:
     runs = [measured(w, args.runs, args.magnitudes) for w in sorted({1, 2, cores})]
     for row in runs:
         row["efficiency"] = runs[0]["wall_s"] / (row["workers"] * row["wall_s"])
-        print(f"(b) {row['workers']:3d} workers: {row['wall_s']:7.1f} s, {row['tasks']} tasks, efficiency "
-              f"{row['efficiency']:.2f}")  # fmt: skip
+        print(f"(b) {row['workers']:3d} workers: {row['wall_s']:7.1f} s wall, {row['cpu_s']:7.1f} s CPU, "
+              f"{row['tasks']} tasks, efficiency {row['efficiency']:.2f} (load {row['load_1min']:.1f})")  # fmt: skip
     grids = {}
     for runs_a_cell in (CAMPAIGN.runs, 10 * CAMPAIGN.runs):
         model = modelled(cost, runs_a_cell)
