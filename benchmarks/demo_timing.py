@@ -3,14 +3,14 @@
 Clones the commit checked out here (``git clone`` of this repository, then that commit) into a temporary
 folder and installs it there as ``make demo`` does (``make .venv/.installed``: its own virtual environment,
 the pinned versions, the package editable); the install is timed apart and left out, and the script waits
-``--settle`` seconds for the install's load to decay. Then it times ``.venv/bin/intervalobs reproduce all``
-in the clone, with the thread settings of the Makefile, from outside: wall seconds, and the CPU seconds of it
-and its worker processes. A fresh clone has no bytecode and no compiled-kernel cache, so the timing includes
-what a first user pays. It reads each example's seconds and enclosure from the output, and notes the
-machine: usable cores and the 1-minute load average before and after (on a shared machine the wall time
-depends on the other load; the CPU time much less). ``--here`` times the command in this checkout's
-environment instead (no clone, no install).
-Writes benchmarks/demo_timing.json, the source of the README's timing statement.
+``--settle`` seconds for the install's load to decay (and, with ``--quiet-below``, for the machine's load
+average to fall below a level). Then it times ``.venv/bin/intervalobs reproduce all`` in the clone, with
+the thread settings of the Makefile, from outside: wall seconds, and the CPU seconds of it and its workers.
+A fresh clone has no bytecode and no compiled-kernel cache, so the timing includes what a first user pays.
+It reads each example's seconds and enclosure from the output, and notes the machine: usable cores and the
+1-minute load average before and after (on a shared machine the wall time depends on the other load; the
+CPU time much less). ``--here`` times the command in this checkout's environment instead (no clone, no
+install). Writes benchmarks/demo_timing.json, the source of the README's timing statement.
 """
 
 from __future__ import annotations
@@ -56,6 +56,14 @@ def fresh_clone(folder: Path) -> tuple[Path, dict[str, object]]:
     return clone, facts
 
 
+def wait_for_load(below: float | None, most: float) -> float:
+    """Wait until the 1-minute load average is below ``below`` (at most ``most`` s); the seconds waited."""
+    start = time.perf_counter()
+    while below is not None and os.getloadavg()[0] >= below and time.perf_counter() - start < most:
+        time.sleep(10.0)
+    return time.perf_counter() - start
+
+
 def timed(command: list[str], cwd: Path) -> tuple[str, float, float, float]:
     """Run ``command`` in ``cwd``: its output, wall seconds, CPU seconds (with its children), load before."""
     load = os.getloadavg()[0]
@@ -76,8 +84,11 @@ def main() -> None:
     parser.add_argument(
         "--settle", type=float, default=60.0, help="seconds to wait after the install, so that its load decays (60)"
     )
+    parser.add_argument("--quiet-below", type=float, help="then wait until the 1-minute load average is below this")
+    parser.add_argument("--max-wait", type=float, default=1800.0, help="most seconds to wait for it (1800)")
     args = parser.parse_args()
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    clone: dict[str, object]
     with tempfile.TemporaryDirectory() as tmp:
         if args.here:
             program, clone, cwd = [sys.executable, "-m", "intervalobs.cli"], {"fresh_clone": False}, ROOT
@@ -85,6 +96,7 @@ def main() -> None:
             cwd, facts = fresh_clone(Path(tmp))
             time.sleep(args.settle)
             program, clone = [str(cwd / ".venv" / "bin" / "intervalobs")], {"fresh_clone": True, **facts}
+        clone["waited_for_load_s"] = wait_for_load(args.quiet_below, args.max_wait)
         command = [
             *program,
             "reproduce",
