@@ -350,6 +350,13 @@ def campaign_section() -> list[str]:
         *_table(data["measured"]["rows"]),
         "",
     ]
+    loads = [row.get("load_1min", 0.0) for row in data["measured"]["rows"]]
+    if max(loads) >= data["cores"]:
+        lines += [
+            f"Not a valid measurement: the load average was {min(loads):.3g}–{max(loads):.3g} on {data['cores']} "
+            "cores, so these rows measure the other work on the machine as much as the campaign.",
+            "",
+        ]
     for runs, rows in data["modelled_paper_grid"]["rows_by_runs_a_cell"].items():
         lines += [f"Modelled, paper grid with {runs} runs a cell:", "", *_table(rows), ""]
     return [*lines, f"Note: {data['note']}.", ""]
