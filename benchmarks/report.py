@@ -343,12 +343,20 @@ def campaign_section() -> list[str]:
     cost = data["task_cost"]
     lines += [
         f"On {data['cores']} cores: one task costs {cost['fixed_s']:.3g} s fixed + {cost['per_run_s']:.3g} s a run, "
-        f"a level's model {cost['design_s']:.3g} s (CPU, one process). Measured ({_cell(data['measured']['runs'])} "
+        f"a level's model {cost['level_s']:.3g} s, a fresh worker's start {cost['start_s']:.3g} s (CPU, one "
+        f"process). Measured ({_cell(data['measured']['runs'])} "
         f"runs a cell, magnitudes {_cell(data['measured']['magnitudes'])}, one level):",
         "",
         *_table(data["measured"]["rows"]),
         "",
     ]
+    loads = [row.get("load_1min", 0.0) for row in data["measured"]["rows"]]
+    if max(loads) >= data["cores"]:
+        lines += [
+            f"Not a valid measurement: the load average was {min(loads):.3g}–{max(loads):.3g} on {data['cores']} "
+            "cores, so these rows measure the other work on the machine as much as the campaign.",
+            "",
+        ]
     for runs, rows in data["modelled_paper_grid"]["rows_by_runs_a_cell"].items():
         lines += [f"Modelled, paper grid with {runs} runs a cell:", "", *_table(rows), ""]
     return [*lines, f"Note: {data['note']}.", ""]

@@ -92,6 +92,26 @@ def test_fast_form_must_match_the_certified_form(model):
         model.bounds.check_fast(lambda at, bt, ct, k: 1.01 * model._fast(at, bt, ct, k), range(8))
 
 
+def test_a_shared_denominator_gives_the_certificate_of_separate_ones(model):
+    """A denominator list shared by entries is evaluated once (issue 36): the certificate is the same to the bit."""
+    from intervalobs.design.lpv import certify_vertex_extremes
+    from intervalobs.examples.manipulator import ENTRY_NAMES, _rational_factory
+
+    shared = _rational_factory(NOMINAL)
+
+    def separate(bt, k):
+        return [(form[0], list(form[1]), *form[2:]) for form in shared(bt, k)]
+
+    args = (ENTRY_NAMES, model.p_lower, model.p_upper, (-1.0, 1.0))
+    options = {"affine": (0, 2), "cells": 32, "splits": 4, "pieces": 4}
+    one, other = certify_vertex_extremes(shared, *args, **options), certify_vertex_extremes(separate, *args, **options)
+    for name in ("slack", "lipschitz", "certified_fraction"):
+        assert np.array_equal(getattr(one, name), getattr(other, name))
+    assert np.array_equal(one.slack, model.bounds.slack)
+    theta = np.linspace(-1.0, 1.0, 9)
+    assert np.array_equal(one.vertex_values(theta), other.vertex_values(theta))
+
+
 def test_parameter_box_with_vanishing_determinant_is_rejected():
     with pytest.raises(AssumptionError, match="cos"):
         ManipulatorModel(delta=(4.0, 1.0, 1.0))

@@ -115,6 +115,14 @@ def _monomials(values: Sequence[Any]) -> list[Any]:
     return out
 
 
+def _combine(coefficients: Sequence[Any], mono: Sequence[Any]) -> Any:
+    """``sum_i coefficients[i] * mono[i]``, summed from the first term."""
+    total: Any = 0.0
+    for c, m in zip(coefficients, mono):
+        total = total + c * m
+    return total
+
+
 def _entries_from_rational(
     rational: RationalForm, n_p: int, affine: tuple[int, ...], with_factor: bool = True
 ) -> Callable[..., list[Any]]:
@@ -123,17 +131,18 @@ def _entries_from_rational(
     def entries(*args: Any) -> list[Any]:
         params, s = args[:n_p], args[n_p]
         mono = _monomials([params[j] for j in affine])
+        # a denominator list shared by several entries (the same object) is evaluated once: the same numbers
+        shared: dict[int, tuple[Sequence[Any], Any]] = {}
         out = []
         for form in rational(*[params[j] for j in general], s):
             num, den = form[0], form[1]
-            n_val: Any = 0.0
-            d_val: Any = 0.0
-            for cn, cd, mv in zip(num, den, mono):
-                n_val = n_val + cn * mv
-                d_val = d_val + cd * mv
-            # over boxes, the numerator times the reciprocal: the derivative enclosure n'/d - n d'/d^2 of the
-            # product rule (the quotient rule's (n' - (n/d) d')/d is neither inside nor around it); at points, n/d
-            value = n_val * (1.0 / d_val) if isinstance(d_val, IntervalDual) else n_val / d_val
+            if id(den) not in shared:
+                d_val = _combine(den, mono)
+                # over boxes, the numerator times the reciprocal: the derivative enclosure n'/d - n d'/d^2 of the
+                # product rule (the quotient rule's (n' - (n/d) d')/d is neither inside nor around it); at points, n/d
+                shared[id(den)] = (den, 1.0 / d_val if isinstance(d_val, IntervalDual) else d_val)
+            n_val, d_term = _combine(num, mono), shared[id(den)][1]
+            value = n_val * d_term if isinstance(d_term, IntervalDual) else n_val / d_term
             if with_factor and len(form) > 2:
                 value = form[2] * value
             out.append(value)
@@ -463,12 +472,15 @@ def _line_slacks(
             lo_vars.append(grid[j][idx[:, col]])
             hi_vars.append(grid[j][idx[:, col] + 1])
     s_lo_c, s_hi_c = edges[idx[:, 0]], edges[idx[:, 0] + 1]
-    *duals, s_dual = IntervalDual.variables(np.column_stack([*lo_vars, s_lo_c]), np.column_stack([*hi_vars, s_hi_c]))
+    # only the partial derivative along p_k is used: seeding it alone gives the same numbers (interval_dual.py)
+    *duals, s_dual = IntervalDual.variables(
+        np.column_stack([*lo_vars, s_lo_c]), np.column_stack([*hi_vars, s_hi_c]), along=k
+    )
     piece_width = (Interval(hi_vars[k]) - lo_vars[k]).upper
     lines = idx.shape[0] // pieces
     slacks = []
     for v in cores(*duals, s_dual):
-        dk = _as_dual(v, s_dual).derivative[..., k]
+        dk = _as_dual(v, s_dual).derivative[..., 0]
         dlo = np.broadcast_to(dk.lower, s_lo_c.shape)
         dhi = np.broadcast_to(dk.upper, s_lo_c.shape)
         # moving p_k to its upper end loses at most the negative mass, to its lower end the positive

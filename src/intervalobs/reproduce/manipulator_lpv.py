@@ -454,9 +454,9 @@ CAMPAIGN_TASK_OVERHEAD = 0.5
 """Fixed cost of a campaign task in runs. Its 13 000-sample time loop (truth and observer) runs compiled, so a task
 costs nearly its runs alone (issue 36; it was 60 runs when the loop ran in Python); the half run stands for Dask's
 bookkeeping and the store. benchmarks/campaign_scaling.py measures it (``task_cost`` in campaign_scaling.json)."""
-CAMPAIGN_LEVEL_OVERHEAD = 15.0
-"""Cost, in runs, of a worker's first task of a level: the model's certified extremes (about 1.8 s, 15 runs of
-0.12 s) built once per level and process. benchmarks/campaign_scaling.py measures it (``design_s``)."""
+CAMPAIGN_LEVEL_OVERHEAD = 2.0
+"""Cost, in runs, of a worker's first task of a level: the model's certified extremes (about 0.25 s, 2 runs of
+0.12 s) built once per level and process. benchmarks/campaign_scaling.py measures it (``level_s``)."""
 
 
 @functools.lru_cache(maxsize=16)
