@@ -139,6 +139,11 @@ GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {
 (width over the same window, its ratio to the recommended HGIO's, enclosure, ms per sample)."""
 
 
+def _sampling(example: Any) -> dict[str, Any]:
+    """The sampling period and the input-rate bound that every design of the example assumes."""
+    return {"h": example.STEP, "input_rate": example.INPUT_RATE}
+
+
 def general_path(t: NDArray[np.float64], sim: Any, hgio: Estimate, hgio_ms_per_sample: float) -> dict[str, Any]:
     """Run every estimator of :data:`GENERAL_ESTIMATORS` on the record; widths next to the HGIO's.
 
@@ -232,10 +237,9 @@ def paper_designs() -> tuple[HighGainIntervalObserver, ModalDecomposition, Theta
         system,
         bounds,
         disks=example.DISKS,
-        h=example.STEP,
         alpha_d=example.ALPHA_D,
         alpha_n=example.ALPHA_N,
-        input_rate=example.INPUT_RATE,
+        **_sampling(example),
         **PAPER_OBSERVER,
     )
     printed_l1 = np.array(example.PAPER["L1"])[:, None]
@@ -330,11 +334,10 @@ def run(out_dir: Path, seed: int, plots: bool, full: bool = True) -> dict[str, A
     widthwise = HighGainIntervalObserver.design_for_width(
         system,
         bounds,
-        h=example.STEP,
         phi_radius=example.PHI_RADIUS,
-        input_rate=example.INPUT_RATE,
         weights=WIDTH_WEIGHTS,
         regions=WIDTH_REGIONS,
+        **_sampling(example),
     )
     assert widthwise.width_design is not None
     width_design_time = time.perf_counter() - start
