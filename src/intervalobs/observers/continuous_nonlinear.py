@@ -58,6 +58,7 @@ from ..interval import Interval
 from ..interval_dual import value_and_jacobian
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
+from ..systems.field_tape import FieldTape, trace_field
 from ..systems.flow_enclosure import ORDER_FACTOR, StateZonotope, interval_product, propagate
 from .base import Observer, ObserverState, record_consistency
 
@@ -270,6 +271,7 @@ class ContinuousNonlinearObserver(Observer):
         self._limited = np.flatnonzero(np.isfinite(self._limits[0]) | np.isfinite(self._limits[1]))
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
+        self._tape: tuple[FieldTape | None, str] | None = None
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The prior: the box of ``x(t_0)`` and of the parameters (split into parts), before the first measurement.
@@ -342,23 +344,30 @@ class ContinuousNonlinearObserver(Observer):
         each part tried on its own, so one diverging part does not stop the others.
         """
         failed = np.zeros(zset.centre.shape[:-1], dtype=bool)
+        tape = self._field_tape()[0] if compiled else None
+        options = (self.substeps, self.order, compiled, tape)
         try:
-            batch = propagate(self.system, held, self._w, zset, self._period, self.substeps, self.order, compiled)
-            return batch[0], failed
+            return propagate(self.system, held, self._w, zset, self._period, *options)[0], failed
         except AssumptionError:
             pass
         centre, generators = zset.centre.copy(), np.zeros_like(zset.generators)
         for index in np.ndindex(*failed.shape):
             single = StateZonotope(zset.centre[index], zset.generators[index])
             try:
-                moved = propagate(
-                    self.system, held[index], self._w, single, self._period, self.substeps, self.order, compiled
-                )[0]
+                moved = propagate(self.system, held[index], self._w, single, self._period, *options)[0]
             except AssumptionError:
                 failed[index] = True
                 continue
             centre[index], generators[index] = moved.centre, moved.generators
         return StateZonotope(centre, generators), failed
+
+    def _field_tape(self) -> tuple[FieldTape | None, str]:
+        """The system's field recorded once (:func:`trace_field`, probed on the prior box), or None and why."""
+        if self._tape is None:
+            low = np.concatenate([self.bounds.x0[0], self.bounds.p[0]])
+            high = np.concatenate([self.bounds.x0[1], self.bounds.p[1]])
+            self._tape = trace_field(self.system, low, high)
+        return self._tape
 
     def _correct(
         self, zset: StateZonotope, y: FloatArray, u: FloatArray, compiled: bool
@@ -424,7 +433,9 @@ class ContinuousNonlinearObserver(Observer):
         Estimate
             ``meta`` holds ``consistent`` (bool, or a list per run), ``inconsistent_from`` (the first
             time the record contradicts the model, the earliest over the runs, None when it never does;
-            per run in ``inconsistent_from_runs``), ``diverging`` and ``compiled`` (whether the compiled kernels ran).
+            per run in ``inconsistent_from_runs``), ``diverging``, ``compiled`` (whether the compiled kernels ran)
+            and ``field_tape`` (with the kernels: ``"recorded"`` where the field was evaluated by its compiled
+            tape, else why it was evaluated in Python; None without them).
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
@@ -437,6 +448,7 @@ class ContinuousNonlinearObserver(Observer):
         record_consistency(estimate, flags)
         estimate.meta["diverging"] = self._diverging(estimate, flags, lost)
         estimate.meta["compiled"] = bool(state.internal["compiled"])
+        estimate.meta["field_tape"] = self._field_tape()[1] if state.internal["compiled"] else None
         return estimate
 
     def _diverging(self, estimate: Estimate, flags: BoolArray, lost: BoolArray) -> bool:

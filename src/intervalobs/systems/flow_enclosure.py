@@ -81,6 +81,7 @@ bound converges to the true reachable set as the set and the step shrink.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -94,6 +95,7 @@ from ..interval_dual import value_and_jacobian
 from ..zonotope import reduce_order
 from .bounds import Bounds
 from .continuous_nonlinear import ContinuousNonlinearSystem
+from .field_tape import FieldTape
 
 __all__ = ["FlowEnclosure", "StateZonotope", "a_priori", "flow_enclosure", "interval_product", "propagate"]
 
@@ -303,22 +305,24 @@ def a_priori(
     free = np.full(system.n, np.inf)
     low = np.concatenate([system.domain[0] if domain else -free, np.full(system.n_params, -np.inf)])
     high = np.concatenate([system.domain[1] if domain else free, np.full(system.n_params, np.inf)])
-    return _picard(system.augmented_field(u), _disturbance_box(system, w), start, tau, low, high)
+    field, disturbance = system.augmented_field(u), _disturbance_box(system, w)
+    return _picard(lambda box: _right_side(field, disturbance, box), start, tau, low, high)
 
 
-def _picard(
-    field: VectorFunction, disturbance: Interval | None, start: Interval, tau: float, low: Any, high: Any
-) -> Interval | None:
-    """Step 1 of the module for boxes ``start`` with domains ``[low, high]`` (broadcast); None if not found."""
+def _picard(rates: Callable[[Interval], Interval], start: Interval, tau: float, low: Any, high: Any) -> Interval | None:
+    """Step 1 of the module for boxes ``start`` with domains ``[low, high]`` (broadcast); None if not found.
+
+    ``rates`` is :math:`F`: the box of the right-hand side over a box (non-finite ends where it is undefined).
+    """
     span = Interval._raw(np.zeros(()), np.asarray(tau, dtype=float))
-    guess = start + span * _right_side(field, disturbance, start)
+    guess = start + span * rates(start)
     for _ in range(_PICARD_ITERATIONS):
         if not (np.all(np.isfinite(guess.lower)) and np.all(np.isfinite(guess.upper))):
             return None
         motion = np.maximum(guess.upper - start.upper, start.lower - guess.lower)
         pad = _INFLATION * motion + 1e-12 * (1.0 + np.abs(guess.centre))
         candidate = Interval._raw(guess.lower - pad, guess.upper + pad)
-        image = start + span * _right_side(field, disturbance, _within(candidate, low, high))
+        image = start + span * rates(_within(candidate, low, high))
         if np.all(image.lower > candidate.lower) and np.all(image.upper < candidate.upper):
             return _within(image, low, high)
         guess = image
@@ -332,7 +336,11 @@ def _stacked(*boxes: Interval) -> Interval:
 
 @dataclass(frozen=True)
 class _Flow:
-    """What stays fixed over one call of :func:`propagate`: the field for the held input, :math:`E[w]`, domains."""
+    """What stays fixed over one call of :func:`propagate`: the field for the held input, :math:`E[w]`, domains.
+
+    ``tape``: the field recorded (:mod:`intervalobs.systems.field_tape`), evaluated compiled with the same ends
+    as ``field``; None evaluates ``field`` in Python.
+    """
 
     field: VectorFunction
     disturbance: Interval | None
@@ -340,10 +348,17 @@ class _Flow:
     high: FloatArray
     n: int
     compiled: bool
+    tape: FieldTape | None = None
+    u: FloatArray | None = None
 
     @classmethod
     def build(
-        cls, system: ContinuousNonlinearSystem, u: FloatArray, w: Interval, ndim: int, compiled: bool = False
+        cls,
+        system: ContinuousNonlinearSystem,
+        u: FloatArray,
+        w: Interval,
+        ndim: int,
+        compiled: tuple[bool, FieldTape | None] = (False, None),
     ) -> _Flow:
         """The set's domain (row 0) and the centre's (row 1, none) for centres of ``ndim`` axes."""
         size = system.n + system.n_params
@@ -354,7 +369,26 @@ class _Flow:
         shape = (2,) + (1,) * (ndim - 1) + (size,)
         disturbance = _disturbance_box(system, w)
         field = system.augmented_field(u)
-        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, compiled)
+        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, *compiled, u)
+
+    def rates(self, box: Interval) -> Interval:
+        """:math:`F(Z) = \\tilde f(Z) + E[w]` over boxes (:func:`_right_side`, by the tape where there is one)."""
+        if self.tape is None or self.u is None:
+            return _right_side(self.field, self.disturbance, box)
+        try:
+            rates = self.tape.evaluate(box.lower, box.upper, self.u)[0]
+        except BoundsError:
+            inf = np.full(box.shape, np.inf)
+            return Interval._raw(-inf, inf)
+        return rates if self.disturbance is None else rates + self.disturbance
+
+    def value_and_jacobian(self, box: Interval) -> tuple[Interval, Interval]:
+        """The boxes of the field and of its Jacobian over boxes (:func:`value_and_jacobian`, or the tape's)."""
+        if self.tape is None or self.u is None:
+            return value_and_jacobian(self.field, box.lower, box.upper, box.shape[-1])
+        value, jacobian = self.tape.evaluate(box.lower, box.upper, self.u, derivative=True)
+        assert jacobian is not None
+        return value, jacobian
 
 
 def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
@@ -387,13 +421,13 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     """Steps 1-4 of the module over ``[0, tau]``; None when an a priori enclosure is not found."""
     point = Interval._wrap(zset.centre)
     size = zset.centre.shape[-1]
-    boxes = _picard(flow.field, flow.disturbance, _stacked(zset.box(), point), tau, flow.low, flow.high)
+    boxes = _picard(flow.rates, _stacked(zset.box(), point), tau, flow.low, flow.high)
     if boxes is None:  # the set's trajectories and its centre's, one batch (the centre ignores the domain)
         return None
     tilde, hat = boxes[0], boxes[1]
     both = Interval._raw(np.minimum(tilde.lower, hat.lower), np.maximum(tilde.upper, hat.upper))
     # one forward-mode pass: the Jacobians over both boxes and over the centre's, the rates over it and at the centre
-    values, jacs = value_and_jacobian(flow.field, *_ends(_stacked(both, hat, point)), size)
+    values, jacs = flow.value_and_jacobian(_stacked(both, hat, point))
     rates = values[1:] if flow.disturbance is None else values[1:] + flow.disturbance
     jac, jac_hat = jacs[0], jacs[1]
     half_square = 0.5 * tau * tau
@@ -435,10 +469,6 @@ def _compiled_rest(
     return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
 
 
-def _ends(box: Interval) -> tuple[FloatArray, FloatArray]:
-    return box.lower, box.upper
-
-
 def propagate(
     system: ContinuousNonlinearSystem,
     u: ArrayLike,
@@ -448,6 +478,7 @@ def propagate(
     substeps: int = 1,
     order: int | None = None,
     compiled: bool = False,
+    tape: FieldTape | None = None,
 ) -> tuple[StateZonotope, Interval]:
     """Carry a zonotope of augmented states over ``[0, h]`` (the module's steps, ``substeps`` of them).
 
@@ -469,6 +500,9 @@ def propagate(
     compiled : bool
         Do steps 3-4 in :mod:`intervalobs.systems.flow_kernel` (Numba; the same bounds up to the order of a few
         sums, several times faster on small sets); False keeps Numba unimported.
+    tape : FieldTape, optional
+        The system's field recorded (:func:`intervalobs.systems.field_tape.trace_field`): every evaluation of
+        the field is the tape's compiled replay (the same ends); default: the field in Python.
 
     Returns
     -------
@@ -484,7 +518,7 @@ def propagate(
         When no a priori enclosure is found even for steps ``2**MAX_HALVINGS`` times shorter (the
         set is too large or the vector field blows up on it).
     """
-    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, compiled)
+    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape))
     kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
     remaining, tau, halvings = float(h), float(h) / substeps, 0
     hull: Interval | None = None
