@@ -535,9 +535,11 @@ def _bisect_parts(
 
 
 def _kernels_loaded() -> bool:
-    """Whether this process has already compiled or loaded the kernels (one signature of each or more)."""
+    """Whether this process has already compiled or loaded the kernels (a step's and the strip update's)."""
     module = sys.modules.get("intervalobs.systems.flow_kernel")
-    return module is not None and bool(module.advance.signatures) and bool(module.strip_update.signatures)
+    if module is None or not module.strip_update.signatures:
+        return False
+    return bool(module.advance.signatures) or bool(module.propagate.signatures)
 
 
 def _broadcast(zset: StateZonotope, lead: tuple[int, ...]) -> StateZonotope:

@@ -210,10 +210,10 @@ class FieldTape:
         if not ok.all():
             raise BoundsError("the vector field is undefined on a box (a divisor containing 0, log or sqrt below 0)")
         rows = self.outputs.size
-        box = Interval._raw(value[0].reshape(*lead, rows), value[1].reshape(*lead, rows))
+        box = Interval._raw(value[:, 0].reshape(*lead, rows), value[:, 1].reshape(*lead, rows))
         if not derivative:
             return box, None
-        return box, Interval._raw(jacobian[0].reshape(*lead, rows, size), jacobian[1].reshape(*lead, rows, size))
+        return box, Interval._raw(jacobian[:, 0].reshape(*lead, rows, size), jacobian[:, 1].reshape(*lead, rows, size))
 
 
 def _record(system: ContinuousNonlinearSystem) -> FieldTape:

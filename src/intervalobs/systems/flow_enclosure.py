@@ -109,6 +109,10 @@ MAX_HALVINGS = 12
 """A step is halved at most this many times before the a priori enclosure is declared lost."""
 _PICARD_ITERATIONS = 6
 _INFLATION = 0.5
+_LOST = (
+    "no validated enclosure of the flow: the set of states is too large for the vector field to stay bounded on it "
+    "over one step (narrow the initial box or shorten h)"
+)
 
 
 @dataclass
@@ -520,6 +524,8 @@ def propagate(
     """
     flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape))
     kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
+    if compiled and tape is not None:
+        return _propagate_taped(flow, zset, (float(h), int(substeps)), kept)
     remaining, tau, halvings = float(h), float(h) / substeps, 0
     hull: Interval | None = None
     while remaining > 0.0:
@@ -528,10 +534,7 @@ def propagate(
         if result is None:
             halvings += 1
             if halvings > MAX_HALVINGS:
-                raise AssumptionError(
-                    "no validated enclosure of the flow: the set of states is too large for the vector "
-                    "field to stay bounded on it over one step (narrow the initial box or shorten h)"
-                )
+                raise AssumptionError(_LOST)
             tau *= 0.5
             continue
         zset, tilde = result
@@ -543,6 +546,37 @@ def propagate(
         remaining = 0.0 if tau >= remaining else remaining - tau
     assert hull is not None
     return zset, hull
+
+
+def _propagate_taped(
+    flow: _Flow, zset: StateZonotope, interval: tuple[float, int], order: int
+) -> tuple[StateZonotope, Interval]:
+    """:func:`propagate` in one call of :func:`intervalobs.systems.flow_kernel.propagate` (the field by its tape)."""
+    from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
+
+    assert flow.tape is not None and flow.u is not None
+    lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
+    batch, m = int(np.prod(lead)), flow.u.shape[-1]
+    sets = (
+        np.ascontiguousarray(zset.centre.reshape(batch, size), dtype=float),
+        np.ascontiguousarray(zset.generators.reshape(batch, size, -1), dtype=float),
+        np.ascontiguousarray(np.broadcast_to(flow.u, (*lead, m)).reshape(batch, m), dtype=float),
+    )
+    no_box = flow.disturbance is None
+    box = np.zeros((2, size)) if no_box else np.stack([flow.disturbance.lower, flow.disturbance.upper])  # type: ignore[union-attr]
+    domain = np.stack([flow.low.reshape(2, size), flow.high.reshape(2, size)])
+    tape = (flow.tape.program, flow.tape.constants, flow.tape.kinds, flow.tape.outputs)
+    centre, generators, hull, status = flow_kernel.propagate(
+        tape, sets, ((box, not no_box), domain), interval, (flow.n, order)
+    )
+    if status == 1:
+        raise AssumptionError(_LOST)
+    if status == 2:
+        raise BoundsError(
+            "the vector field's Jacobian is undefined on a box (a divisor containing 0, log or sqrt below 0)"
+        )
+    end = StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
+    return end, Interval._raw(hull[0].reshape(*lead, size), hull[1].reshape(*lead, size))
 
 
 @dataclass(frozen=True)

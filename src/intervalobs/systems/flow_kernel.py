@@ -34,9 +34,14 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["advance", "strip_update"]
+from .flow_enclosure import _INFLATION, _PICARD_ITERATIONS, MAX_HALVINGS
+from .tape_kernel import replay
+
+__all__ = ["advance", "propagate", "strip_update"]
 
 FloatArray = NDArray[np.float64]
+Tape = tuple[NDArray[np.int64], FloatArray, NDArray[np.bool_], NDArray[np.int64]]
+"""``(program, constants, kinds, outputs)`` of a :class:`~intervalobs.systems.field_tape.FieldTape`."""
 
 _EPS = float(np.finfo(float).eps)
 _TINY = float(np.finfo(float).tiny)
@@ -373,3 +378,225 @@ def strip_update(
             centre[b], generators[b], a[b], (strip[0][b], strip[1][b]), (new_centre[b], new_generators[b])
         )
     return new_centre, new_generators, empty
+
+
+@numba.njit(cache=True, nogil=True)
+def _field(
+    tape: Tape,
+    boxes: FloatArray,
+    inputs: FloatArray,
+    disturbance: tuple[FloatArray, bool],
+    rates: FloatArray,
+) -> bool:
+    """:math:`F = \\tilde f + E[w]` over boxes ``(2, S, N)`` by the tape (``flow_enclosure._Flow.rates``); False
+    where the field is undefined on some box (the caller then has no enclosure, as from infinite rates)."""
+    program, constants, kinds, outputs = tape
+    count, size = program.shape[0], boxes.shape[2]
+    work = (np.empty(count), np.empty(count), np.zeros((2, count, 0)))
+    out = (np.empty((2, size)), np.zeros((2, size, 0)))
+    box, added = disturbance
+    for s in range(boxes.shape[1]):
+        if not replay(program, (constants, kinds, outputs), (boxes[0, s], boxes[1, s], inputs[s]), work, out):
+            return False
+        for i in range(size):
+            low, high = out[0][0, i], out[0][1, i]
+            if added:
+                low, high = _down(low + box[0, i]), _up(high + box[1, i])
+            rates[0, s, i], rates[1, s, i] = low, high
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _motion(start: FloatArray, rates: FloatArray, tau: float, out: FloatArray) -> None:
+    """``start + [0, tau] * rates`` (outward rounded, as ``Interval``), into ``out``."""
+    for s in range(start.shape[1]):
+        for i in range(start.shape[2]):
+            low, high = _hull(0.0, tau, rates[0, s, i], rates[1, s, i])
+            out[0, s, i], out[1, s, i] = _down(start[0, s, i] + _down(low)), _up(start[1, s, i] + _up(high))
+
+
+@numba.njit(cache=True, nogil=True)
+def _within(box: FloatArray, domain: FloatArray, rows: int, out: FloatArray) -> None:
+    """``flow_enclosure._within``: each box cut to its domain (row ``s // rows`` of ``domain``), kept non-empty."""
+    for s in range(box.shape[1]):
+        for i in range(box.shape[2]):
+            low = max(box[0, s, i], domain[0, s // rows, i])
+            high = min(box[1, s, i], domain[1, s // rows, i])
+            if low <= high:
+                out[0, s, i], out[1, s, i] = low, high
+            else:
+                out[0, s, i], out[1, s, i] = box[0, s, i], box[1, s, i]
+
+
+@numba.njit(cache=True, nogil=True)
+def _picard(
+    tape: Tape,
+    start: FloatArray,
+    inputs: FloatArray,
+    field: tuple[tuple[FloatArray, bool], FloatArray, float],
+    out: FloatArray,
+) -> bool:
+    """``flow_enclosure._picard`` for the boxes ``start`` (2, S, N), the same iterations on the whole batch.
+
+    ``field`` is ``((E[w], whether there is one), domains (2, 2, N): the sets' row 0 and the centres' row 1, tau)``;
+    the first half of the boxes are the sets', the second the centres'. False: no a priori box found.
+    """
+    disturbance, domain, tau = field
+    rates, guess, candidate, image = (
+        np.empty(start.shape),
+        np.empty(start.shape),
+        np.empty(start.shape),
+        np.empty(start.shape),
+    )
+    rows = start.shape[1] // 2
+    if not _field(tape, start, inputs, disturbance, rates):
+        return False
+    _motion(start, rates, tau, guess)
+    for _ in range(_PICARD_ITERATIONS):
+        if not np.all(np.isfinite(guess)):
+            return False
+        for s in range(start.shape[1]):
+            for i in range(start.shape[2]):
+                motion = max(guess[1, s, i] - start[1, s, i], start[0, s, i] - guess[0, s, i])
+                pad = _INFLATION * motion + 1e-12 * (1.0 + abs(0.5 * (guess[0, s, i] + guess[1, s, i])))
+                candidate[0, s, i], candidate[1, s, i] = guess[0, s, i] - pad, guess[1, s, i] + pad
+        _within(candidate, domain, rows, guess)
+        if not _field(tape, guess, inputs, disturbance, rates):
+            return False
+        _motion(start, rates, tau, image)
+        if np.all(image[0] > candidate[0]) and np.all(image[1] < candidate[1]):
+            _within(image, domain, rows, out)
+            return True
+        guess[:] = image
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
+def _centre_end(
+    rates: tuple[FloatArray, FloatArray], jacobian: FloatArray, centre: FloatArray, tau: float, out: FloatArray
+) -> None:
+    """``c + tau F(c) + tau^2/2 [J_hat] F(hat)`` (``flow_enclosure._step``, step 2), outward rounded, into ``out``.
+
+    ``rates``: the ends (2, N) of :math:`F` over the centre's a priori box and at the centre.
+    """
+    over, at = rates
+    size = centre.size
+    half_square = 0.5 * tau * tau
+    column = np.empty((2, size, 1))
+    _product(jacobian[0], jacobian[1], over[0].reshape((size, 1)), over[1].reshape((size, 1)), column)
+    for i in range(size):
+        a_lo, a_hi = _hull(at[0, i], at[1, i], tau, tau)
+        b_lo, b_hi = _hull(column[0, i, 0], column[1, i, 0], half_square, half_square)
+        low = _down(_down(centre[i] + _down(a_lo)) + _down(b_lo))
+        high = _up(_up(centre[i] + _up(a_hi)) + _up(b_hi))
+        out[0, i], out[1, i] = low, high
+
+
+@numba.njit(cache=True, nogil=True)
+def _taped_step(
+    tape: Tape,
+    zset: tuple[FloatArray, FloatArray, FloatArray],
+    field: tuple[tuple[FloatArray, bool], FloatArray, float],
+    step: tuple[float, int, int],
+    out: tuple[FloatArray, FloatArray, FloatArray],
+) -> int:
+    """``flow_enclosure._step`` with the field's tape: 0, or 1 (no a priori box), 2 (a Jacobian undefined)."""
+    centre, generators, inputs = zset
+    disturbance, _, tau = field
+    batch, size = centre.shape
+    start = np.empty((2, 2 * batch, size))
+    for b in range(batch):
+        for i in range(size):
+            total = 0.0
+            for j in range(generators.shape[2]):
+                total += abs(generators[b, i, j])
+            reach = total + ((generators.shape[2] + 2) * _EPS * total + _TINY)
+            start[0, b, i], start[1, b, i] = _down(_down(-reach) + centre[b, i]), _up(_up(reach) + centre[b, i])
+            start[0, batch + b, i] = start[1, batch + b, i] = centre[b, i]
+    both_inputs = np.concatenate((inputs, inputs))
+    boxes = np.empty(start.shape)
+    if not _picard(tape, start, both_inputs, field, boxes):
+        return 1
+    program, constants, kinds, outputs = tape
+    count = program.shape[0]
+    work = (np.empty(count), np.empty(count), np.zeros((2, count, size)))
+    values, slopes = np.empty((3, 2, size)), np.empty((3, 2, size, size))
+    ends = np.empty((2, size))
+    for b in range(batch):
+        out[2][0, b], out[2][1, b] = boxes[0, b], boxes[1, b]
+        lows = (np.minimum(boxes[0, b], boxes[0, batch + b]), boxes[0, batch + b], centre[b])
+        highs = (np.maximum(boxes[1, b], boxes[1, batch + b]), boxes[1, batch + b], centre[b])
+        for r in range(3):  # the Jacobians over both boxes and over the centre's, the rates over it and at it
+            box = (lows[r], highs[r], inputs[b])
+            if not replay(program, (constants, kinds, outputs), box, work, (values[r], slopes[r])):
+                return 2
+            if disturbance[1]:
+                for i in range(size):
+                    values[r, 0, i] = _down(values[r, 0, i] + disturbance[0][0, i])
+                    values[r, 1, i] = _up(values[r, 1, i] + disturbance[0][1, i])
+        _centre_end((values[1], values[2]), slopes[1], centre[b], tau, ends)
+        jacobian = (slopes[0, 0], slopes[0, 1])
+        _advance_one(centre[b], generators[b], (ends[0], ends[1]), jacobian, step, out[0][b], out[1][b])
+    return 0
+
+
+@numba.njit(cache=True, nogil=True)
+def propagate(
+    tape: Tape,
+    zset: tuple[FloatArray, FloatArray, FloatArray],
+    field: tuple[tuple[FloatArray, bool], FloatArray],
+    interval: tuple[float, int],
+    step: tuple[int, int],
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:
+    """:func:`intervalobs.systems.flow_enclosure.propagate` with the field's tape: every step in one call.
+
+    Parameters
+    ----------
+    tape : tuple
+        ``(program, constants, kinds, outputs)`` of a :class:`~intervalobs.systems.field_tape.FieldTape`.
+    zset : tuple of numpy.ndarray
+        ``(centre, generators, inputs)``, shapes (B, N), (B, N, m), (B, m'): the sets and their held inputs.
+    field : tuple
+        ``((E[w] (2, N), whether there is one), domains (2, 2, N))``: the ends of the sets' domain (row 0) and of the
+        centres' (row 1).
+    interval : tuple
+        ``(h, substeps)``.
+    step : tuple
+        ``(n, order)``: number of states, generators kept.
+
+    Returns
+    -------
+    centre, generators : numpy.ndarray, shapes (B, N) and (B, N, order)
+    hull : numpy.ndarray, shape (2, B, N)
+        The ends of the hull of the a priori boxes.
+    status : int
+        0; 1 when no a priori box was found even after ``MAX_HALVINGS`` halvings; 2 when the field's Jacobian is
+        undefined on a box.
+    """
+    centre, generators, inputs = zset
+    disturbance, domain = field
+    h, substeps = interval
+    n, order = step
+    batch, size = centre.shape
+    hull = np.empty((2, batch, size))
+    out = (np.empty((batch, size)), np.empty((batch, size, order)), np.empty((2, batch, size)))
+    remaining, tau, halvings, first = h, h / substeps, 0, True
+    while remaining > 0.0:
+        tau = min(tau, remaining)
+        status = _taped_step(tape, (centre, generators, inputs), (disturbance, domain, tau), (tau, n, order), out)
+        if status == 2:
+            return centre, generators, hull, 2
+        if status == 1:
+            halvings += 1
+            if halvings > MAX_HALVINGS:
+                return centre, generators, hull, 1
+            tau *= 0.5
+            continue
+        centre, generators = out[0].copy(), out[1].copy()
+        if first:
+            hull[:] = out[2]
+        else:
+            hull[0], hull[1] = np.minimum(hull[0], out[2][0]), np.maximum(hull[1], out[2][1])
+        first = False
+        remaining = 0.0 if tau >= remaining else remaining - tau
+    return centre, generators, hull, 0

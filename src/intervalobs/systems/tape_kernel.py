@@ -312,6 +312,32 @@ def _run(
 
 
 @numba.njit(cache=True, nogil=True)
+def replay(
+    program: NDArray[np.int64],
+    tape: tuple[FloatArray, NDArray[np.bool_], NDArray[np.int64]],
+    box: tuple[FloatArray, FloatArray, FloatArray],
+    work: tuple[FloatArray, FloatArray, FloatArray],
+    out: tuple[FloatArray, FloatArray],
+) -> bool:
+    """One box through the tape (see :func:`evaluate`): the outputs' ends into ``out[0]`` (shape (2, p)) and, where
+    ``work[2]`` has columns, their Jacobian's into ``out[1]`` (shape (2, p, n)); False where an operation was refused.
+    """
+    constants, kinds, outputs = tape
+    d = work[2]
+    derivative = d.shape[2] > 0
+    ok = _run(program, (constants, kinds), box, work, derivative)
+    for r in range(outputs.size):
+        s = outputs[r]
+        out[0][0, r], out[0][1, r] = work[0][s], work[1][s]
+        if derivative:
+            if kinds[s]:
+                out[1][:, r] = d[:, s]
+            else:
+                out[1][:, r] = 0.0
+    return ok
+
+
+@numba.njit(cache=True, nogil=True)
 def evaluate(
     program: NDArray[np.int64],
     tape: tuple[FloatArray, NDArray[np.bool_], NDArray[np.int64]],
@@ -334,26 +360,21 @@ def evaluate(
 
     Returns
     -------
-    value : numpy.ndarray, shape (2, B, p)
+    value : numpy.ndarray, shape (B, 2, p)
         Lower and upper ends of the outputs.
-    jacobian : numpy.ndarray, shape (2, B, p, n)
+    jacobian : numpy.ndarray, shape (B, 2, p, n)
         Lower and upper ends of their Jacobians (zeros without ``derivative``).
     ok : numpy.ndarray of bool, shape (B,)
         False where an operation was refused (a divisor containing 0, ``log``/``sqrt`` below 0).
     """
-    constants, kinds, outputs = tape
+    outputs = tape[2]
     lower, upper, inputs = box
     batch, size = lower.shape
-    count, width = program.shape[0], size if derivative else 0
-    value = np.zeros((2, batch, outputs.size))
-    jacobian = np.zeros((2, batch, outputs.size, size))
+    count = program.shape[0]
+    value = np.zeros((batch, 2, outputs.size))
+    jacobian = np.zeros((batch, 2, outputs.size, size))
     ok = np.ones(batch, dtype=np.bool_)
-    lo, hi, d = np.empty(count), np.empty(count), np.zeros((2, count, width))
+    work = (np.empty(count), np.empty(count), np.zeros((2, count, size if derivative else 0)))
     for i in range(batch):
-        ok[i] = _run(program, (constants, kinds), (lower[i], upper[i], inputs[i]), (lo, hi, d), derivative)
-        for r in range(outputs.size):
-            s = outputs[r]
-            value[0, i, r], value[1, i, r] = lo[s], hi[s]
-            if derivative and kinds[s]:
-                jacobian[:, i, r] = d[:, s]
+        ok[i] = replay(program, tape, (lower[i], upper[i], inputs[i]), work, (value[i], jacobian[i]))
     return value, jacobian, ok
