@@ -196,3 +196,33 @@ def test_a_field_undefined_at_a_probe_input_is_recorded_when_both_paths_refuse()
     estimate = ContinuousNonlinearObserver(system, bounds, 0.1, compiled=True).run(t, truth[:, None], u)
     assert estimate.meta["field_tape"] == "recorded"
     assert np.all((estimate.lower[:, 0] <= truth) & (truth <= estimate.upper[:, 0]))
+
+
+@pytest.mark.parametrize("make", [chemostat_bundle, compartments, cstr], ids=["chemostat", "compartments", "cstr"])
+def test_the_recorded_correction_gives_the_python_correction(make: Callable[[], Case]) -> None:
+    """correction_kernel.correct (domain, parameter box, every output's strip) against the Python correction: 12
+    random sets, some crossing the domain, three contradicted by the data: the same sets to the order of a few sums
+    and the same empty ones."""
+    case = make()
+    b = case.bounds.resolve(case.system)
+    size = case.system.n + case.system.n_params
+    low, high = np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]])
+    rng = np.random.default_rng(9)
+    centre = low + (high - low) * rng.uniform(-0.2, 1.2, (12, size))
+    observer = ContinuousNonlinearObserver(case.system, case.bounds, case.h, compiled=True)
+    generators = 0.1 * (high - low)[:, None] * rng.uniform(-1.0, 1.0, (12, size, observer.order))
+    start = StateZonotope(centre, generators)
+    truth = centre[:, : case.system.n] + 0.05 * (high - low)[: case.system.n] * rng.uniform(-1, 1, (12, case.system.n))
+    y = truth[:, case.outputs] + b.v[1] * rng.uniform(-3.0, 3.0, (12, len(case.outputs)))
+    y[-3:] += 100.0  # three sets the data contradict
+    u = np.full((12, case.system.m), 0.4)
+    recorded = observer._correct(start, y, u, True)
+    reference = observer._correct(start, y, u, False)
+    assert observer._recorded(output=True)[1] == "recorded"
+    np.testing.assert_array_equal(recorded[1], reference[1])
+    live = ~reference[1]
+    mine, theirs = recorded[0].box(), reference[0].box()
+    scale = (theirs.upper - theirs.lower)[live]
+    assert 3 <= live.sum() < 12, live
+    assert np.all(np.abs(mine.lower[live] - theirs.lower[live]) <= 1e-12 * scale + 1e-15)
+    assert np.all(np.abs(mine.upper[live] - theirs.upper[live]) <= 1e-12 * scale + 1e-15)

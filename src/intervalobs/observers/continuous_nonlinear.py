@@ -271,7 +271,7 @@ class ContinuousNonlinearObserver(Observer):
         self._limited = np.flatnonzero(np.isfinite(self._limits[0]) | np.isfinite(self._limits[1]))
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
-        self._tape: tuple[FieldTape | None, str] | None = None
+        self._tapes: dict[bool, tuple[FieldTape | None, str]] = {}
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The prior: the box of ``x(t_0)`` and of the parameters (split into parts), before the first measurement.
@@ -344,7 +344,7 @@ class ContinuousNonlinearObserver(Observer):
         each part tried on its own, so one diverging part does not stop the others.
         """
         failed = np.zeros(zset.centre.shape[:-1], dtype=bool)
-        tape = self._field_tape()[0] if compiled else None
+        tape = self._recorded(output=False)[0] if compiled else None
         options = (self.substeps, self.order, compiled, tape)
         try:
             return propagate(self.system, held, self._w, zset, self._period, *options)[0], failed
@@ -361,18 +361,51 @@ class ContinuousNonlinearObserver(Observer):
             centre[index], generators[index] = moved.centre, moved.generators
         return StateZonotope(centre, generators), failed
 
-    def _field_tape(self) -> tuple[FieldTape | None, str]:
-        """The system's field recorded once (:func:`trace_field`, probed on the prior box), or None and why."""
-        if self._tape is None:
+    def _recorded(self, output: bool) -> tuple[FieldTape | None, str]:
+        """The system's field (or output map) recorded once (:func:`trace_field`, probed on the prior box), or None
+        and why."""
+        if output not in self._tapes:
             low = np.concatenate([self.bounds.x0[0], self.bounds.p[0]])
             high = np.concatenate([self.bounds.x0[1], self.bounds.p[1]])
-            self._tape = trace_field(self.system, low, high)
-        return self._tape
+            self._tapes[output] = trace_field(self.system, low, high, output=output)
+        return self._tapes[output]
+
+    def _compiled_correct(
+        self, zset: StateZonotope, y: FloatArray, u: FloatArray
+    ) -> tuple[StateZonotope, BoolArray] | None:
+        """:meth:`_correct` in one call of :func:`intervalobs.observers.correction_kernel.correct` (the output map by
+        its tape); None where the output map is not recorded."""
+        tape = self._recorded(output=True)[0]
+        if tape is None or zset.generators.shape[-1] != self.order:
+            return None
+        from . import correction_kernel  # Numba is imported only where a record is long enough to pay for it
+
+        lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
+        batch = int(np.prod(lead))
+
+        def flat(array: FloatArray, tail: tuple[int, ...]) -> FloatArray:
+            return np.ascontiguousarray(np.broadcast_to(array, (*lead, *tail)).reshape(batch, *tail), dtype=float)
+
+        centre, generators, empty, ok = correction_kernel.correct(
+            (tape.program, tape.constants, tape.kinds, tape.outputs),
+            (flat(zset.centre, (size,)), flat(zset.generators, (size, self.order))),
+            (flat(y, (self.p,)), flat(u, (self.m,)), np.stack(self.bounds.v)),
+            (*self._limits, self._limited.astype(np.int64), _NEGLIGIBLE),
+        )
+        if not ok:
+            raise BoundsError(
+                "g: the output map is undefined on a set's hull (a divisor containing 0, log or sqrt below 0)"
+            )
+        end = StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, self.order))
+        return end, empty.reshape(lead)
 
     def _correct(
         self, zset: StateZonotope, y: FloatArray, u: FloatArray, compiled: bool
     ) -> tuple[StateZonotope, BoolArray]:
         """Contract by the state domain and parameter box, then by each output (module docstring)."""
+        recorded = self._compiled_correct(zset, y, u) if compiled else None
+        if recorded is not None:
+            return recorded
         empty = np.zeros(y.shape[:-1], dtype=bool)
         zset, empty = self._domain_contract(zset, empty, compiled)
         output = self.system.output_map(u)
@@ -434,8 +467,8 @@ class ContinuousNonlinearObserver(Observer):
             ``meta`` holds ``consistent`` (bool, or a list per run), ``inconsistent_from`` (the first
             time the record contradicts the model, the earliest over the runs, None when it never does;
             per run in ``inconsistent_from_runs``), ``diverging``, ``compiled`` (whether the compiled kernels ran)
-            and ``field_tape`` (with the kernels: ``"recorded"`` where the field was evaluated by its compiled
-            tape, else why it was evaluated in Python; None without them).
+            and ``field_tape``, ``output_tape`` (with the kernels: ``"recorded"`` where f, g were evaluated by
+            their compiled tapes, else why they were evaluated in Python; None without the kernels).
         """
         times, ys, us = self._signals(t, y, u)
         state = self.init()
@@ -448,7 +481,9 @@ class ContinuousNonlinearObserver(Observer):
         record_consistency(estimate, flags)
         estimate.meta["diverging"] = self._diverging(estimate, flags, lost)
         estimate.meta["compiled"] = bool(state.internal["compiled"])
-        estimate.meta["field_tape"] = self._field_tape()[1] if state.internal["compiled"] else None
+        compiled = bool(state.internal["compiled"])
+        estimate.meta["field_tape"] = self._recorded(output=False)[1] if compiled else None
+        estimate.meta["output_tape"] = self._recorded(output=True)[1] if compiled else None
         return estimate
 
     def _diverging(self, estimate: Estimate, flags: BoolArray, lost: BoolArray) -> bool:
@@ -491,8 +526,8 @@ def _slope_remainder(slope: Interval, zset: StateZonotope) -> Interval:
     image = interval_product(
         Interval._raw(slope.lower[..., None, :], slope.upper[..., None, :]), Interval._wrap(zset.generators)
     )
-    reach = np.maximum(-image.lower, image.upper)[..., 0, :].sum(-1)
-    reach = np.nextafter(reach * (1.0 + 2 * reach.size * _EPS), np.inf)
+    reach = np.maximum(-image.lower, image.upper)[..., 0, :].sum(-1)  # m nonnegative terms: within (m - 1)u
+    reach = np.nextafter(reach * (1.0 + 2 * zset.generators.shape[-1] * _EPS), np.inf)
     return Interval._raw(-reach, reach)
 
 

@@ -21,6 +21,7 @@ unsound, only slower.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import BoundsError
+from ..inclusion import VectorFunction
 from ..interval import Interval
 from ..interval_dual import value_and_jacobian
 from .continuous_nonlinear import ContinuousNonlinearSystem
@@ -152,7 +154,7 @@ class _Node:
 
 @dataclass(frozen=True)
 class FieldTape:
-    """The recorded augmented field :math:`(f(x, u, \\theta), 0)` of a system, replayed compiled over boxes.
+    """A recorded function of the augmented state and the inputs (the field or the output map), replayed compiled.
 
     Attributes
     ----------
@@ -162,8 +164,8 @@ class FieldTape:
         The number of each constant slot.
     kinds : numpy.ndarray of bool, shape (K,)
         Whether each slot is an interval (a function of the states and parameters) or a point.
-    outputs : numpy.ndarray of int64, shape (n + n_params,)
-        The slots of the augmented field's components.
+    outputs : numpy.ndarray of int64, shape (q,)
+        The slots of the function's components (``n + n_params`` for the augmented field, p for the outputs).
     """
 
     program: NDArray[np.int64]
@@ -174,7 +176,7 @@ class FieldTape:
     def evaluate(
         self, lower: FloatArray, upper: FloatArray, u: FloatArray, derivative: bool = False
     ) -> tuple[Interval, Interval | None]:
-        """The field's box over boxes (and its Jacobian's, with ``derivative``), as the Python path gives them.
+        """The function's box over boxes (and its Jacobian's, with ``derivative``), as the Python path gives them.
 
         Parameters
         ----------
@@ -187,8 +189,8 @@ class FieldTape:
 
         Returns
         -------
-        value : Interval, shape (..., n + n_params)
-        jacobian : Interval, shape (..., n + n_params, n + n_params), or None without ``derivative``
+        value : Interval, shape (..., q)
+        jacobian : Interval, shape (..., q, n + n_params), or None without ``derivative``
 
         Raises
         ------
@@ -216,17 +218,13 @@ class FieldTape:
         return box, Interval._raw(jacobian[:, 0].reshape(*lead, rows, size), jacobian[:, 1].reshape(*lead, rows, size))
 
 
-def _record(system: ContinuousNonlinearSystem) -> FieldTape:
-    """Call ``f`` once on recording objects (raises what the recording cannot follow)."""
+def _record(function: Callable[[list[Any], list[Any]], Sequence[Any]], size: int, m: int) -> FieldTape:
+    """Call ``function(z, u)`` once on recording objects (raises what the recording cannot follow)."""
     recorder = _Recorder()
-    size = system.n + system.n_params
     z = [recorder.push("variable", j, 0, True) for j in range(size)]
-    u = [recorder.push("input", j, 0, False) for j in range(system.m)]
+    u = [recorder.push("input", j, 0, False) for j in range(m)]
     with np.errstate(all="ignore"):
-        rates = list(system.f(z[: system.n], u, z[system.n :]))
-    if len(rates) != system.n:
-        raise _Untraceable(f"f returned {len(rates)} components, not {system.n}")
-    outputs = [recorder.operand(r).slot for r in rates] + [recorder.operand(0.0).slot] * system.n_params
+        outputs = [recorder.operand(c).slot for c in function(z, u)]
     return FieldTape(
         np.array(recorder.program, dtype=np.int64).reshape(-1, 3),
         np.array(recorder.constants),
@@ -235,16 +233,18 @@ def _record(system: ContinuousNonlinearSystem) -> FieldTape:
     )
 
 
-def _probe(tape: FieldTape, system: ContinuousNonlinearSystem, lower: FloatArray, upper: FloatArray) -> str | None:
-    """Why the tape's replay differs from the Python evaluation on probe boxes (None: identical, bit for bit)."""
-    size = lower.size
+def _probe(
+    tape: FieldTape, python: Callable[[FloatArray], VectorFunction], box: tuple[FloatArray, FloatArray], m: int
+) -> str | None:
+    """Why the tape's replay differs from ``python(u)``'s evaluation on probe boxes (None: identical, bit for bit)."""
+    lower, upper = box
     middle = 0.5 * (lower + upper)
     boxes = (np.stack([lower, middle, lower + 0.25 * (upper - lower)]), np.stack([upper, middle, middle]))
     for level in (0.0, 1.0):
-        u = np.full((3, system.m), level)
+        u = np.full((3, m), level)
         try:
             with np.errstate(all="ignore"):
-                expected = value_and_jacobian(system.augmented_field(u), *boxes, size)
+                expected = value_and_jacobian(python(u), *boxes, tape.outputs.size)
         except (BoundsError, ZeroDivisionError, FloatingPointError):
             expected = None
         try:
@@ -253,7 +253,7 @@ def _probe(tape: FieldTape, system: ContinuousNonlinearSystem, lower: FloatArray
             replay = None
         if expected is None or replay is None:
             if (expected is None) != (replay is None):
-                return f"the replay and the Python evaluation disagree on whether f is defined (inputs {level})"
+                return f"the replay and the Python evaluation disagree on whether it is defined (inputs {level})"
             continue
         for name, mine, theirs in zip(("value", "Jacobian"), replay, expected, strict=True):
             assert mine is not None
@@ -264,26 +264,43 @@ def _probe(tape: FieldTape, system: ContinuousNonlinearSystem, lower: FloatArray
 
 
 def trace_field(
-    system: ContinuousNonlinearSystem, lower: FloatArray, upper: FloatArray
+    system: ContinuousNonlinearSystem, lower: FloatArray, upper: FloatArray, output: bool = False
 ) -> tuple[FieldTape | None, str]:
-    """Record the system's augmented field as a tape, checked against the Python evaluation on probe boxes.
+    """Record the system's augmented field (or output map) as a tape, checked against the Python evaluation.
 
     Parameters
     ----------
     system : ContinuousNonlinearSystem
     lower, upper : numpy.ndarray, shape (n + n_params,)
         The probe box of the augmented state (finite ends; the prior box of states and parameters).
+    output : bool
+        Record the output map :math:`g(x, u)` of the augmented state
+        (:meth:`~intervalobs.systems.continuous_nonlinear.ContinuousNonlinearSystem.output_map`) instead of the
+        field :math:`(f(x, u, \\theta), 0)`.
 
     Returns
     -------
     tape : FieldTape or None
-        None where the field cannot be recorded or its replay differs (module docstring).
+        None where the function cannot be recorded or its replay differs (module docstring).
     reason : str
         ``"recorded"``, or why the Python evaluation is kept.
     """
+    n, size = system.n, system.n + system.n_params
+
+    def augmented(z: list[Any], u: list[Any]) -> list[Any]:
+        rates = list(system.f(z[:n], u, z[n:]))
+        if len(rates) != n:
+            raise _Untraceable(f"f returned {len(rates)} components, not {n}")
+        return rates + [0.0] * system.n_params
+
+    def observed(z: list[Any], u: list[Any]) -> list[Any]:
+        return list(system.g(z[:n], u))
+
     try:
-        tape = _record(system)
+        tape = _record(observed if output else augmented, size, system.m)
     except Exception as error:  # anything the recording cannot follow keeps the Python path
         return None, f"not recorded: {type(error).__name__}: {error}"
-    mismatch = _probe(tape, system, np.asarray(lower, dtype=float), np.asarray(upper, dtype=float))
+    python = system.output_map if output else system.augmented_field
+    probe = (np.asarray(lower, dtype=float), np.asarray(upper, dtype=float))
+    mismatch = _probe(tape, python, probe, system.m)
     return (None, f"not used: {mismatch}") if mismatch else (tape, "recorded")

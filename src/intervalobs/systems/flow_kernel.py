@@ -493,6 +493,18 @@ def _centre_end(
 
 
 @numba.njit(cache=True, nogil=True)
+def hull_box(centre: FloatArray, generators: FloatArray, out: FloatArray) -> None:
+    """``flow_enclosure.hull_box`` of one set (the row sums in order), into ``out`` (2, N)."""
+    count = generators.shape[1]
+    for i in range(centre.size):
+        total = 0.0
+        for j in range(count):
+            total += abs(generators[i, j])
+        reach = total + ((count + 2) * _EPS * total + _TINY)
+        out[0, i], out[1, i] = _down(_down(-reach) + centre[i]), _up(_up(reach) + centre[i])
+
+
+@numba.njit(cache=True, nogil=True)
 def _taped_step(
     tape: Tape,
     zset: tuple[FloatArray, FloatArray, FloatArray],
@@ -506,13 +518,8 @@ def _taped_step(
     batch, size = centre.shape
     start = np.empty((2, 2 * batch, size))
     for b in range(batch):
-        for i in range(size):
-            total = 0.0
-            for j in range(generators.shape[2]):
-                total += abs(generators[b, i, j])
-            reach = total + ((generators.shape[2] + 2) * _EPS * total + _TINY)
-            start[0, b, i], start[1, b, i] = _down(_down(-reach) + centre[b, i]), _up(_up(reach) + centre[b, i])
-            start[0, batch + b, i] = start[1, batch + b, i] = centre[b, i]
+        hull_box(centre[b], generators[b], start[:, b])
+        start[0, batch + b], start[1, batch + b] = centre[b], centre[b]
     both_inputs = np.concatenate((inputs, inputs))
     boxes = np.empty(start.shape)
     if not _picard(tape, start, both_inputs, field, boxes):
