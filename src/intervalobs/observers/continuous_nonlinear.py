@@ -66,10 +66,11 @@ __all__ = ["ContinuousNonlinearObserver"]
 
 _EPS = float(np.finfo(float).eps)
 COMPILED_MIN_STEPS = 1000
-"""Set-steps (samples × runs × parts) from which :meth:`ContinuousNonlinearObserver.run` does the array part of
-each step in :mod:`intervalobs.systems.flow_kernel` when ``compiled`` is None: importing Numba and loading the
-cached kernels cost about a second of CPU (the first run after an install compiles them, about 13 s), and the
-kernels save 1.3-1.7 CPU ms per set-step (``benchmarks/continuous_cost.json``)."""
+"""Set-steps (samples × runs × parts) from which :meth:`ContinuousNonlinearObserver.run` runs each sample in the
+compiled kernels (:mod:`intervalobs.systems.flow_kernel`, the recorded field and output map) when ``compiled`` is
+None: importing Numba and loading the cached kernels cost about a second of CPU (the first run after an install
+compiles them, about a minute), and the kernels save 1.3-3.5 CPU ms per set-step of one part
+(``benchmarks/continuous_cost.json``)."""
 _NEGLIGIBLE = 1e-9
 """A domain or parameter end is used to contract only where the set crosses it by more than this fraction of its
 width (a parameter's box is crossed by rounding after every step; leaving such a crossing is sound and saves a
@@ -195,8 +196,10 @@ class ContinuousNonlinearObserver(Observer):
         states and parameters (:func:`_bisect_parts`). Each half is the part cut by a strip, so the
         halves together hold every point the part held.
     compiled : bool, optional
-        Do the array part of each step (the flow step after the user's function, the strip updates) in
-        :mod:`intervalobs.systems.flow_kernel` (Numba, the same bounds up to the order of a few sums). Default:
+        Run each sample in compiled kernels (Numba, the same bounds up to the order of a few sums): ``f`` and ``g``
+        recorded as tapes (:mod:`intervalobs.systems.field_tape`) and the whole prediction and correction in one
+        call each; where a function cannot be recorded, it is evaluated in Python and only the array part of each
+        step (:mod:`intervalobs.systems.flow_kernel`) is compiled (``meta["field_tape"]`` says which). Default:
         for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
         process (``init``/``step`` then use them too).
 
