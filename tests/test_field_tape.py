@@ -226,3 +226,42 @@ def test_the_recorded_correction_gives_the_python_correction(make: Callable[[], 
     assert 3 <= live.sum() < 12, live
     assert np.all(np.abs(mine.lower[live] - theirs.lower[live]) <= 1e-12 * scale + 1e-15)
     assert np.all(np.abs(mine.upper[live] - theirs.upper[live]) <= 1e-12 * scale + 1e-15)
+
+
+@pytest.mark.parametrize("make", [pendulum, cstr, chemostat_bundle], ids=["pendulum", "cstr", "chemostat"])
+def test_the_compiled_picard_search_is_the_python_one_bit_for_bit(make: Callable[[], Case]) -> None:
+    """flow_kernel._picard against flow_enclosure._picard (the tape's rates both): the same a priori boxes, or both
+    none, for 8 random sets and their centres at two step lengths (the longer one finds none)."""
+    from intervalobs.systems import flow_kernel
+    from intervalobs.systems.flow_enclosure import _Flow, _picard
+
+    case = make()
+    b = case.bounds.resolve(case.system)
+    size = case.system.n + case.system.n_params
+    low, high = np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]])
+    tape, _ = trace_field(case.system, low, high)
+    assert tape is not None
+    rng = np.random.default_rng(4)
+    lower = low + (high - low) * rng.uniform(0.0, 0.6, (8, size))
+    upper = lower + (high - low) * rng.uniform(0.0, 0.4, (8, size))
+    middle = 0.5 * (lower + upper)
+    u = np.full((8, case.system.m), 0.2)
+    w = Interval._raw(*b.w)
+    for tau in (case.h, 40 * case.h):
+        flow = _Flow.build(case.system, u, w, 2, (True, tape))
+        start = Interval._raw(np.stack([lower, middle]), np.stack([upper, middle]))
+        expected = _picard(flow.rates, start, tau, flow.low, flow.high)
+        box = (
+            np.zeros((2, size))
+            if flow.disturbance is None
+            else np.stack([flow.disturbance.lower, flow.disturbance.upper])
+        )
+        domain = np.stack([flow.low.reshape(2, size), flow.high.reshape(2, size)])
+        out = np.empty((2, 16, size))
+        ends = np.stack([start.lower.reshape(16, size), start.upper.reshape(16, size)])
+        field = ((box, flow.disturbance is not None), domain, float(tau))
+        found = flow_kernel._picard(tuple(vars(tape).values()), ends, np.concatenate([u, u]), field, out)
+        assert found == (expected is not None)
+        if expected is not None:
+            np.testing.assert_array_equal(out[0], expected.lower.reshape(16, size))
+            np.testing.assert_array_equal(out[1], expected.upper.reshape(16, size))

@@ -442,32 +442,24 @@ def _picard(
     the first half of the boxes are the sets', the second the centres'. False: no a priori box found.
     """
     disturbance, domain, tau = field
-    rates, guess, candidate, image = (
-        np.empty(start.shape),
-        np.empty(start.shape),
-        np.empty(start.shape),
-        np.empty(start.shape),
-    )
+    rates, guess, candidate, source = np.empty(start.shape), np.empty(start.shape), np.empty(start.shape), start.copy()
     rows = start.shape[1] // 2
-    if not _field(tape, start, inputs, disturbance, rates):
-        return False
-    _motion(start, rates, tau, guess)
-    for _ in range(_PICARD_ITERATIONS):
-        if not np.all(np.isfinite(guess)):
+    for iteration in range(_PICARD_ITERATIONS + 1):  # iteration 0: the first guess, start + [0, tau] F(start)
+        if iteration > 0:
+            if not np.all(np.isfinite(guess)):
+                return False
+            for s in range(start.shape[1]):
+                for i in range(start.shape[2]):
+                    motion = max(guess[1, s, i] - start[1, s, i], start[0, s, i] - guess[0, s, i])
+                    pad = _INFLATION * motion + 1e-12 * (1.0 + abs(0.5 * (guess[0, s, i] + guess[1, s, i])))
+                    candidate[0, s, i], candidate[1, s, i] = guess[0, s, i] - pad, guess[1, s, i] + pad
+            _within(candidate, domain, rows, source)
+        if not _field(tape, source, inputs, disturbance, rates):
             return False
-        for s in range(start.shape[1]):
-            for i in range(start.shape[2]):
-                motion = max(guess[1, s, i] - start[1, s, i], start[0, s, i] - guess[0, s, i])
-                pad = _INFLATION * motion + 1e-12 * (1.0 + abs(0.5 * (guess[0, s, i] + guess[1, s, i])))
-                candidate[0, s, i], candidate[1, s, i] = guess[0, s, i] - pad, guess[1, s, i] + pad
-        _within(candidate, domain, rows, guess)
-        if not _field(tape, guess, inputs, disturbance, rates):
-            return False
-        _motion(start, rates, tau, image)
-        if np.all(image[0] > candidate[0]) and np.all(image[1] < candidate[1]):
-            _within(image, domain, rows, out)
+        _motion(start, rates, tau, guess)
+        if iteration > 0 and np.all(guess[0] > candidate[0]) and np.all(guess[1] < candidate[1]):
+            _within(guess, domain, rows, out)
             return True
-        guess[:] = image
     return False
 
 
