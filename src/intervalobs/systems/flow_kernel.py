@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .flow_enclosure import _INFLATION, _PICARD_ITERATIONS, MAX_HALVINGS
-from .tape_kernel import replay
+from .tape_kernel import _down, _up, replay
 
 __all__ = ["advance", "propagate", "strip_update"]
 
@@ -45,16 +45,6 @@ Tape = tuple[NDArray[np.int64], FloatArray, NDArray[np.bool_], NDArray[np.int64]
 
 _EPS = float(np.finfo(float).eps)
 _TINY = float(np.finfo(float).tiny)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _down(x: float) -> float:
-    return np.nextafter(x, -np.inf)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _up(x: float) -> float:
-    return np.nextafter(x, np.inf)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

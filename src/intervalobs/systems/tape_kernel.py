@@ -21,9 +21,12 @@ Importing this module imports Numba; the first call of a fresh install compiles 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
+from numba.core import types
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from .field_tape import OPERATIONS
@@ -44,14 +47,38 @@ _TWO_PI = 2.0 * np.pi
 _PERIOD_SLACK = 1e-9
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _down(x: float) -> float:
-    return np.nextafter(x, -np.inf)
+def _bitcast(source: Any, target: Any) -> Any:
+    """A Numba intrinsic reinterpreting the 64 bits of a ``source`` value as a ``target`` one (no conversion)."""
+
+    def typed(typingctx: Any, x: Any) -> Any:
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            return builder.bitcast(args[0], context.get_value_type(target))
+
+        return target(source), codegen
+
+    return intrinsic(typed)
+
+
+_bits: Any = _bitcast(types.float64, types.int64)
+"""The IEEE 754 bits of a float64 as an int64."""
+_float: Any = _bitcast(types.int64, types.float64)
+"""The float64 of IEEE 754 bits (the inverse of ``_bits``)."""
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _up(x: float) -> float:
-    return np.nextafter(x, np.inf)
+    """``np.nextafter(x, inf)`` by the bits: the next float64 up (NaN and +inf kept, ±0 to the smallest subnormal)."""
+    if x != x or x == np.inf:
+        return x
+    if x == 0.0:
+        return _float(1)
+    return _float(_bits(x) + 1) if x > 0.0 else _float(_bits(x) - 1)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _down(x: float) -> float:
+    """``np.nextafter(x, -inf)``: the next float64 down (:func:`_up` mirrored)."""
+    return -_up(-x)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -177,11 +204,12 @@ def _binary(code: int, a_lo: float, a_hi: float, b_lo: float, b_hi: float) -> tu
     return low, high, True
 
 
-@numba.njit(cache=True, nogil=True)
-def _keep_zeros(d_lo: FloatArray, d_hi: FloatArray, j: int, first: FloatArray, second: FloatArray) -> None:
-    """``interval_dual._keep_zeros``: an exact 0 where the sources' entry ``j`` are exact zeros (``first[0, j]``...)."""
-    if first[0, j] == 0.0 and first[1, j] == 0.0 and second[0, j] == 0.0 and second[1, j] == 0.0:
-        d_lo[j], d_hi[j] = 0.0, 0.0
+@numba.njit(cache=True, nogil=True, inline="always")
+def _keep_zeros(d: FloatArray, k: int, j: int, sources: tuple[int, int]) -> None:
+    """``interval_dual._keep_zeros``: entry ``j`` of slot ``k``'s derivative an exact 0 where both sources' are."""
+    a, b = sources
+    if d[0, a, j] == 0.0 and d[1, a, j] == 0.0 and d[0, b, j] == 0.0 and d[1, b, j] == 0.0:
+        d[0, k, j], d[1, k, j] = 0.0, 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -194,16 +222,16 @@ def _binary_derivative(
     """
     k, a, b = slots
     dual_a, dual_b = kinds[a], kinds[b]
-    source = d[:, a] if dual_a else d[:, b]
-    other = d[:, b] if dual_a and dual_b else source
+    src = a if dual_a else b  # the dual operand (the first where both are)
+    other = b if dual_a and dual_b else src
     for j in range(d.shape[2]):
         if code == ADD or code == SUB:
             if dual_a and dual_b:
                 low, high, _ = _binary(code, d[0, a, j], d[1, a, j], d[0, b, j], d[1, b, j])
             elif dual_a or code == ADD:
-                low, high = source[0, j], source[1, j]
+                low, high = d[0, src, j], d[1, src, j]
             else:  # point - dual: the derivative negated
-                low, high = -source[1, j], -source[0, j]
+                low, high = -d[1, src, j], -d[0, src, j]
         elif code == MUL:
             if dual_a and dual_b:
                 p_lo, p_hi = _mul(d[0, a, j], d[1, a, j], lo[b], hi[b])
@@ -211,21 +239,21 @@ def _binary_derivative(
                 low, high = _down(p_lo + q_lo), _up(p_hi + q_hi)
             else:
                 c = b if dual_a else a
-                low, high = _mul(source[0, j], source[1, j], lo[c], hi[c])
+                low, high = _mul(d[0, src, j], d[1, src, j], lo[c], hi[c])
         elif dual_a:  # dual / dual, dual / point: (u' - Q v') / V
             r_lo, r_hi = _down(1.0 / hi[b]), _up(1.0 / lo[b])
-            low, high = source[0, j], source[1, j]
+            low, high = d[0, src, j], d[1, src, j]
             if dual_b:
                 p_lo, p_hi = _mul(lo[k], hi[k], d[0, b, j], d[1, b, j])
                 low, high = _down(low - p_hi), _up(high - p_lo)
             low, high = _mul(low, high, r_lo, r_hi)
         else:  # point / dual: -(v' (Q / V))
             s_lo, s_hi = _mul(lo[k], hi[k], _down(1.0 / hi[b]), _up(1.0 / lo[b]))
-            p_lo, p_hi = _mul(source[0, j], source[1, j], s_lo, s_hi)
+            p_lo, p_hi = _mul(d[0, src, j], d[1, src, j], s_lo, s_hi)
             low, high = -p_hi, -p_lo
         d[0, k, j], d[1, k, j] = low, high
         if (code != ADD and code != SUB) or (dual_a and dual_b):
-            _keep_zeros(d[0, k], d[1, k], j, source, other)
+            _keep_zeros(d, k, j, (src, other))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -307,7 +335,7 @@ def _run(
                         d[0, k, j], d[1, k, j] = 0.0, 0.0
                         continue
                     d[0, k, j], d[1, k, j] = _mul(d[0, a, j], d[1, a, j], s_lo, s_hi)
-                    _keep_zeros(d[0, k], d[1, k], j, d[:, a], d[:, a])
+                    _keep_zeros(d, k, j, (a, a))
     return True
 
 
