@@ -69,7 +69,7 @@ COMPILED_MIN_STEPS = 1000
 """Set-steps (samples × runs × parts) from which :meth:`ContinuousNonlinearObserver.run` runs each sample in the
 compiled kernels (:mod:`intervalobs.systems.flow_kernel`, the recorded field and output map) when ``compiled`` is
 None: importing Numba and loading the cached kernels cost about a second of CPU (the first run after an install
-compiles them, about a minute), and the kernels save 1.3-3.5 CPU ms per set-step of one part
+compiles them, about a minute), and the kernels save 2-4.4 CPU ms per sample of one part against the NumPy path
 (``benchmarks/continuous_cost.json``)."""
 _NEGLIGIBLE = 1e-9
 """A domain or parameter end is used to contract only where the set crosses it by more than this fraction of its
