@@ -7,13 +7,19 @@ reduction to ``order`` generators. :func:`strip_update` is the observer's contra
 strip (:func:`intervalobs.observers.continuous_nonlinear._strip_update`, with its hull-keeping gain). Both
 evaluate the same formulas, in the same order, as the NumPy paths of
 :func:`intervalobs.systems.flow_enclosure._step` and of the observer (which stay the reference and are used
-for short records), so the two agree up to the order of a few sums; the user's function is never compiled.
+for short records), so the two agree up to the order of a few sums.
+
+:func:`propagate` is the whole of :func:`intervalobs.systems.flow_enclosure.propagate` in one call where the
+user's field is recorded as a tape (:mod:`intervalobs.systems.field_tape`, replayed by
+:mod:`intervalobs.systems.tape_kernel`): per step the sets' hulls, the Picard search on the whole batch (the
+iterations of ``flow_enclosure._picard``, its a priori boxes bit for bit), the forward-mode pass, the centre's
+box (step 2) and :func:`advance`'s steps 3-4, with the Python loop's halvings.
 
 Notes
 -----
 **Soundness.** Every interval operation is the one of :class:`~intervalobs.interval.Interval`: the hull of the
 four products of the ends (``0 * inf = 0``), sums in round-to-nearest, and each end moved one floating-point
-number outward (``nextafter``), a matrix product's row sums first padded by the dot-product bound
+number outward (``nextafter``, computed on the bits: ``tape_kernel._up``), a matrix product's row sums first padded by the dot-product bound
 :math:`\gamma_k\sum|t|` with :math:`\gamma_k = (k + 2)\varepsilon` and the smallest normal number, as
 ``Interval.__matmul__`` does (policy 1 of :mod:`intervalobs.interval`). That bound holds for any order of
 summation, so the loop's order (not BLAS's or NumPy's pairwise one) changes no guarantee. The point products
