@@ -17,11 +17,11 @@ box (step 2) and :func:`advance`'s steps 3-4, with the Python loop's halvings.
 
 Notes
 -----
-**Soundness.** Every interval operation is the one of :class:`~intervalobs.interval.Interval`: the hull of the
-four products of the ends (``0 * inf = 0``), sums in round-to-nearest, and each end moved one floating-point
-number outward (``nextafter``, computed on the bits: ``tape_kernel._up``), a matrix product's row sums first padded by the dot-product bound
-:math:`\gamma_k\sum|t|` with :math:`\gamma_k = (k + 2)\varepsilon` and the smallest normal number, as
-``Interval.__matmul__`` does (policy 1 of :mod:`intervalobs.interval`). That bound holds for any order of
+**Soundness.** Every interval operation is the one of :class:`~intervalobs.interval.Interval`: the hull of the four
+products of the ends (``0 * inf = 0``), sums in round-to-nearest, and each end moved one floating-point number
+outward (``nextafter``, computed on the bits: ``tape_kernel._up``), a matrix product's row sums first padded by the
+dot-product bound :math:`\gamma_k\sum|t|` with :math:`\gamma_k = (k + 2)\varepsilon` and the smallest normal number,
+as ``Interval.__matmul__`` does (policy 1 of :mod:`intervalobs.interval`). That bound holds for any order of
 summation, so the loop's order (not BLAS's or NumPy's pairwise one) changes no guarantee. The point products
 (:math:`\mathrm{mid}[\Phi]G` and the centres) need no rounding: whatever they miss is in the remainder box,
 which is computed in interval arithmetic from them. The reduction boxes the smallest generators with the
