@@ -290,3 +290,21 @@ def test_the_kernels_next_float_is_numpys_nextafter() -> None:
     for mine, theirs in zip(out, expected, strict=True):
         np.testing.assert_array_equal(mine, theirs)
         np.testing.assert_array_equal(np.signbit(mine), np.signbit(theirs))
+
+
+def test_an_output_map_it_cannot_record_is_evaluated_in_python() -> None:
+    """The pendulum measured through tanh: f recorded, g not; the correction runs in Python, the same bounds as the
+    NumPy path to the order of a few sums, every truth enclosed."""
+    case = pendulum()
+    system = ContinuousNonlinearSystem(
+        case.system.f, lambda x, u: (np.tanh(x[0]),), n=2, m=1, n_params=1, E=[[0.0], [1.0]]
+    )
+    t, u, x, _ = _record(case, 1.0, starts=2)
+    noise = np.where(np.random.default_rng(3).random((2, t.size)) < 0.5, -0.01, 0.01)
+    y = (np.tanh(x[..., 0]) + noise)[..., None]
+    held = np.broadcast_to(u, (2, t.size, 1))
+    runs = [ContinuousNonlinearObserver(system, case.bounds, case.h, compiled=c).run(t, y, held) for c in (False, True)]
+    assert runs[1].meta["field_tape"] == "recorded" and runs[1].meta["output_tape"].startswith("not recorded")
+    np.testing.assert_allclose(runs[1].lower, runs[0].lower, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(runs[1].upper, runs[0].upper, rtol=1e-12, atol=1e-12)
+    assert enclosure_report(t, runs[1].lower, x, runs[1].upper).fraction == 1.0
