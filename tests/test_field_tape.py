@@ -171,7 +171,9 @@ def _record(case: Case, duration: float, starts: int = 1) -> tuple[np.ndarray, n
     return t, u, np.array(truths), np.array(outputs)
 
 
-@pytest.mark.parametrize("make", [pendulum, cstr, compartments, chemostat_bundle], ids=str)
+@pytest.mark.parametrize(
+    "make", [pendulum, cstr, compartments, chemostat_bundle], ids=["pendulum", "cstr", "compartments", "chemostat"]
+)
 def test_the_observer_on_the_tape_encloses_every_truth(make: Callable[[], Case]) -> None:
     case = make()
     t, u, x, y = _record(case, 3.0, starts=6)

@@ -506,7 +506,8 @@ def propagate(
         sums, several times faster on small sets); False keeps Numba unimported.
     tape : FieldTape, optional
         The system's field recorded (:func:`intervalobs.systems.field_tape.trace_field`): every evaluation of
-        the field is the tape's compiled replay (the same ends); default: the field in Python.
+        the field is the tape's compiled replay (the same ends), and with ``compiled`` every step is done in one
+        call of :func:`intervalobs.systems.flow_kernel.propagate`; default: the field in Python.
 
     Returns
     -------
