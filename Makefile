@@ -70,3 +70,4 @@ notebooks: $(STAMP)
 
 clean:
 	rm -rf $(VENV) $(LATEST) .venv-lock results build *.egg-info docs/_build docs/api
+	find src -name '*.nbi' -delete -o -name '*.nbc' -delete

@@ -15,7 +15,9 @@ An operation the Python path refuses (a divisor containing 0, ``log`` or ``sqrt`
 status instead of raising; the caller raises or widens as the Python path does.
 
 Importing this module imports Numba; the first call of a fresh install compiles it into Numba's cache
-(``cache=True``), later processes load it.
+(``cache=True``), later processes load it. :mod:`intervalobs.systems.flow_kernel` and
+:mod:`intervalobs.observers.correction_kernel` compile this interpreter into their own cached code, which Numba
+does not invalidate when only this file changes: remove the caches after editing it (``make clean``).
 """
 
 from __future__ import annotations
