@@ -7,7 +7,12 @@ divided by the recommended HGIO's, and the CPU ms per sample (all runs together)
 ``benchmarks/wrapping.json`` (entries keyed ``"<model> order=<order> reduction=<reduction>"``, merged into the
 file). Issue 32.
 
-Run with ``python benchmarks/wrapping.py [--orders 16 32 64 128] [--reductions box frame] [--field]``.
+With ``--cases``, instead: the pendulum (10 s) and the chemostat (12 h) of ``benchmarks/continuous_cost.py``
+(compiled kernels, substeps 2 and 1, CPU ms per sample the median of 3 after a warm-up, widths over the second half)
+and the chemostat reproduction (``intervalobs reproduce chemostat``, 12 h, seed 0: the one zonotope's and the
+bundle's X and S widths over the second half), for each reduction; entries keyed ``"<case> reduction=<reduction>"``.
+
+Run with ``python benchmarks/wrapping.py [--orders 16 32 64 128] [--reductions box frame] [--field] [--cases]``.
 """
 
 from __future__ import annotations
@@ -84,13 +89,75 @@ def general(t: np.ndarray, sim: Any, hgio: Any, field: bool, order: int, reducti
     }
 
 
+def cases(reduction: str) -> dict[str, Any]:
+    """The continuous_cost cases and the chemostat reproduction with ``reduction``."""
+    import functools
+    import sys
+    import tempfile
+
+    from intervalobs.reproduce import chemostat
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    import continuous_cost
+
+    out: dict[str, Any] = {}
+    for name, make in (
+        ("pendulum_10s", continuous_cost.pendulum_record),
+        ("chemostat_12h", continuous_cost.chemostat_record),
+    ):
+        system, bounds, h, t, y, u, truth = make()
+        for substeps in (2, 1):
+            observer = ContinuousNonlinearObserver(
+                system, bounds, h, substeps=substeps, compiled=True, reduction=reduction
+            )
+            observer.run(t, y, u)
+            costs = []
+            for _ in range(3):
+                clock = time.process_time()
+                estimate = observer.run(t, y, u)
+                costs.append(1000.0 * (time.process_time() - clock) / t.size)
+            inside = (estimate.lower <= truth) & (truth <= estimate.upper)
+            out[f"{name} substeps={substeps}"] = {
+                "cpu_ms_per_sample": float(np.median(costs)),
+                "mean_width_second_half": (estimate.upper - estimate.lower)[t >= 0.5 * t[-1]].mean(axis=0).tolist(),
+                "enclosure": float(inside.mean()),
+            }
+    original = chemostat.ContinuousNonlinearObserver
+    chemostat.ContinuousNonlinearObserver = functools.partial(original, reduction=reduction)  # type: ignore[misc]
+    try:
+        with tempfile.TemporaryDirectory() as folder:
+            clock = time.process_time()
+            summary = chemostat.run(Path(folder), 0, False, full=False)
+            seconds = time.process_time() - clock
+    finally:
+        chemostat.ContinuousNonlinearObserver = original  # type: ignore[misc]
+    bundle = summary["design"]["bundle"]
+    out["reproduce_chemostat_12h"] = {
+        "one_zonotope_biomass_mean_width_second_half": summary["design"]["biomass_mean_width_second_half"],
+        "one_zonotope_width_state_mean": summary["width"]["state_mean"],
+        "bundle": dict(bundle),
+        "enclosure": summary.get("enclosure"),
+        "cpu_s": seconds,
+    }
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--orders", type=int, nargs="+", default=[16, 32, 64, 128])
     parser.add_argument("--reductions", nargs="+", default=["box"])
     parser.add_argument("--field", action="store_true", help="e^{-|x|} in the field (default: as disturbance)")
     parser.add_argument("--label", default="", help="suffix of the entries' keys")
+    parser.add_argument("--cases", action="store_true", help="the pendulum and the chemostat instead")
     args = parser.parse_args()
+    if args.cases:
+        results = json.loads(OUT.read_text()) if OUT.exists() else {}
+        for reduction in args.reductions:
+            for key, entry in cases(reduction).items():
+                results[f"{key} reduction={reduction}"] = entry
+                print(key, reduction, json.dumps(entry, default=float), flush=True)
+            OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
+        return
     t, sim, hgio = record()
     results = json.loads(OUT.read_text()) if OUT.exists() else {}
     model = "phi_in_field" if args.field else "phi_as_disturbance"

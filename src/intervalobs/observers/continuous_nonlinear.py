@@ -200,11 +200,11 @@ class ContinuousNonlinearObserver(Observer):
         :mod:`intervalobs.systems.flow_kernel` (Numba, the same bounds up to the order of a few sums). Default:
         for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
         process (``init``/``step`` then use them too).
-    reduction : {"box", "frame"}
-        How the zonotopes' generators beyond ``order`` are reduced after every step and strip: ``"box"``
-        (Combastel's: the smallest replaced by their axis-aligned box) or ``"frame"`` (boxed in an orthonormal frame
-        of the largest generators, which turns with the set: less wrapping where the flow rotates;
-        :func:`~intervalobs.systems.flow_enclosure._reduce_in_frame`).
+    reduction : {"frame", "box"}
+        How the zonotopes' generators beyond ``order`` are reduced after every step and strip: ``"frame"`` (the
+        default: the smallest boxed in the frame that the flow carried from the previous reduction, so a rotating
+        flow does not make the boxes wrap; :func:`~intervalobs.systems.flow_enclosure._reduce_in_frame`) or
+        ``"box"`` (Combastel's: boxed in the axes).
 
     Attributes
     ----------
@@ -238,7 +238,7 @@ class ContinuousNonlinearObserver(Observer):
         divergence_factor: float = 10.0,
         refine: int = 0,
         compiled: bool | None = None,
-        reduction: str = "box",
+        reduction: str = "frame",
     ) -> None:
         if not isinstance(system, ContinuousNonlinearSystem):
             raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")

@@ -50,8 +50,9 @@ would lose. One step of length :math:`\tau` maps it to a zonotope containing :ma
    generators are :math:`G' = \mathrm{fl}(MG)` and everything else — :math:`[\hat z(\tau)]`,
    :math:`([\Phi] - M)[G\xi]`, :math:`(MG - G')\xi` — is a box :math:`[e]`, whose centre is the new
    centre and whose radii are new generators (one per coordinate). The generators beyond
-   ``order`` are reduced (Combastel 2003: the smallest replaced by the box of their hull,
-   :func:`intervalobs.zonotope.reduce_order`, rounded upward).
+   ``order`` are reduced: ``reduction="box"`` (Combastel 2003: the smallest replaced by the box of their hull,
+   :func:`intervalobs.zonotope.reduce_order`, rounded upward) or ``"frame"`` (the smallest boxed in the frame that
+   the flow carried from the previous reduction, :func:`_reduce_in_frame`: less wrapping under a rotating flow).
 
 Every interval operation is outward rounded (:class:`~intervalobs.interval.Interval`); the
 floating-point :math:`G'` and :math:`c'` need no rounding because whatever they miss is in

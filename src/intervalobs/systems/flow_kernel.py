@@ -20,7 +20,9 @@ summation, so the loop's order (not BLAS's or NumPy's pairwise one) changes no g
 (:math:`\mathrm{mid}[\Phi]G` and the centres) need no rounding: whatever they miss is in the remainder box,
 which is computed in interval arithmetic from them. The reduction boxes the smallest generators with the
 row sums of their magnitudes widened by :math:`2m\varepsilon` relative and rounded up, as
-:func:`intervalobs.systems.flow_enclosure._reduce`.
+:func:`intervalobs.systems.flow_enclosure._reduce`, or (``frame``) in a frame with the verified inverse bound of
+:func:`intervalobs.systems.flow_enclosure._reduce_in_frame` (the same formulas; the floating inverse is LAPACK's
+in both, and the frame's 26-bit rounding can turn a last-bit difference of a sum into one of :math:`2^{-26}`).
 
 Importing this module imports Numba; the first call of a fresh install compiles it into Numba's cache
 (``cache=True``), later processes load it.
