@@ -211,3 +211,10 @@ def test_the_frame_box_turns_with_a_rotated_box() -> None:
     back = turn.T  # the hull in the turned coordinates: [2, 1.9] for the original and the frame's box
     assert np.abs(back @ framed).sum(-1) == pytest.approx(np.abs(back @ g).sum(-1), rel=1e-7)
     assert np.abs(back @ boxed).sum(-1) == pytest.approx(np.array([1.0, 0.9]) + (0.5 + 0.75**0.5) ** 2, rel=1e-7)
+
+
+def test_a_refused_frame_falls_back_to_the_axis_box(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the frame's verified residual is above the limit, the small generators get Combastel's axis box."""
+    g = _generators(3, 4, 20, 0)
+    monkeypatch.setattr(enclosure_module, "_FRAME_RESIDUAL", -1.0)
+    np.testing.assert_array_equal(enclosure_module._reduce(g, 8, "frame"), enclosure_module._reduce(g, 8, "box"))
