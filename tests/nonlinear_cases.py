@@ -139,3 +139,19 @@ def compartments() -> Case:
     )
     bounds = Bounds(x0=(0.0, 0.5), p=(0.95, 1.05), w=(-0.02, 0.02), v=(-0.02, 0.02))
     return Case("compartments", system, bounds, _with_w(f, 6, [0]), [0, 5], 0.1, {})
+
+
+def rotation() -> Case:
+    """A linear system whose x2-x3 block rotates (eigenvalues -0.5 ± 1.94i at the nominal frequency), x1 measured.
+
+    The wrapping case of the zonotopes' reduction (the sampled-output high-gain paper's example has the same block);
+    the rotation frequency is a parameter (±3 %), the disturbance enters x2 and x3.
+    """
+
+    def f(x: Any, u: Any, p: Any) -> tuple[Any, Any, Any]:
+        return -x[0] + x[1], -0.5 * x[1] + p[0] * x[2] + u[0], -p[0] * x[1] - 0.5 * x[2]
+
+    e = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]
+    system = ContinuousNonlinearSystem(f, lambda x, u: (x[0],), n=3, m=1, n_params=1, E=e)
+    bounds = Bounds(x0=([-0.5, -1.0, -1.0], [0.5, 1.0, 1.0]), p=(1.88, 2.0), w=(-0.2, 0.2), v=(-0.05, 0.05))
+    return Case("rotation", system, bounds, _with_w(f, 3, [1, 2]), [0], 0.05, {"order": 12})

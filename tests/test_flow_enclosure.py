@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import importlib
 import itertools
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import linprog
 
 from intervalobs import Bounds, ContinuousNonlinearSystem
 from intervalobs.errors import AssumptionError, BoundsError
@@ -13,6 +17,8 @@ from intervalobs.interval import Interval
 from intervalobs.systems import flow_enclosure
 from intervalobs.systems.flow_enclosure import StateZonotope, propagate
 from nonlinear_cases import Case, cstr, pendulum, simulate_truth
+
+enclosure_module = importlib.import_module("intervalobs.systems.flow_enclosure")  # the package re-exports the function
 
 
 def _vertices(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -82,8 +88,9 @@ def test_zonotope_of_a_box_is_the_box() -> None:
     np.testing.assert_allclose(hull.upper, upper, rtol=1e-14)
 
 
+@pytest.mark.parametrize("reduction", ["box", "frame"], ids=str)
 @pytest.mark.parametrize("make", [pendulum, cstr], ids=["pendulum", "cstr"])
-def test_the_compiled_step_gives_the_numpy_step_bounds(make) -> None:
+def test_the_compiled_step_gives_the_numpy_step_bounds(make, reduction: str) -> None:
     """flow_kernel.advance evaluates the NumPy step's formulas: the same sets up to the order of a few sums.
 
     Random start zonotopes (12 of them, 3 generators beyond the box's) so that the reduction runs too.
@@ -99,9 +106,115 @@ def test_the_compiled_step_gives_the_numpy_step_bounds(make) -> None:
     start = StateZonotope(centre, generators)
     u = np.full((12, case.system.m), 0.3)
     w = Interval._raw(*b.w)
-    sets = [propagate(case.system, u, w, start, case.h, 2, 3 * size, compiled=c)[0] for c in (0, 1)]
+    sets = [propagate(case.system, u, w, start, case.h, 2, 3 * size, bool(c), reduction=reduction)[0] for c in (0, 1)]
     numpy_box, compiled_box = sets[0].box(), sets[1].box()
     scale = numpy_box.upper - numpy_box.lower
     assert np.all(np.abs(compiled_box.lower - numpy_box.lower) <= 1e-12 * scale)
     assert np.all(np.abs(compiled_box.upper - numpy_box.upper) <= 1e-12 * scale)
     np.testing.assert_allclose(sets[1].generators, sets[0].generators, rtol=1e-12, atol=1e-12 * scale.max())
+
+
+def _generators(seed: int, size: int, count: int, degenerate: int) -> np.ndarray:
+    """Random generators turned by a rotation, norms spread over decades; ``degenerate`` picks a hard case."""
+    rng = np.random.default_rng(seed)
+    g = rng.normal(size=(size, count)) * np.logspace(0, -rng.uniform(1, 6), count)
+    angle = rng.uniform(0, 2 * np.pi)
+    turn = np.eye(size)
+    turn[:2, :2] = [[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
+    g = turn @ g
+    if degenerate == 1:  # parameter rows untouched by the flow: zero in every small generator
+        g[-1, size:] = 0.0
+    elif degenerate == 2:  # all generators in one plane (rank 2)
+        g[2:] = 0.0
+    elif degenerate == 3:  # tiny and huge scales, zero columns
+        g[:, -3:] = 0.0
+        g[:, size : 2 * size] *= 1e-250
+        g[0] *= 1e100
+    return g
+
+
+def _in_zonotope(point: np.ndarray, generators: np.ndarray) -> bool:
+    """Whether ``point`` is ``generators @ eta`` for some ``|eta| <= 1`` (an LP: smallest infinity norm of eta)."""
+    size, count = generators.shape
+    # minimise s subject to G eta = point, -s <= eta <= s
+    cost = np.zeros(count + 1)
+    cost[-1] = 1.0
+    a_eq = np.hstack([generators, np.zeros((size, 1))])
+    a_ub = np.vstack(
+        [np.hstack([np.eye(count), -np.ones((count, 1))]), np.hstack([-np.eye(count), -np.ones((count, 1))])]
+    )
+    result = linprog(cost, A_ub=a_ub, b_ub=np.zeros(2 * count), A_eq=a_eq, b_eq=point, bounds=(None, None))
+    return bool(result.status == 0 and result.x[-1] <= 1.0 + 1e-7)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    size=st.integers(3, 6),
+    extra=st.integers(1, 20),
+    keep=st.integers(0, 8),
+    degenerate=st.integers(0, 3),
+)
+def test_the_frame_reduction_contains_the_original(
+    seed: int, size: int, extra: int, keep: int, degenerate: int
+) -> None:
+    """Boxing the small generators in a frame keeps every point: by construction (the small generators solved in
+    the frame have |x|1 <= d) and by LP membership of the original's vertices-like points in the reduced set."""
+    order = size + keep
+    g = _generators(seed, size, order + extra, degenerate)
+    reduced = enclosure_module._reduce(g, order, "frame")
+    assert reduced.shape == (size, order) and np.all(np.isfinite(reduced))
+    norms = np.linalg.norm(g, axis=0)
+    ranked = np.argsort(-norms, kind="stable")
+    np.testing.assert_array_equal(reduced[:, :keep], g[:, ranked[:keep]])
+    frame, small = reduced[:, keep:], g[:, ranked[keep:]]
+    solved = np.linalg.lstsq(frame, small, rcond=None)[0]
+    assert np.allclose(frame @ solved, small, rtol=1e-9, atol=1e-12 * np.abs(small).max(initial=0.0))
+    assert np.all(np.abs(solved).sum(-1) <= 1.0 + 1e-9)
+    if degenerate == 3:  # the LP's tolerances are absolute: skip the extreme scales
+        return
+    rng = np.random.default_rng(seed + 1)
+    for xi in np.sign(rng.uniform(-1, 1, (6, g.shape[1]))):
+        assert _in_zonotope(g @ xi, reduced)
+
+
+@pytest.mark.parametrize("degenerate", [0, 1, 2, 3], ids=["random", "parameter-rows", "rank-2", "scales"])
+def test_the_compiled_frame_reduction_is_the_numpy_one(degenerate: int) -> None:
+    """flow_kernel._reduce(frame=True) evaluates enclosure_module._reduce_in_frame's formulas (bit for bit here)."""
+    from intervalobs.systems import flow_kernel
+
+    for seed in range(20):
+        size, order = 3 + seed % 4, 8 + seed % 5
+        g = _generators(seed, size, order + 7, degenerate)
+        out = np.empty((size, order))
+        flow_kernel._reduce(g, order, True, out)
+        scale = np.abs(enclosure_module._reduce(g, order, "box")).max()
+        np.testing.assert_allclose(out, enclosure_module._reduce(g, order, "frame"), rtol=1e-12, atol=1e-12 * scale)
+
+
+def test_the_kernel_uses_the_frame_constants() -> None:
+    from intervalobs.systems import flow_kernel
+
+    for name in ("_FRAME_BITS", "_FRAME_ACCEPT", "_FRAME_RESIDUAL", "_FRAME_FLOOR", "_FRAME_TINY"):
+        assert getattr(flow_kernel, name) == getattr(enclosure_module, name), name
+
+
+def test_the_frame_box_turns_with_a_rotated_box() -> None:
+    """A box turned by 30 degrees, split into many small generators: the frame of the largest boxes them with no
+    wrapping; the axis box, turned back, is (sqrt(3)/2 + 1/2)^2 = 1.87 times the small generators' part."""
+    angle = np.pi / 6
+    turn = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    pieces = np.concatenate([np.repeat(turn[:, :1], 4, axis=1) * 0.25, np.repeat(turn[:, 1:], 4, axis=1) * 0.25], 1)
+    g = np.concatenate([turn * [1.0, 0.9], pieces], axis=1)
+    framed = enclosure_module._reduce(g, 4, "frame")
+    boxed = enclosure_module._reduce(g, 4, "box")
+    back = turn.T  # the hull in the turned coordinates: [2, 1.9] for the original and the frame's box
+    assert np.abs(back @ framed).sum(-1) == pytest.approx(np.abs(back @ g).sum(-1), rel=1e-7)
+    assert np.abs(back @ boxed).sum(-1) == pytest.approx(np.array([1.0, 0.9]) + (0.5 + 0.75**0.5) ** 2, rel=1e-7)
+
+
+def test_a_refused_frame_falls_back_to_the_axis_box(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the frame's verified residual is above the limit, the small generators get Combastel's axis box."""
+    g = _generators(3, 4, 20, 0)
+    monkeypatch.setattr(enclosure_module, "_FRAME_RESIDUAL", -1.0)
+    np.testing.assert_array_equal(enclosure_module._reduce(g, 8, "frame"), enclosure_module._reduce(g, 8, "box"))

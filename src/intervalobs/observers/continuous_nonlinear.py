@@ -59,7 +59,7 @@ from ..interval_dual import value_and_jacobian
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.field_tape import FieldTape, trace_field
-from ..systems.flow_enclosure import ORDER_FACTOR, StateZonotope, interval_product, propagate
+from ..systems.flow_enclosure import ORDER_FACTOR, REDUCTIONS, StateZonotope, interval_product, propagate
 from .base import Observer, ObserverState, record_consistency
 
 __all__ = ["ContinuousNonlinearObserver"]
@@ -100,7 +100,7 @@ def _hull_gain(generators: FloatArray, row: FloatArray, sigma: FloatArray) -> Fl
 
 
 def _strip_update(
-    zset: StateZonotope, a: FloatArray, strip: Interval, order: int, compiled: bool = False
+    zset: StateZonotope, a: FloatArray, strip: Interval, order: int, compiled: bool = False, reduction: str = "box"
 ) -> tuple[StateZonotope, BoolArray]:
     r"""A zonotope containing :math:`\{x \in \langle c, G\rangle : a^\top x \in [s]\}`; also whether that set is empty.
 
@@ -114,10 +114,11 @@ def _strip_update(
     a zonotope with one more generator; :math:`\lambda = GG^\top a/(a^\top GG^\top a + \sigma^2)`
     minimises its Frobenius radius (Alamo, Bravo & Camacho 2005). The centre and generators are
     computed in interval arithmetic; their midpoints are kept and the rest joins the box term. ``compiled``:
-    the same in :func:`intervalobs.systems.flow_kernel.strip_update`.
+    the same in :func:`intervalobs.systems.flow_kernel.strip_update`; ``reduction``: how the generators beyond
+    ``order`` are reduced (:data:`~intervalobs.systems.flow_enclosure.REDUCTIONS`).
     """
     if compiled:
-        return _compiled_strip_update(zset, a, strip, order)
+        return _compiled_strip_update(zset, a, strip, order, reduction)
     generators = zset.generators
     row = Interval._wrap(a[..., None, :])
     image = interval_product(row, Interval._wrap(generators))[..., 0, :]
@@ -140,11 +141,11 @@ def _strip_update(
     slack = np.concatenate([moved.radius, extra.radius[..., :, None]], axis=-1).sum(-1)
     slack = np.nextafter(slack * (1.0 + 2 * new.shape[-1] * _EPS), np.inf)
     box = Interval._raw(centre.lower - centre.centre - slack, centre.upper - centre.centre + slack)
-    return StateZonotope(centre.centre, new).with_box(box, order), empty
+    return StateZonotope(centre.centre, new).with_box(box, order, reduction), empty
 
 
 def _compiled_strip_update(
-    zset: StateZonotope, a: FloatArray, strip: Interval, order: int
+    zset: StateZonotope, a: FloatArray, strip: Interval, order: int, reduction: str = "box"
 ) -> tuple[StateZonotope, BoolArray]:
     """:func:`_strip_update` by the compiled kernel, every set of the batch flattened."""
     from ..systems import flow_kernel  # Numba is imported only where a record is long enough to pay for it
@@ -160,6 +161,7 @@ def _compiled_strip_update(
         flat(a, (size,)),
         (flat(strip.lower, ()), flat(strip.upper, ())),
         int(order),
+        reduction == "frame",
     )
     return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order)), empty.reshape(lead)
 
@@ -202,6 +204,11 @@ class ContinuousNonlinearObserver(Observer):
         step (:mod:`intervalobs.systems.flow_kernel`) is compiled (``meta["field_tape"]`` says which). Default:
         for a run of at least ``COMPILED_MIN_STEPS`` set-steps, or when the kernels are already loaded in the
         process (``init``/``step`` then use them too).
+    reduction : {"frame", "box"}
+        How the zonotopes' generators beyond ``order`` are reduced after every step and strip: ``"frame"`` (the
+        default: the smallest boxed in the frame that the flow carried from the previous reduction, so a rotating
+        flow does not make the boxes wrap; :func:`~intervalobs.systems.flow_enclosure._reduce_in_frame`) or
+        ``"box"`` (Combastel's: boxed in the axes).
 
     Attributes
     ----------
@@ -235,6 +242,7 @@ class ContinuousNonlinearObserver(Observer):
         divergence_factor: float = 10.0,
         refine: int = 0,
         compiled: bool | None = None,
+        reduction: str = "frame",
     ) -> None:
         if not isinstance(system, ContinuousNonlinearSystem):
             raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")
@@ -267,6 +275,9 @@ class ContinuousNonlinearObserver(Observer):
         if compiled not in (None, True, False):
             raise BoundsError(f"compiled: expected None, True or False, got {compiled!r}")
         self.compiled = compiled
+        if reduction not in REDUCTIONS:
+            raise BoundsError(f"reduction: expected one of {', '.join(map(repr, REDUCTIONS))}, got {reduction!r}")
+        self.reduction = reduction
         self._limits = (
             np.concatenate([system.domain[0], self.bounds.p[0]]),
             np.concatenate([system.domain[1], self.bounds.p[1]]),
@@ -326,7 +337,7 @@ class ContinuousNonlinearObserver(Observer):
         alive &= ~empty
         zset = _revive(alive, _select(alive, corrected, zset))
         if self.refine:
-            zset, alive = _bisect_parts(zset, alive, self._scale, self.order, compiled)
+            zset, alive = _bisect_parts(zset, alive, self._scale, self.order, compiled, self.reduction)
         consistent = alive.any(-1) | lost
         box = zset.box()
         n = self.n
@@ -348,16 +359,30 @@ class ContinuousNonlinearObserver(Observer):
         """
         failed = np.zeros(zset.centre.shape[:-1], dtype=bool)
         tape = self._recorded(output=False)[0] if compiled else None
-        options = (self.substeps, self.order, compiled, tape)
+
+        def step(sets: StateZonotope, inputs: FloatArray) -> StateZonotope:
+            return propagate(
+                self.system,
+                inputs,
+                self._w,
+                sets,
+                self._period,
+                self.substeps,
+                self.order,
+                compiled,
+                tape=tape,
+                reduction=self.reduction,
+            )[0]
+
         try:
-            return propagate(self.system, held, self._w, zset, self._period, *options)[0], failed
+            return step(zset, held), failed
         except AssumptionError:
             pass
         centre, generators = zset.centre.copy(), np.zeros_like(zset.generators)
         for index in np.ndindex(*failed.shape):
             single = StateZonotope(zset.centre[index], zset.generators[index])
             try:
-                moved = propagate(self.system, held[index], self._w, single, self._period, *options)[0]
+                moved = step(single, held[index])
             except AssumptionError:
                 failed[index] = True
                 continue
@@ -394,6 +419,7 @@ class ContinuousNonlinearObserver(Observer):
             (flat(zset.centre, (size,)), flat(zset.generators, (size, self.order))),
             (flat(y, (self.p,)), flat(u, (self.m,)), np.stack(self.bounds.v)),
             (*self._limits, self._limited.astype(np.int64), _NEGLIGIBLE),
+            self.reduction == "frame",
         )
         if not ok:
             raise BoundsError(
@@ -423,7 +449,7 @@ class ContinuousNonlinearObserver(Observer):
             remainder = _slope_remainder(slope - a, zset)
             level = (Interval._wrap(a[..., None, :]) @ Interval._wrap(zset.centre))[..., 0]
             strip = (y[..., i] - self._v[i]) - centre - remainder + level
-            updated, now_empty = _strip_update(zset, a, strip, self.order, compiled)
+            updated, now_empty = _strip_update(zset, a, strip, self.order, compiled, self.reduction)
             empty |= now_empty
             zset = _select(~empty, updated, zset)
             zset, empty = self._domain_contract(zset, empty, compiled)
@@ -446,7 +472,7 @@ class ContinuousNonlinearObserver(Observer):
                 continue
             a = np.broadcast_to(np.eye(size)[i], zset.centre.shape)
             updated, now_empty = _strip_update(
-                zset, a, Interval._raw(np.asarray(low[i]), np.asarray(high[i])), self.order, compiled
+                zset, a, Interval._raw(np.asarray(low[i]), np.asarray(high[i])), self.order, compiled, self.reduction
             )
             empty = empty | now_empty
             zset, hull = _select(~empty, updated, zset), None
@@ -535,7 +561,12 @@ def _slope_remainder(slope: Interval, zset: StateZonotope) -> Interval:
 
 
 def _bisect_parts(
-    zset: StateZonotope, alive: BoolArray, scale: FloatArray, order: int, compiled: bool = False
+    zset: StateZonotope,
+    alive: BoolArray,
+    scale: FloatArray,
+    order: int,
+    compiled: bool = False,
+    reduction: str = "box",
 ) -> tuple[StateZonotope, BoolArray]:
     r"""Where at most half the parts of a run live, bisect each live part into its own slot and a dropped one's.
 
@@ -555,8 +586,8 @@ def _bisect_parts(
     low = np.take_along_axis(hull.lower, coordinate[..., None], -1)[..., 0]
     high = np.take_along_axis(hull.upper, coordinate[..., None], -1)[..., 0]
     middle = 0.5 * (low + high)
-    lower_half, lower_empty = _strip_update(zset, row, Interval._raw(low, middle), order, compiled)
-    upper_half, upper_empty = _strip_update(zset, row, Interval._raw(middle, high), order, compiled)
+    lower_half, lower_empty = _strip_update(zset, row, Interval._raw(low, middle), order, compiled, reduction)
+    upper_half, upper_empty = _strip_update(zset, row, Interval._raw(middle, high), order, compiled, reduction)
     slots = np.argsort(~alive, axis=-1, kind="stable")
     rank = np.argsort(slots, axis=-1)
     source = np.take_along_axis(slots, np.clip(rank - count, 0, parts - 1), axis=-1)

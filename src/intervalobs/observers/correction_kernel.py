@@ -30,6 +30,7 @@ def _contract_domain(
     zset: tuple[FloatArray, FloatArray],
     empty: NDArray[np.bool_],
     limits: tuple[FloatArray, FloatArray, NDArray[np.int64], float],
+    frame: bool,
 ) -> None:
     """``_domain_contract``: each limited coordinate's strip ``[low_i, high_i]``, on every set where one set crosses
     it by more than ``negligible`` of its width; a set found empty keeps its last zonotope (in place)."""
@@ -53,7 +54,7 @@ def _contract_domain(
         row = np.zeros(size)
         row[i] = 1.0
         for b in range(batch):
-            now = _strip_one(centre[b], generators[b], row, (low[i], high[i]), (new_centre, new_generators))
+            now = _strip_one(centre[b], generators[b], row, (low[i], high[i]), (new_centre, new_generators), frame)
             empty[b] = empty[b] or now
             if not empty[b]:
                 centre[b] = new_centre
@@ -95,6 +96,7 @@ def correct(
     zset: tuple[FloatArray, FloatArray],
     data: tuple[FloatArray, FloatArray, FloatArray],
     limits: tuple[FloatArray, FloatArray, NDArray[np.int64], float],
+    frame: bool,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], bool]:
     """The observer's correction at one sample for a batch of sets (module docstring).
 
@@ -109,6 +111,8 @@ def correct(
     limits : tuple
         ``(low, high, limited, negligible)``: the domain and parameter box (N,) each, the coordinates with a finite
         end, and the fraction of a set's width below which a crossing is left.
+    frame : bool
+        Reduce the generators in the frame of the largest (``reduction="frame"``), not in the axes.
 
     Returns
     -------
@@ -124,7 +128,7 @@ def correct(
     centre, generators = zset[0].copy(), zset[1].copy()
     batch, size = centre.shape
     empty = np.zeros(batch, dtype=np.bool_)
-    _contract_domain((centre, generators), empty, limits)
+    _contract_domain((centre, generators), empty, limits, frame)
     count, rows = program.shape[0], outputs.size
     work = (np.empty(count), np.empty(count), np.zeros((2, count, size)))
     values, slopes = np.empty((2, 2, rows)), np.empty((2, 2, rows, size))
@@ -139,10 +143,10 @@ def correct(
                     return centre, generators, empty, False
             row = values[:, :, i].copy()
             a, low, high = _strip(row, slopes[0, :, i], (centre[b], generators[b]), (y[b, i], noise[0, i], noise[1, i]))
-            now = _strip_one(centre[b], generators[b], a, (low, high), (new_centre, new_generators))
+            now = _strip_one(centre[b], generators[b], a, (low, high), (new_centre, new_generators), frame)
             empty[b] = empty[b] or now
             if not empty[b]:
                 centre[b] = new_centre
                 generators[b] = new_generators
-        _contract_domain((centre, generators), empty, limits)
+        _contract_domain((centre, generators), empty, limits, frame)
     return centre, generators, empty, True

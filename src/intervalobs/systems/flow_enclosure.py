@@ -50,8 +50,9 @@ would lose. One step of length :math:`\tau` maps it to a zonotope containing :ma
    generators are :math:`G' = \mathrm{fl}(MG)` and everything else — :math:`[\hat z(\tau)]`,
    :math:`([\Phi] - M)[G\xi]`, :math:`(MG - G')\xi` — is a box :math:`[e]`, whose centre is the new
    centre and whose radii are new generators (one per coordinate). The generators beyond
-   ``order`` are reduced (Combastel 2003: the smallest replaced by the box of their hull,
-   :func:`intervalobs.zonotope.reduce_order`, rounded upward).
+   ``order`` are reduced: ``reduction="box"`` (Combastel 2003: the smallest replaced by the box of their hull,
+   :func:`intervalobs.zonotope.reduce_order`, rounded upward) or ``"frame"`` (the smallest boxed in the frame that
+   the flow carried from the previous reduction, :func:`_reduce_in_frame`: less wrapping under a rotating flow).
 
 Every interval operation is outward rounded (:class:`~intervalobs.interval.Interval`); the
 floating-point :math:`G'` and :math:`c'` need no rounding because whatever they miss is in
@@ -97,7 +98,15 @@ from .bounds import Bounds
 from .continuous_nonlinear import ContinuousNonlinearSystem
 from .field_tape import FieldTape
 
-__all__ = ["FlowEnclosure", "StateZonotope", "a_priori", "flow_enclosure", "interval_product", "propagate"]
+__all__ = [
+    "REDUCTIONS",
+    "FlowEnclosure",
+    "StateZonotope",
+    "a_priori",
+    "flow_enclosure",
+    "interval_product",
+    "propagate",
+]
 
 _EPS = float(np.finfo(float).eps)
 
@@ -158,7 +167,7 @@ class StateZonotope:
         """
         return hull_box(self.centre, self.generators)
 
-    def with_box(self, extra: Interval, order: int) -> StateZonotope:
+    def with_box(self, extra: Interval, order: int, reduction: str = "box") -> StateZonotope:
         """The sum with a box (its centre moves the centre, its radii are new generators), ``order`` generators.
 
         Parameters
@@ -167,6 +176,8 @@ class StateZonotope:
             Box added (Minkowski sum).
         order : int
             Most generators kept (at least N).
+        reduction : {"box", "frame"}
+            How the generators beyond ``order`` are reduced (:data:`REDUCTIONS`).
 
         Returns
         -------
@@ -177,7 +188,7 @@ class StateZonotope:
         radius = np.nextafter(np.maximum(shifted.upper - centre, centre - shifted.lower), np.inf)
         size = centre.shape[-1]
         generators = np.concatenate([self.generators, radius[..., :, None] * np.eye(size)], axis=-1)
-        return StateZonotope(centre, _reduce(generators, order))
+        return StateZonotope(centre, _reduce(generators, order, reduction))
 
 
 _GAMMA_PAD = float(np.finfo(float).eps)
@@ -219,8 +230,9 @@ def _unit_cube_image(magnitude: FloatArray) -> Interval:
     return Interval._raw(np.nextafter(-reach, -np.inf), np.nextafter(reach, np.inf))
 
 
-def _reduce(generators: FloatArray, order: int) -> FloatArray:
-    """Exactly ``order`` generators: :func:`reduce_order` with its box rounded upward, or zero columns appended.
+def _reduce(generators: FloatArray, order: int, reduction: str = "box") -> FloatArray:
+    """Exactly ``order`` generators: :func:`reduce_order` with its box rounded upward (``reduction="box"``) or
+    :func:`_reduce_in_frame` (``"frame"``), or zero columns appended.
 
     A sum of ``m`` nonnegative terms is within ``m`` ulps of its value, so the box is widened by that.
     A fixed count keeps the sets of all runs and parts one array.
@@ -229,12 +241,139 @@ def _reduce(generators: FloatArray, order: int) -> FloatArray:
     if count <= order:
         pad = np.zeros((*generators.shape[:-1], order - count))
         return np.concatenate([generators, pad], axis=-1)
+    if reduction == "frame":
+        return _reduce_in_frame(generators, order)
     reduced = reduce_order(generators, order)
     size = generators.shape[-2]
     idx = np.arange(size)
     box = reduced[..., idx, order - size + idx]
     reduced[..., idx, order - size + idx] = np.nextafter(box * (1.0 + 2 * count * _EPS), np.inf)
     return reduced
+
+
+REDUCTIONS = ("box", "frame")
+"""The reductions of :class:`StateZonotope`: ``"box"`` (Combastel's, :func:`intervalobs.zonotope.reduce_order`) and
+``"frame"`` (the small generators boxed in a frame carried by the flow, :func:`_reduce_in_frame`)."""
+_FRAME_BITS = 26
+"""Significant bits of the frame's entries and of the box's radii: their products (at most 53 bits) are exact."""
+_FRAME_ACCEPT = 0.25
+"""A candidate joins the frame when at least this fraction of its norm is orthogonal to the frame so far."""
+_FRAME_RESIDUAL = 0.25
+"""Largest verified :math:`\\|I - QP\\|_\\infty` (:math:`Q` the floating inverse of the frame) for which it is used."""
+_FRAME_FLOOR = 2.0**-500
+"""Smallest radius of a frame direction (no product with a frame entry of at least ``_FRAME_TINY`` underflows)."""
+_FRAME_TINY = 2.0**-60
+"""Frame entries below this magnitude are set to zero (the frame stays exactly representable)."""
+
+
+def _round_bits(values: FloatArray, up: bool) -> FloatArray:
+    """Values with ``_FRAME_BITS`` significant bits: to nearest (``up`` False) or upward (nonnegative ``values``)."""
+    mantissa, exponent = np.frexp(values)
+    scaled = mantissa * 2.0**_FRAME_BITS  # exact: a power of two
+    rounded = np.ceil(scaled) if up else np.floor(scaled + 0.5)
+    return np.ldexp(rounded * 2.0**-_FRAME_BITS, exponent)
+
+
+def _frame(leading: FloatArray) -> FloatArray:
+    r"""A frame (unit columns) of the candidates ``leading`` taken in turn, then of the unit axes.
+
+    A candidate joins when at least ``_FRAME_ACCEPT`` of its norm is orthogonal to the frame so far (Gram-Schmidt
+    twice against the accepted ones, for the test only: the frame holds the candidate itself, normalised, as
+    Lohner's parallelepiped and Kühn's zonotope reduction do); an axis needs only :math:`\min(1/4, 1/(2\sqrt N))`,
+    so the frame is always completed. Rounded to ``_FRAME_BITS`` bits, entries below ``_FRAME_TINY`` zeroed.
+    """
+    batch, size, _ = leading.shape
+    basis = np.zeros((batch, size, size))
+    frame = np.zeros((batch, size, size))
+    found = np.zeros(batch, dtype=np.intp)
+    candidates = np.concatenate([leading, np.broadcast_to(np.eye(size), (batch, size, size))], -1)
+    rows = np.arange(batch)
+    for j in range(candidates.shape[-1]):
+        if np.all(found == size):
+            break
+        vector = candidates[..., j]
+        residual = vector
+        for _ in range(2):  # classical Gram-Schmidt twice against the accepted ones (zero columns beyond)
+            residual = residual - (basis @ (np.swapaxes(basis, -1, -2) @ residual[..., None]))[..., 0]
+        norm = np.sqrt(np.sum(residual * residual, axis=-1))
+        length = np.sqrt(np.sum(vector * vector, axis=-1))
+        share = _FRAME_ACCEPT if j < candidates.shape[-1] - size else min(_FRAME_ACCEPT, 0.5 / np.sqrt(size))
+        take = (found < size) & (norm > share * length)
+        slot = np.minimum(found, size - 1)[take]
+        basis[rows[take], :, slot] = (residual / np.where(take, norm, 1.0)[:, None])[take]
+        frame[rows[take], :, slot] = (vector / np.where(take, length, 1.0)[:, None])[take]
+        found += take
+    frame = _round_bits(frame, up=False)
+    return np.where(np.abs(frame) < _FRAME_TINY, 0.0, frame)
+
+
+def _reduce_in_frame(generators: FloatArray, order: int) -> FloatArray:
+    r"""``order`` generators: the ``order - N`` largest, then the small ones boxed in a frame carried by the flow.
+
+    The small generators :math:`G_s` are replaced by :math:`P\,\mathrm{diag}(d)` with :math:`d \ge |P^{-1}G_s|\mathbf 1`
+    (the box of :math:`P^{-1}G_s\xi` in the frame's coordinates; Combastel's reduction is the case :math:`P = I`), so
+    :math:`G_s\xi = P(P^{-1}G_s\xi) \in \{P\,\mathrm{diag}(d)\eta : |\eta| \le 1\}` and the reduced zonotope contains
+    the original. The frame's candidates are, in turn, the columns ``order - N`` to ``order`` of ``generators`` (the
+    box of the previous reduction, as the flow step and the strip update leave them: the set's first ``order``
+    columns come first), largest first, then the ``2N`` largest generators, then the axes (:func:`_frame`). A box
+    carried by the flow is thus boxed again in its own turned and sheared frame (Lohner's parallelepiped, Kühn's
+    zonotopes), instead of in the axes, where a rotating flow makes each step's box wrap the previous one.
+
+    **Soundness.** :math:`d` is an upper bound proved in floating point. With :math:`Q` a floating inverse of
+    :math:`P` and :math:`R = I - QP`, :math:`P x = g` gives :math:`x = Qg + Rx`; if :math:`\|R\|_\infty \le \beta < 1`,
+    then :math:`\|x\|_\infty \le \|Qg\|_\infty / (1 - \beta)` and :math:`|x| \le |Qg| + |R|\mathbf 1\,\|x\|_\infty`.
+    Summed over the small generators,
+
+    .. math:: |P^{-1}G_s|\mathbf 1 \le \sum_j \overline{|Qg_j|} + \overline{|R|}\mathbf 1
+              \frac{\sum_j \|\overline{|Qg_j|}\|_\infty}{1 - \beta},
+
+    where :math:`\overline{|Qg_j|} = |\mathrm{fl}(Qg_j)| + \gamma|Q||g_j| + \eta` and :math:`\overline{|R|}` likewise
+    bound the products' rounding (:math:`\gamma = (N + 2)\varepsilon`, :math:`\eta` the smallest normal number, the
+    bound of ``Interval.__matmul__``), and every sum, product and quotient of these nonnegative bounds is rounded
+    upward; no property of :math:`Q` is assumed. :math:`P`'s entries carry ``_FRAME_BITS`` significant bits and
+    :math:`d` is rounded upward to as many, so :math:`P\,\mathrm{diag}(d)` is computed exactly (:math:`d \ge`
+    ``_FRAME_FLOOR``, entries of :math:`P` at most 1 and not below ``_FRAME_TINY``: no product underflows or
+    overflows). Where :math:`\beta` exceeds ``_FRAME_RESIDUAL`` (an ill-conditioned frame) or a bound is not finite,
+    the set falls back to Combastel's axis box (always sound).
+
+    References
+    ----------
+    R. J. Lohner, "Enclosing the solutions of ordinary initial and boundary value problems", 1987.
+    W. Kühn, "Rigorously computed orbits of dynamical systems without the wrapping effect", *Computing*
+    61(1):47-67, 1998. X. Yang, J. K. Scott, "A comparison of zonotope order reduction techniques", *Automatica*
+    95:378-384, 2018.
+    """
+    lead, (size, count) = generators.shape[:-2], generators.shape[-2:]
+    flat = generators.reshape(-1, size, count)
+    keep = order - size
+    norms = np.sqrt(np.sum(flat * flat, axis=-2))
+    ranked = np.argsort(-norms, axis=-1, kind="stable")
+    ordered = np.take_along_axis(flat, ranked[:, None, :], axis=-1)
+    turn = np.argsort(-norms[:, order - size : order], axis=-1, kind="stable")
+    carried = np.take_along_axis(flat[..., order - size : order], turn[:, None, :], axis=-1)
+    frame = _frame(np.concatenate([carried, ordered[..., : 2 * size]], axis=-1))
+    try:  # nonsingular: each column has a quarter of its norm off the others' span (unless the data are not finite)
+        inverse = np.linalg.inv(frame)
+    except np.linalg.LinAlgError:
+        inverse = np.full_like(frame, np.nan)  # every set of the batch falls back to the axis box
+    small = ordered[..., keep:]
+    gamma = (size + 2) * _EPS
+    image = np.nextafter(np.abs(inverse @ small) + (gamma * (np.abs(inverse) @ np.abs(small)) + _TINY), np.inf)
+    spread = small.shape[-1] * 2 * _EPS
+    total = np.nextafter(image.sum(-1) * (1.0 + spread), np.inf)
+    reach = np.nextafter(image.max(-2).sum(-1) * (1.0 + spread), np.inf)
+    loss = np.nextafter(np.abs(np.eye(size) - inverse @ frame), np.inf)
+    loss = np.nextafter((loss + (gamma * (np.abs(inverse) @ np.abs(frame)) + _TINY)) * (1.0 + 2 * _EPS), np.inf)
+    rows = np.nextafter(loss.sum(-1) * (1.0 + 2 * size * _EPS), np.inf)
+    beta = rows.max(-1)
+    factor = np.nextafter(1.0 / np.nextafter(1.0 - np.minimum(beta, 0.5), -np.inf), np.inf)
+    scaled = np.nextafter(reach * factor, np.inf)
+    radius = np.nextafter(total + np.nextafter(rows * scaled[:, None], np.inf), np.inf)
+    radius = _round_bits(np.maximum(radius, _FRAME_FLOOR), up=True)
+    usable = (beta <= _FRAME_RESIDUAL) & np.all(np.isfinite(radius), axis=-1)
+    box = np.nextafter(np.abs(small).sum(-1) * (1.0 + 2 * count * _EPS), np.inf)
+    reduced = np.where(usable[:, None, None], frame * radius[:, None, :], box[:, :, None] * np.eye(size))
+    return np.concatenate([ordered[..., :keep], reduced], axis=-1).reshape(*lead, size, order)
 
 
 def interval_product(a: Interval, b: Interval) -> Interval:
@@ -354,6 +493,7 @@ class _Flow:
     compiled: bool
     tape: FieldTape | None = None
     u: FloatArray | None = None
+    reduction: str = "box"
 
     @classmethod
     def build(
@@ -363,6 +503,7 @@ class _Flow:
         w: Interval,
         ndim: int,
         compiled: tuple[bool, FieldTape | None] = (False, None),
+        reduction: str = "box",
     ) -> _Flow:
         """The set's domain (row 0) and the centre's (row 1, none) for centres of ``ndim`` axes."""
         size = system.n + system.n_params
@@ -373,7 +514,7 @@ class _Flow:
         shape = (2,) + (1,) * (ndim - 1) + (size,)
         disturbance = _disturbance_box(system, w)
         field = system.augmented_field(u)
-        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, *compiled, u)
+        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, *compiled, u, reduction)
 
     def rates(self, box: Interval) -> Interval:
         """:math:`F(Z) = \\tilde f(Z) + E[w]` over boxes (:func:`_right_side`, by the tape where there is one)."""
@@ -446,7 +587,7 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     spread_box = _unit_cube_image(np.abs(zset.generators))
     exact_box = _unit_cube_image(np.maximum(np.abs(exact.lower), np.abs(exact.upper)))
     error = centre_end - zset.centre + (phi - mid) @ spread_box + exact_box
-    return StateZonotope(zset.centre, generators).with_box(error, order), tilde
+    return StateZonotope(zset.centre, generators).with_box(error, order, flow.reduction), tilde
 
 
 def _compiled_rest(
@@ -468,7 +609,7 @@ def _compiled_rest(
         flat(zset.generators, 2),
         (flat(centre_end.lower, 1), flat(centre_end.upper, 1)),
         (flat(jac.lower, 2), flat(jac.upper, 2)),
-        (float(tau), int(flow.n), int(order)),
+        (float(tau), int(flow.n), int(order), int(flow.reduction == "frame")),
     )
     return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
 
@@ -482,7 +623,9 @@ def propagate(
     substeps: int = 1,
     order: int | None = None,
     compiled: bool = False,
+    *,
     tape: FieldTape | None = None,
+    reduction: str = "box",
 ) -> tuple[StateZonotope, Interval]:
     """Carry a zonotope of augmented states over ``[0, h]`` (the module's steps, ``substeps`` of them).
 
@@ -508,6 +651,9 @@ def propagate(
         The system's field recorded (:func:`intervalobs.systems.field_tape.trace_field`): every evaluation of
         the field is the tape's compiled replay (the same ends), and with ``compiled`` every step is done in one
         call of :func:`intervalobs.systems.flow_kernel.propagate`; default: the field in Python.
+    reduction : {"box", "frame"}
+        How the generators beyond ``order`` are reduced after each step (:data:`REDUCTIONS`): in the axes
+        (Combastel) or in the frame of the largest (:func:`_reduce_in_frame`, less wrapping under rotation).
 
     Returns
     -------
@@ -523,7 +669,7 @@ def propagate(
         When no a priori enclosure is found even for steps ``2**MAX_HALVINGS`` times shorter (the
         set is too large or the vector field blows up on it).
     """
-    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape))
+    flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape), reduction)
     kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
     if compiled and tape is not None:
         return _propagate_taped(flow, zset, (float(h), int(substeps)), kept)
@@ -568,7 +714,7 @@ def _propagate_taped(
     domain = np.stack([flow.low.reshape(2, size), flow.high.reshape(2, size)])
     tape = (flow.tape.program, flow.tape.constants, flow.tape.kinds, flow.tape.outputs)
     centre, generators, hull, status = flow_kernel.propagate(
-        tape, sets, ((box, not no_box), domain), interval, (flow.n, order)
+        tape, sets, ((box, not no_box), domain), interval, (flow.n, order, int(flow.reduction == "frame"))
     )
     if status == 1:
         raise AssumptionError(_LOST)

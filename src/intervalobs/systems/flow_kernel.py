@@ -26,7 +26,9 @@ summation, so the loop's order (not BLAS's or NumPy's pairwise one) changes no g
 (:math:`\mathrm{mid}[\Phi]G` and the centres) need no rounding: whatever they miss is in the remainder box,
 which is computed in interval arithmetic from them. The reduction boxes the smallest generators with the
 row sums of their magnitudes widened by :math:`2m\varepsilon` relative and rounded up, as
-:func:`intervalobs.systems.flow_enclosure._reduce`.
+:func:`intervalobs.systems.flow_enclosure._reduce`, or (``frame``) in a frame with the verified inverse bound of
+:func:`intervalobs.systems.flow_enclosure._reduce_in_frame` (the same formulas; the floating inverse is LAPACK's
+in both, and the frame's 26-bit rounding can turn a last-bit difference of a sum into one of :math:`2^{-26}`).
 
 Importing this module imports Numba; the first call of a fresh install compiles it into Numba's cache
 (``cache=True``), later processes load it.
@@ -51,6 +53,8 @@ Tape = tuple[NDArray[np.int64], FloatArray, NDArray[np.bool_], NDArray[np.int64]
 
 _EPS = float(np.finfo(float).eps)
 _TINY = float(np.finfo(float).tiny)
+_FRAME_BITS, _FRAME_ACCEPT, _FRAME_RESIDUAL = 26, 0.25, 0.25  # flow_enclosure's constants (tested equal)
+_FRAME_FLOOR, _FRAME_TINY = 2.0**-500, 2.0**-60
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -118,8 +122,9 @@ def _fundamental(j_lo: FloatArray, j_hi: FloatArray, n: int, tau: float, out: Fl
 
 
 @numba.njit(cache=True, nogil=True)
-def _reduce(generators: FloatArray, order: int, out: FloatArray) -> None:
-    """``order`` generators: the ``order - N`` of largest Euclidean norm, then the box of the others (rounded up)."""
+def _reduce(generators: FloatArray, order: int, frame: bool, out: FloatArray) -> None:
+    """``order`` generators: the ``order - N`` of largest Euclidean norm, then the box of the others (rounded up),
+    in the axes or (``frame``) in the frame of the largest (:func:`_box_in_frame`)."""
     size, count = generators.shape
     out[:] = 0.0
     if count <= order:
@@ -135,11 +140,137 @@ def _reduce(generators: FloatArray, order: int, out: FloatArray) -> None:
     ranked = np.argsort(norms, kind="mergesort")
     for c in range(keep):
         out[:, c] = generators[:, ranked[c]]
+    if frame:
+        ordered = np.empty((size, count))
+        for c in range(count):
+            ordered[:, c] = generators[:, ranked[c]]
+        columns = min(2 * size, count)
+        leading = np.empty((size, size + columns))
+        turn = np.argsort(norms[order - size : order], kind="mergesort")
+        for c in range(size):  # the previous reduction's box, as the step left it, then the largest
+            leading[:, c] = generators[:, order - size + turn[c]]
+        leading[:, size:] = ordered[:, :columns]
+        if _box_in_frame(ordered, keep, leading, out[:, keep:]):
+            return
     for i in range(size):
         box = 0.0
         for c in range(keep, count):
             box += abs(generators[i, ranked[c]])
+        out[i, keep:] = 0.0
         out[i, keep + i] = _up(box * (1.0 + 2 * count * _EPS))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _round_bits(value: float, up: bool) -> float:
+    """``value`` with ``_FRAME_BITS`` significant bits, to nearest or (``up``, nonnegative) upward."""
+    mantissa, exponent = math.frexp(value)
+    scaled = mantissa * 2.0**_FRAME_BITS
+    rounded = math.ceil(scaled) if up else math.floor(scaled + 0.5)
+    return math.ldexp(rounded * 2.0**-_FRAME_BITS, exponent)
+
+
+@numba.njit(cache=True, nogil=True)
+def _frame(leading: FloatArray) -> FloatArray:
+    """The frame of ``flow_enclosure._frame``: candidates accepted by Gram-Schmidt, kept normalised, rounded."""
+    size, columns = leading.shape
+    basis = np.zeros((size, size))
+    frame = np.zeros((size, size))
+    found = 0
+    vector = np.empty(size)
+    residual = np.empty(size)
+    coefficients = np.empty(size)
+    for j in range(columns + size):
+        if found == size:
+            break
+        for i in range(size):
+            vector[i] = leading[i, j] if j < columns else (1.0 if i == j - columns else 0.0)
+            residual[i] = vector[i]
+        for _ in range(2):  # classical Gram-Schmidt twice
+            for k in range(size):
+                total = 0.0
+                for i in range(size):
+                    total += basis[i, k] * residual[i]
+                coefficients[k] = total
+            for i in range(size):
+                total = 0.0
+                for k in range(size):
+                    total += basis[i, k] * coefficients[k]
+                residual[i] = residual[i] - total
+        norm, length = 0.0, 0.0
+        for i in range(size):
+            norm += residual[i] * residual[i]
+            length += vector[i] * vector[i]
+        norm, length = math.sqrt(norm), math.sqrt(length)
+        share = _FRAME_ACCEPT if j < columns else min(_FRAME_ACCEPT, 0.5 / math.sqrt(size))
+        if norm > share * length:
+            for i in range(size):
+                basis[i, found] = residual[i] / norm
+                frame[i, found] = vector[i] / length
+            found += 1
+    for i in range(size):
+        for k in range(size):
+            value = _round_bits(frame[i, k], False)
+            frame[i, k] = 0.0 if abs(value) < _FRAME_TINY else value
+    return frame
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_in_frame(ordered: FloatArray, keep: int, leading: FloatArray, out: FloatArray) -> bool:
+    """The columns ``keep:`` of ``ordered`` boxed in a frame (``flow_enclosure._reduce_in_frame``), into ``out``.
+
+    Returns False (``out`` untouched) where the frame's verified residual is above ``_FRAME_RESIDUAL`` or a bound
+    is not finite: the caller boxes them in the axes.
+    """
+    size, count = ordered.shape
+    frame = _frame(leading)
+    for i in range(size):
+        for k in range(size):
+            if not math.isfinite(frame[i, k]):
+                return False
+    inverse = np.linalg.inv(frame)
+    gamma = (size + 2) * _EPS
+    spread = (count - keep) * 2 * _EPS
+    total = np.zeros(size)
+    reach = 0.0
+    for j in range(keep, count):
+        largest = 0.0
+        for i in range(size):
+            s, m = 0.0, 0.0
+            for k in range(size):
+                s += inverse[i, k] * ordered[k, j]
+                m += abs(inverse[i, k]) * abs(ordered[k, j])
+            image = _up(abs(s) + (gamma * m + _TINY))
+            total[i] += image
+            largest = max(largest, image)
+        reach += largest
+    reach = _up(reach * (1.0 + spread))
+    rows = np.empty(size)
+    beta = 0.0
+    for i in range(size):
+        row = 0.0
+        for j in range(size):
+            s, m = 0.0, 0.0
+            for k in range(size):
+                s += inverse[i, k] * frame[k, j]
+                m += abs(inverse[i, k]) * abs(frame[k, j])
+            loss = _up(abs((1.0 if i == j else 0.0) - s))
+            row += _up((loss + (gamma * m + _TINY)) * (1.0 + 2 * _EPS))
+        rows[i] = _up(row * (1.0 + 2 * size * _EPS))
+        beta = max(beta, rows[i])
+    factor = _up(1.0 / _down(1.0 - min(beta, 0.5)))
+    scaled = _up(reach * factor)
+    radius = np.empty(size)
+    for i in range(size):
+        bound = _up(_up(total[i] * (1.0 + spread)) + _up(rows[i] * scaled))
+        radius[i] = _round_bits(max(bound, _FRAME_FLOOR), True)
+        if not math.isfinite(radius[i]):
+            return False
+    if not beta <= _FRAME_RESIDUAL:
+        return False
+    for i in range(size):
+        for k in range(size):
+            out[i, k] = frame[i, k] * radius[k]  # exact: 26-bit factors
+    return True
 
 
 @numba.njit(cache=True, nogil=True)
@@ -148,12 +279,12 @@ def _advance_one(
     generators: FloatArray,
     centre_end: tuple[FloatArray, FloatArray],
     jacobian: tuple[FloatArray, FloatArray],
-    step: tuple[float, int, int],
+    step: tuple[float, int, int, int],
     new_centre: FloatArray,
     new_generators: FloatArray,
 ) -> None:
     """Steps 3-4 of the flow enclosure for one set (see :func:`advance`)."""
-    tau, n, order = step
+    tau, n, order, frame = step
     j_lo, j_hi = jacobian
     size, count = generators.shape
     half_square = 0.5 * tau * tau
@@ -208,7 +339,7 @@ def _advance_one(
         middle = 0.5 * (low + high)
         new_centre[i] = middle
         all_generators[i, count + i] = _up(max(high - middle, middle - low))
-    _reduce(all_generators, order, new_generators)
+    _reduce(all_generators, order, frame == 1, new_generators)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -217,7 +348,7 @@ def advance(
     generators: FloatArray,
     centre_end: tuple[FloatArray, FloatArray],
     jacobian: tuple[FloatArray, FloatArray],
-    step: tuple[float, int, int],
+    step: tuple[float, int, int, int],
 ) -> tuple[FloatArray, FloatArray]:
     """Steps 3-4 of :mod:`intervalobs.systems.flow_enclosure` for a batch of sets.
 
@@ -232,7 +363,8 @@ def advance(
     jacobian : tuple of numpy.ndarray, shape (B, N, N) each
         The interval Jacobian over both a priori boxes.
     step : tuple
-        ``(tau, n, order)``: step length, number of states (the rest are parameters), generators kept.
+        ``(tau, n, order, frame)``: step length, number of states (the rest are parameters), generators kept, and
+        1 to box the small generators in the frame of the largest (``reduction="frame"``), 0 in the axes.
 
     Returns
     -------
@@ -289,6 +421,7 @@ def _strip_one(
     a: FloatArray,
     strip: tuple[float, float],
     out: tuple[FloatArray, FloatArray],
+    frame: bool,
 ) -> bool:
     """The strip update of one set (see :func:`strip_update`); returns whether the intersection is empty."""
     size, count = generators.shape
@@ -338,13 +471,18 @@ def _strip_one(
         middle = 0.5 * (box[0, i] + box[1, i])
         out[0][i] = middle
         new[i, count + 1 + i] = _up(max(box[1, i] - middle, middle - box[0, i]))
-    _reduce(new, out[1].shape[1], out[1])
+    _reduce(new, out[1].shape[1], frame, out[1])
     return empty
 
 
 @numba.njit(cache=True, nogil=True)
 def strip_update(
-    centre: FloatArray, generators: FloatArray, a: FloatArray, strip: tuple[FloatArray, FloatArray], order: int
+    centre: FloatArray,
+    generators: FloatArray,
+    a: FloatArray,
+    strip: tuple[FloatArray, FloatArray],
+    order: int,
+    frame: bool,
 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     """A zonotope containing each set's intersection with the strip :math:`a^\\top x \\in [s]`, for a batch of sets.
 
@@ -358,6 +496,8 @@ def strip_update(
         Lower and upper ends of :math:`[s]`.
     order : int
         Generators kept.
+    frame : bool
+        Box the small generators in the frame of the largest (``reduction="frame"``), not in the axes.
 
     Returns
     -------
@@ -371,7 +511,7 @@ def strip_update(
     empty = np.zeros(batch, dtype=np.bool_)
     for b in range(batch):
         empty[b] = _strip_one(
-            centre[b], generators[b], a[b], (strip[0][b], strip[1][b]), (new_centre[b], new_generators[b])
+            centre[b], generators[b], a[b], (strip[0][b], strip[1][b]), (new_centre[b], new_generators[b]), frame
         )
     return new_centre, new_generators, empty
 
@@ -497,7 +637,7 @@ def _taped_step(
     tape: Tape,
     zset: tuple[FloatArray, FloatArray, FloatArray],
     field: tuple[tuple[FloatArray, bool], FloatArray, float],
-    step: tuple[float, int, int],
+    step: tuple[float, int, int, int],
     out: tuple[FloatArray, FloatArray, FloatArray],
 ) -> int:
     """``flow_enclosure._step`` with the field's tape: 0, or 1 (no a priori box), 2 (a Jacobian undefined)."""
@@ -541,7 +681,7 @@ def propagate(
     zset: tuple[FloatArray, FloatArray, FloatArray],
     field: tuple[tuple[FloatArray, bool], FloatArray],
     interval: tuple[float, int],
-    step: tuple[int, int],
+    step: tuple[int, int, int],
 ) -> tuple[FloatArray, FloatArray, FloatArray, int]:
     """:func:`intervalobs.systems.flow_enclosure.propagate` with the field's tape: every step in one call.
 
@@ -557,7 +697,8 @@ def propagate(
     interval : tuple
         ``(h, substeps)``.
     step : tuple
-        ``(n, order)``: number of states, generators kept.
+        ``(n, order, frame)``: number of states, generators kept, and 1 to reduce in the frame of the largest
+        generators (``reduction="frame"``), 0 in the axes.
 
     Returns
     -------
@@ -571,14 +712,16 @@ def propagate(
     centre, generators, inputs = zset
     disturbance, domain = field
     h, substeps = interval
-    n, order = step
+    n, order, frame = step
     batch, size = centre.shape
     hull = np.empty((2, batch, size))
     out = (np.empty((batch, size)), np.empty((batch, size, order)), np.empty((2, batch, size)))
     remaining, tau, halvings, first = h, h / substeps, 0, True
     while remaining > 0.0:
         tau = min(tau, remaining)
-        status = _taped_step(tape, (centre, generators, inputs), (disturbance, domain, tau), (tau, n, order), out)
+        status = _taped_step(
+            tape, (centre, generators, inputs), (disturbance, domain, tau), (tau, n, order, frame), out
+        )
         if status == 2:
             return centre, generators, hull, 2
         if status == 1:
