@@ -201,8 +201,11 @@ def test_continuous_nonlinear_model_picks_the_validated_observer_and_is_sound() 
     x = _damped_pendulum_record(t)
     y = x[:, :1] + 0.01 * np.where(np.arange(t.size) % 2 == 0, 1.0, -1.0)[:, None]
     estimate = observe(system, bounds, t, y, budget=1e4)
-    assert estimate.meta["estimator"] == "ContinuousNonlinearObserver"
+    assert estimate.meta["estimator"] == "ContinuousNonlinearObserver(refine=64)"  # the bundle first
     assert np.all((estimate.lower <= x) & (x <= estimate.upper))
+    single = observe(system, bounds, t, y, estimator="ContinuousNonlinearObserver")
+    assert np.all((single.lower <= x) & (x <= single.upper))
+    assert np.mean(estimate.width()) <= np.mean(single.width()) * (1 + 1e-9)
 
 
 def test_an_estimator_that_refuses_the_model_is_passed_over_with_its_reason() -> None:
