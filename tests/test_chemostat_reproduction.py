@@ -46,12 +46,16 @@ def test_design_notes_quote_the_long_benchmark() -> None:
     design, tight = report["design"], report["tightness"]
     notes = (root / "docs" / "design.md").read_text()
     sweep = {entry["parts"]: entry for entry in design["bundle_sweep"]}
+
+    def ratio(entry: dict[str, float]) -> float:
+        return entry["biomass_mean_width_second_half"] / tight["biomass_consistent_inner_width_second_half"]
+
     quoted = [
         f"{tight['biomass_consistent_inner_width_second_half']:.2e}".replace("e-0", "e-"),
         f"{design['biomass_mean_width_second_half']:.3g} g/L, ratio {tight['biomass_ratio']:.0f}",
-        f"{design['bundle']['biomass_mean_width_second_half']:.3g} g/L, ratio {tight['bundle_biomass_ratio']:.0f}",
-        f"gave {sweep[64]['biomass_mean_width_second_half']:.2g} and "
-        f"{sweep[128]['biomass_mean_width_second_half']:.2g}",
+        f"256 parts {design['bundle']['biomass_mean_width_second_half']:.3g} g/L "
+        f"({tight['bundle_biomass_ratio']:.0f}×)",
+        *(f"{parts} parts {ratio(sweep[parts]):.3g}×" for parts in (64, 128, 1024, 4096)),
     ]
     missing = [text for text in quoted if text not in notes]
     assert missing == []
