@@ -37,6 +37,7 @@ Importing this module imports Numba; the first call of a fresh install compiles 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -215,6 +216,16 @@ def _frame(leading: FloatArray) -> FloatArray:
 
 
 @numba.njit(cache=True, nogil=True)
+def _row_times_column(a: NDArray[np.floating[Any]], b: FloatArray, i: int, j: int) -> tuple[float, float]:
+    """The floating sum of :math:`a_{ik}b_{kj}` and of its terms' magnitudes (the product's error scale)."""
+    s, m = 0.0, 0.0
+    for k in range(a.shape[1]):
+        s += a[i, k] * b[k, j]
+        m += abs(a[i, k]) * abs(b[k, j])
+    return s, m
+
+
+@numba.njit(cache=True, nogil=True)
 def _box_in_frame(ordered: FloatArray, keep: int, leading: FloatArray, out: FloatArray) -> bool:
     """The columns ``keep:`` of ``ordered`` boxed in a frame (``flow_enclosure._reduce_in_frame``), into ``out``.
 
@@ -235,10 +246,7 @@ def _box_in_frame(ordered: FloatArray, keep: int, leading: FloatArray, out: Floa
     for j in range(keep, count):
         largest = 0.0
         for i in range(size):
-            s, m = 0.0, 0.0
-            for k in range(size):
-                s += inverse[i, k] * ordered[k, j]
-                m += abs(inverse[i, k]) * abs(ordered[k, j])
+            s, m = _row_times_column(inverse, ordered, i, j)
             image = _up(abs(s) + (gamma * m + _TINY))
             total[i] += image
             largest = max(largest, image)
@@ -249,10 +257,7 @@ def _box_in_frame(ordered: FloatArray, keep: int, leading: FloatArray, out: Floa
     for i in range(size):
         row = 0.0
         for j in range(size):
-            s, m = 0.0, 0.0
-            for k in range(size):
-                s += inverse[i, k] * frame[k, j]
-                m += abs(inverse[i, k]) * abs(frame[k, j])
+            s, m = _row_times_column(inverse, frame, i, j)
             loss = _up(abs((1.0 if i == j else 0.0) - s))
             row += _up((loss + (gamma * m + _TINY)) * (1.0 + 2 * _EPS))
         rows[i] = _up(row * (1.0 + 2 * size * _EPS))
