@@ -58,7 +58,7 @@ from ..interval import Interval
 from ..interval_dual import value_and_jacobian
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
-from ..systems.field_tape import FieldTape, trace_field
+from ..systems.field_tape import FieldTape, kernel_batch, trace_field
 from ..systems.flow_enclosure import ORDER_FACTOR, REDUCTIONS, StateZonotope, interval_product, propagate
 from .base import Observer, ObserverState, record_consistency
 
@@ -151,15 +151,11 @@ def _compiled_strip_update(
     from ..systems import flow_kernel  # Numba is imported only where a record is long enough to pay for it
 
     lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
-
-    def flat(array: FloatArray, tail: tuple[int, ...]) -> FloatArray:
-        return np.ascontiguousarray(np.broadcast_to(array, (*lead, *tail)).reshape(-1, *tail), dtype=float)
-
     centre, generators, empty = flow_kernel.strip_update(
-        flat(zset.centre, (size,)),
-        flat(zset.generators, zset.generators.shape[-2:]),
-        flat(a, (size,)),
-        (flat(strip.lower, ()), flat(strip.upper, ())),
+        kernel_batch(zset.centre, lead, (size,)),
+        kernel_batch(zset.generators, lead, zset.generators.shape[-2:]),
+        kernel_batch(a, lead, (size,)),
+        (kernel_batch(strip.lower, lead, ()), kernel_batch(strip.upper, lead, ())),
         int(order),
         reduction == "frame",
     )
@@ -409,15 +405,10 @@ class ContinuousNonlinearObserver(Observer):
         from . import correction_kernel  # Numba is imported only where a record is long enough to pay for it
 
         lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
-        batch = int(np.prod(lead))
-
-        def flat(array: FloatArray, tail: tuple[int, ...]) -> FloatArray:
-            return np.ascontiguousarray(np.broadcast_to(array, (*lead, *tail)).reshape(batch, *tail), dtype=float)
-
         centre, generators, empty, ok = correction_kernel.correct(
-            (tape.program, tape.constants, tape.kinds, tape.outputs),
-            (flat(zset.centre, (size,)), flat(zset.generators, (size, self.order))),
-            (flat(y, (self.p,)), flat(u, (self.m,)), np.stack(self.bounds.v)),
+            tape.arrays,
+            (kernel_batch(zset.centre, lead, (size,)), kernel_batch(zset.generators, lead, (size, self.order))),
+            (kernel_batch(y, lead, (self.p,)), kernel_batch(u, lead, (self.m,)), np.stack(self.bounds.v)),
             (*self._limits, self._limited.astype(np.int64), _NEGLIGIBLE),
             self.reduction == "frame",
         )

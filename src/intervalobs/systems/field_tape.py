@@ -34,7 +34,7 @@ from ..interval import Interval
 from ..interval_dual import value_and_jacobian
 from .continuous_nonlinear import ContinuousNonlinearSystem
 
-__all__ = ["FieldTape", "trace_field"]
+__all__ = ["FieldTape", "kernel_batch", "trace_field"]
 
 FloatArray = NDArray[np.float64]
 
@@ -152,6 +152,25 @@ class _Node:
         raise _Untraceable(f"numpy.{ufunc.__name__}, which the tape does not record")
 
 
+def kernel_batch(array: Any, lead: tuple[int, ...], tail: tuple[int, ...]) -> FloatArray:
+    """``array`` broadcast to ``lead + tail`` and flattened to one writable C-contiguous float batch ``(B, *tail)``:
+    how the compiled kernels take sets, boxes and inputs.
+
+    Parameters
+    ----------
+    array : array_like
+        Broadcastable to ``lead + tail``.
+    lead, tail : tuple of int
+        The batch's leading axes and each item's shape.
+
+    Returns
+    -------
+    numpy.ndarray, shape ``(prod(lead), *tail)``
+    """
+    flat = np.broadcast_to(array, (*lead, *tail)).reshape(int(np.prod(lead)), *tail)
+    return np.require(flat, dtype=float, requirements=["C", "W"])  # a broadcast view is read-only: then a copy
+
+
 @dataclass(frozen=True)
 class FieldTape:
     """A recorded function of the augmented state and the inputs (the field or the output map), replayed compiled.
@@ -172,6 +191,11 @@ class FieldTape:
     constants: FloatArray
     kinds: NDArray[np.bool_]
     outputs: NDArray[np.int64]
+
+    @property
+    def arrays(self) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.bool_], NDArray[np.int64]]:
+        """``(program, constants, kinds, outputs)``: the tape as the compiled kernels take it."""
+        return self.program, self.constants, self.kinds, self.outputs
 
     def evaluate(
         self, lower: FloatArray, upper: FloatArray, u: FloatArray, derivative: bool = False
@@ -200,11 +224,10 @@ class FieldTape:
         from . import tape_kernel  # Numba is imported only where a record is long enough to pay for it
 
         lead, size = lower.shape[:-1], lower.shape[-1]
-        batch, m = int(np.prod(lead)), u.shape[-1]
         flat = (
-            np.ascontiguousarray(lower.reshape(batch, size)),
-            np.ascontiguousarray(upper.reshape(batch, size)),
-            np.ascontiguousarray(np.broadcast_to(u, (*lead, m)).reshape(batch, m), dtype=float),
+            kernel_batch(lower, lead, (size,)),
+            kernel_batch(upper, lead, (size,)),
+            kernel_batch(u, lead, u.shape[-1:]),
         )
         value, jacobian, ok = tape_kernel.evaluate(
             self.program, (self.constants, self.kinds, self.outputs), flat, derivative

@@ -96,7 +96,7 @@ from ..interval_dual import value_and_jacobian
 from ..zonotope import reduce_order
 from .bounds import Bounds
 from .continuous_nonlinear import ContinuousNonlinearSystem
-from .field_tape import FieldTape
+from .field_tape import FieldTape, kernel_batch
 
 __all__ = [
     "REDUCTIONS",
@@ -490,9 +490,9 @@ class _Flow:
     low: FloatArray
     high: FloatArray
     n: int
-    compiled: bool
+    u: FloatArray
+    compiled: bool = False
     tape: FieldTape | None = None
-    u: FloatArray | None = None
     reduction: str = "box"
 
     @classmethod
@@ -514,11 +514,11 @@ class _Flow:
         shape = (2,) + (1,) * (ndim - 1) + (size,)
         disturbance = _disturbance_box(system, w)
         field = system.augmented_field(u)
-        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, *compiled, u, reduction)
+        return cls(field, disturbance, low.reshape(shape), high.reshape(shape), system.n, u, *compiled, reduction)
 
     def rates(self, box: Interval) -> Interval:
         """:math:`F(Z) = \\tilde f(Z) + E[w]` over boxes (:func:`_right_side`, by the tape where there is one)."""
-        if self.tape is None or self.u is None:
+        if self.tape is None:
             return _right_side(self.field, self.disturbance, box)
         try:
             rates = self.tape.evaluate(box.lower, box.upper, self.u)[0]
@@ -529,7 +529,7 @@ class _Flow:
 
     def value_and_jacobian(self, box: Interval) -> tuple[Interval, Interval]:
         """The boxes of the field and of its Jacobian over boxes (:func:`value_and_jacobian`, or the tape's)."""
-        if self.tape is None or self.u is None:
+        if self.tape is None:
             return value_and_jacobian(self.field, box.lower, box.upper, box.shape[-1])
         value, jacobian = self.tape.evaluate(box.lower, box.upper, self.u, derivative=True)
         assert jacobian is not None
@@ -598,17 +598,12 @@ def _compiled_rest(
 
     centre_end, jac = boxes
     lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
-
-    def flat(array: FloatArray, axes: int) -> FloatArray:
-        return np.ascontiguousarray(
-            np.broadcast_to(array, (*lead, *array.shape[-axes:])).reshape(-1, *array.shape[-axes:])
-        )
-
+    vector, matrix = (size,), (size, size)
     centre, generators = flow_kernel.advance(
-        flat(zset.centre, 1),
-        flat(zset.generators, 2),
-        (flat(centre_end.lower, 1), flat(centre_end.upper, 1)),
-        (flat(jac.lower, 2), flat(jac.upper, 2)),
+        kernel_batch(zset.centre, lead, vector),
+        kernel_batch(zset.generators, lead, zset.generators.shape[-2:]),
+        (kernel_batch(centre_end.lower, lead, vector), kernel_batch(centre_end.upper, lead, vector)),
+        (kernel_batch(jac.lower, lead, matrix), kernel_batch(jac.upper, lead, matrix)),
         (float(tau), int(flow.n), int(order), int(flow.reduction == "frame")),
     )
     return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
@@ -701,20 +696,18 @@ def _propagate_taped(
     """:func:`propagate` in one call of :func:`intervalobs.systems.flow_kernel.propagate` (the field by its tape)."""
     from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
 
-    assert flow.tape is not None and flow.u is not None
+    assert flow.tape is not None
     lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
-    batch, m = int(np.prod(lead)), flow.u.shape[-1]
     sets = (
-        np.ascontiguousarray(zset.centre.reshape(batch, size), dtype=float),
-        np.ascontiguousarray(zset.generators.reshape(batch, size, -1), dtype=float),
-        np.ascontiguousarray(np.broadcast_to(flow.u, (*lead, m)).reshape(batch, m), dtype=float),
+        kernel_batch(zset.centre, lead, (size,)),
+        kernel_batch(zset.generators, lead, zset.generators.shape[-2:]),
+        kernel_batch(flow.u, lead, flow.u.shape[-1:]),
     )
     no_box = flow.disturbance is None
     box = np.zeros((2, size)) if no_box else np.stack([flow.disturbance.lower, flow.disturbance.upper])  # type: ignore[union-attr]
     domain = np.stack([flow.low.reshape(2, size), flow.high.reshape(2, size)])
-    tape = (flow.tape.program, flow.tape.constants, flow.tape.kinds, flow.tape.outputs)
     centre, generators, hull, status = flow_kernel.propagate(
-        tape, sets, ((box, not no_box), domain), interval, (flow.n, order, int(flow.reduction == "frame"))
+        flow.tape.arrays, sets, ((box, not no_box), domain), interval, (flow.n, order, int(flow.reduction == "frame"))
     )
     if status == 1:
         raise AssumptionError(_LOST)
