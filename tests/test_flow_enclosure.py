@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from scipy.optimize import linprog
 
 from intervalobs import Bounds, ContinuousNonlinearSystem
-from intervalobs.errors import AssumptionError, BoundsError
+from intervalobs.errors import ArgumentError, AssumptionError, BoundsError
 from intervalobs.interval import Interval
 from intervalobs.systems import flow_enclosure
 from intervalobs.systems.flow_enclosure import StateZonotope, propagate
@@ -218,3 +218,42 @@ def test_a_refused_frame_falls_back_to_the_axis_box(monkeypatch: pytest.MonkeyPa
     g = _generators(3, 4, 20, 0)
     monkeypatch.setattr(enclosure_module, "_FRAME_RESIDUAL", -1.0)
     np.testing.assert_array_equal(enclosure_module._reduce(g, 8, "frame"), enclosure_module._reduce(g, 8, "box"))
+
+
+@pytest.mark.parametrize("make", [pendulum, cstr], ids=["pendulum", "cstr"])
+def test_persistent_symbols_keep_their_meaning_over_many_steps(make) -> None:
+    """With ``persistent=N`` the start's symbols stay the same: ``z(t_k) ∈ c_k + G_k ξ ± r_k`` for the start's ``ξ``.
+
+    Starts at the vertices and inside the box (each with its ``ξ``), ``w`` switching inside the intervals; the
+    residual ``z(t_k) - c_k - G_k ξ`` must lie in the hull of the other generators at every sample.
+    """
+    case: Case = make()
+    b = case.bounds.resolve(case.system)
+    size = case.system.n + case.system.n_params
+    low, high = np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]])
+    centre, radius = 0.5 * (low + high), 0.5 * (high - low)
+    zset = StateZonotope(centre, np.concatenate([np.diag(radius), np.zeros((size, 8))], axis=1))
+    t = np.arange(0.0, 6 * case.h + 1e-12, case.h)
+    u = np.full((t.size, case.system.m), 0.3)
+    rng = np.random.default_rng(3)
+    symbols = np.vstack([_vertices(-np.ones(size), np.ones(size)), rng.uniform(-1.0, 1.0, (6, size))])
+    truths = [
+        simulate_truth(case, (centre + radius * xi)[: case.system.n], (centre + radius * xi)[case.system.n :], t, u, s)
+        for s, xi in enumerate(symbols)
+    ]
+    for k in range(1, t.size):
+        zset = propagate(case.system, u[k - 1], Interval._raw(*b.w), zset, case.h, 4, size + 8, persistent=size)[0]
+        persistent, rest = zset.generators[:, :size], zset.generators[:, size:]
+        reach = np.abs(rest).sum(axis=1) * (1 + 1e-12)
+        assert np.all(reach[: case.system.n] < 0.5 * np.abs(persistent[: case.system.n]).sum(axis=1))  # not all rest
+        for xi, truth in zip(symbols, truths):
+            residual = truth[k] - zset.centre[: case.system.n] - persistent[: case.system.n] @ xi
+            assert np.all(np.abs(residual) <= reach[: case.system.n] + 1e-12), (k, xi, residual, reach)
+
+
+def test_persistent_generators_refuse_the_compiled_path() -> None:
+    case = pendulum()
+    b = case.bounds.resolve(case.system)
+    zset = StateZonotope.from_box(np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]]))
+    with pytest.raises(ArgumentError, match="NumPy path only"):
+        propagate(case.system, [0.3], Interval._raw(*b.w), zset, case.h, compiled=True, persistent=2)

@@ -10,7 +10,9 @@ in ``Estimate.meta["rows"]``:
 * ``"predicted"`` (most observers): row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_{k-1}``; row 0
   is the prior box and ``step`` returns the state at ``t_{k+1}``;
 * ``"filtered"``: row ``k`` is the box of ``x(t_k)`` given ``y_0 … y_k``; ``step`` returns the state
-  at ``t_k``.
+  at ``t_k``;
+* ``"smoothed"`` (:class:`~intervalobs.observers.set_inversion.SetInversionSmoother`): row ``k`` is the box
+  of ``x(t_k)`` given the whole record; there is no ``step``, only ``run``.
 
 A leading axis of ``y`` and ``u`` holds Monte Carlo runs: ``step`` accepts it from an unbatched state
 (the prior is shared by every run) and carries it without a loop over runs. An observer overrides
@@ -243,8 +245,9 @@ class Observer(ABC):
     m: int
     h: float | None = None
     """The sampling period a record must have (``dt`` in discrete time); None: any spacing."""
-    rows: Literal["predicted", "filtered"] = "predicted"
-    """What row ``k`` of :meth:`run` bounds: ``x(t_k)`` given ``y_0 … y_{k-1}`` or given ``y_0 … y_k``."""
+    rows: Literal["predicted", "filtered", "smoothed"] = "predicted"
+    """What row ``k`` of :meth:`run` bounds: ``x(t_k)`` given ``y_0 … y_{k-1}``, given ``y_0 … y_k``, or given the
+    whole record."""
     batched: bool = True
     """Whether :meth:`step` takes a leading axis of runs; if not, :meth:`run` loops over the runs one by one."""
     missing_samples: bool = False

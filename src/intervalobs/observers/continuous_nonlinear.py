@@ -80,6 +80,54 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+def prior_splits(splits: int | tuple[int, ...], n: int, size: int) -> tuple[int, ...]:
+    """Parts along each state and parameter from ``splits`` (an int: along every state; n of them: states only).
+
+    Parameters
+    ----------
+    splits : int or sequence of int
+    n, size : int
+        Numbers of states and of states and parameters.
+
+    Returns
+    -------
+    tuple of int, length ``size``
+
+    Raises
+    ------
+    BoundsError
+        Not a positive integer, or neither n nor ``size`` of them.
+    """
+    parts = (splits,) * n if isinstance(splits, int) else tuple(splits)
+    parts = parts + (1,) * (size - len(parts)) if len(parts) == n else parts
+    if len(parts) != size or not all(isinstance(k, (int, np.integer)) and k >= 1 for k in parts):
+        raise BoundsError(
+            f"splits: expected a positive integer, {n} of them (states) or {size} (states and parameters), "
+            f"got {splits!r}"
+        )
+    return tuple(int(k) for k in parts)
+
+
+def prior_parts(low: FloatArray, high: FloatArray, splits: tuple[int, ...]) -> tuple[FloatArray, FloatArray]:
+    """The grid of ``splits`` boxes covering ``[low, high]``: their lower and upper ends, shape (P, N).
+
+    Parameters
+    ----------
+    low, high : numpy.ndarray, shape (N,)
+    splits : tuple of int, length N
+
+    Returns
+    -------
+    part_lo, part_hi : numpy.ndarray, shape (P, N)
+    """
+    size = low.size
+    grids = [np.linspace(low[i], high[i], k + 1) for i, k in enumerate(splits)]
+    index = np.stack(np.meshgrid(*[np.arange(k) for k in splits], indexing="ij"), -1).reshape(-1, size)
+    part_lo = np.stack([grids[i][index[:, i]] for i in range(size)], -1)
+    part_hi = np.stack([grids[i][index[:, i] + 1] for i in range(size)], -1)
+    return part_lo, part_hi
+
+
 def _hull_gain(generators: FloatArray, row: FloatArray, sigma: FloatArray) -> FloatArray:
     r"""Per coordinate, the :math:`\lambda_i` minimising :math:`\sum_j |G_{ij} - \lambda_i b_j| + \sigma|\lambda_i|`.
 
@@ -250,15 +298,7 @@ class ContinuousNonlinearObserver(Observer):
         self.n, self.p, self.m, self.h = system.n, system.p, system.m, float(h)
         self._period = float(h)
         self.substeps, self.divergence_factor = substeps, float(divergence_factor)
-        size = system.n + system.n_params
-        parts = (splits,) * system.n if isinstance(splits, int) else tuple(splits)
-        parts = parts + (1,) * (size - len(parts)) if len(parts) == system.n else parts
-        if len(parts) != size or not all(isinstance(k, (int, np.integer)) and k >= 1 for k in parts):
-            raise BoundsError(
-                f"splits: expected a positive integer, {system.n} of them (states) or {size} (states and "
-                f"parameters), got {splits!r}"
-            )
-        self.splits = tuple(int(k) for k in parts)
+        self.splits = prior_splits(splits, system.n, system.n + system.n_params)
         self.order = ORDER_FACTOR * (system.n + system.n_params) if order is None else int(order)
         if self.order < system.n + system.n_params:
             raise BoundsError(f"order: expected at least {system.n + system.n_params} generators, got {order!r}")
@@ -297,12 +337,8 @@ class ContinuousNonlinearObserver(Observer):
         """
         lo, hi = self._prior_box(self.bounds.x0, x0_lower, x0_upper)
         low, high = np.concatenate([lo, self.bounds.p[0]]), np.concatenate([hi, self.bounds.p[1]])
-        size = low.size
-        grids = [np.linspace(low[i], high[i], k + 1) for i, k in enumerate(self.splits)]
-        index = np.stack(np.meshgrid(*[np.arange(k) for k in self.splits], indexing="ij"), -1).reshape(-1, size)
-        part_lo = np.stack([grids[i][index[:, i]] for i in range(size)], -1)
-        part_hi = np.stack([grids[i][index[:, i] + 1] for i in range(size)], -1)
-        count = index.shape[0]
+        part_lo, part_hi = prior_parts(low, high, self.splits)
+        count = part_lo.shape[0]
         zset = StateZonotope.from_box(part_lo, part_hi, self.order)
         if self.refine:
             zset = StateZonotope(

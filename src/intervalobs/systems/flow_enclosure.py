@@ -89,7 +89,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import AssumptionError, BoundsError
+from ..errors import ArgumentError, AssumptionError, BoundsError
 from ..inclusion import VectorFunction, interval_function
 from ..interval import Interval
 from ..interval_dual import value_and_jacobian
@@ -167,7 +167,7 @@ class StateZonotope:
         """
         return hull_box(self.centre, self.generators)
 
-    def with_box(self, extra: Interval, order: int, reduction: str = "box") -> StateZonotope:
+    def with_box(self, extra: Interval, order: int, reduction: str = "box", persistent: int = 0) -> StateZonotope:
         """The sum with a box (its centre moves the centre, its radii are new generators), ``order`` generators.
 
         Parameters
@@ -175,9 +175,11 @@ class StateZonotope:
         extra : Interval, shape (..., N)
             Box added (Minkowski sum).
         order : int
-            Most generators kept (at least N).
+            Most generators kept (at least N + ``persistent``).
         reduction : {"box", "frame"}
             How the generators beyond ``order`` are reduced (:data:`REDUCTIONS`).
+        persistent : int
+            Leading generator columns never reduced (their symbols keep their meaning from step to step).
 
         Returns
         -------
@@ -188,7 +190,8 @@ class StateZonotope:
         radius = np.nextafter(np.maximum(shifted.upper - centre, centre - shifted.lower), np.inf)
         size = centre.shape[-1]
         generators = np.concatenate([self.generators, radius[..., :, None] * np.eye(size)], axis=-1)
-        return StateZonotope(centre, _reduce(generators, order, reduction))
+        kept, rest = generators[..., :persistent], generators[..., persistent:]
+        return StateZonotope(centre, np.concatenate([kept, _reduce(rest, order - persistent, reduction)], axis=-1))
 
 
 _GAMMA_PAD = float(np.finfo(float).eps)
@@ -562,7 +565,9 @@ def _fundamental_a_priori(jac: Interval, n: int, tau: float) -> Interval:
     return Interval._raw(np.maximum(box.lower, sweep.lower), np.minimum(box.upper, sweep.upper))
 
 
-def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[StateZonotope, Interval] | None:
+def _step(
+    flow: _Flow, zset: StateZonotope, tau: float, order: int, persistent: int = 0
+) -> tuple[StateZonotope, Interval] | None:
     """Steps 1-4 of the module over ``[0, tau]``; None when an a priori enclosure is not found."""
     point = Interval._wrap(zset.centre)
     size = zset.centre.shape[-1]
@@ -587,7 +592,7 @@ def _step(flow: _Flow, zset: StateZonotope, tau: float, order: int) -> tuple[Sta
     spread_box = _unit_cube_image(np.abs(zset.generators))
     exact_box = _unit_cube_image(np.maximum(np.abs(exact.lower), np.abs(exact.upper)))
     error = centre_end - zset.centre + (phi - mid) @ spread_box + exact_box
-    return StateZonotope(zset.centre, generators).with_box(error, order, flow.reduction), tilde
+    return StateZonotope(zset.centre, generators).with_box(error, order, flow.reduction, persistent), tilde
 
 
 def _compiled_rest(
@@ -621,6 +626,8 @@ def propagate(
     *,
     tape: FieldTape | None = None,
     reduction: str = "box",
+    persistent: int = 0,
+    halvings: int = MAX_HALVINGS,
 ) -> tuple[StateZonotope, Interval]:
     """Carry a zonotope of augmented states over ``[0, h]`` (the module's steps, ``substeps`` of them).
 
@@ -649,6 +656,13 @@ def propagate(
     reduction : {"box", "frame"}
         How the generators beyond ``order`` are reduced after each step (:data:`REDUCTIONS`): in the axes
         (Combastel) or in the frame of the largest (:func:`_reduce_in_frame`, less wrapping under rotation).
+    persistent : int
+        Leading generator columns never reduced: the set stays :math:`c + G_p\\xi + G_r\\eta` with the *same*
+        symbols :math:`\\xi` as at the start (step 4 maps :math:`G_p` by :math:`M` and puts all the rest in
+        :math:`G_r`), so the states at several times are affine in one :math:`\\xi` up to a box each
+        (:mod:`intervalobs.observers.set_inversion`). NumPy path only (``compiled`` must be False).
+    halvings : int
+        Most halvings of a step where no a priori enclosure is found (then :class:`AssumptionError`).
 
     Returns
     -------
@@ -661,21 +675,23 @@ def propagate(
     Raises
     ------
     AssumptionError
-        When no a priori enclosure is found even for steps ``2**MAX_HALVINGS`` times shorter (the
+        When no a priori enclosure is found even for steps ``2**halvings`` times shorter (the
         set is too large or the vector field blows up on it).
     """
+    if persistent and compiled:
+        raise ArgumentError("propagate: persistent generators are kept on the NumPy path only (compiled=False)")
     flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape), reduction)
-    kept = ORDER_FACTOR * zset.centre.shape[-1] if order is None else int(order)
+    kept = ORDER_FACTOR * zset.centre.shape[-1] + persistent if order is None else int(order)
     if compiled and tape is not None:
         return _propagate_taped(flow, zset, (float(h), int(substeps)), kept)
-    remaining, tau, halvings = float(h), float(h) / substeps, 0
+    remaining, tau, halved = float(h), float(h) / substeps, 0
     hull: Interval | None = None
     while remaining > 0.0:
         tau = min(tau, remaining)
-        result = _step(flow, zset, tau, kept)
+        result = _step(flow, zset, tau, kept, persistent)
         if result is None:
-            halvings += 1
-            if halvings > MAX_HALVINGS:
+            halved += 1
+            if halved > halvings:
                 raise AssumptionError(_LOST)
             tau *= 0.5
             continue
