@@ -15,8 +15,9 @@ from intervalobs import Bounds, ContinuousNonlinearSystem
 from intervalobs.errors import ArgumentError, AssumptionError, BoundsError
 from intervalobs.interval import Interval
 from intervalobs.systems import flow_enclosure
+from intervalobs.systems.field_tape import trace_field
 from intervalobs.systems.flow_enclosure import StateZonotope, propagate
-from nonlinear_cases import Case, cstr, pendulum, simulate_truth
+from nonlinear_cases import Case, chemostat_bundle, cstr, pendulum, simulate_truth
 
 enclosure_module = importlib.import_module("intervalobs.systems.flow_enclosure")  # the package re-exports the function
 
@@ -178,18 +179,23 @@ def test_the_frame_reduction_contains_the_original(
         assert _in_zonotope(g @ xi, reduced)
 
 
+@pytest.mark.parametrize("persistent", [0, 2], ids=["all-reduced", "2-persistent"])
 @pytest.mark.parametrize("degenerate", [0, 1, 2, 3], ids=["random", "parameter-rows", "rank-2", "scales"])
-def test_the_compiled_frame_reduction_is_the_numpy_one(degenerate: int) -> None:
-    """flow_kernel._reduce(frame=True) evaluates enclosure_module._reduce_in_frame's formulas (bit for bit here)."""
+def test_the_compiled_frame_reduction_is_the_numpy_one(degenerate: int, persistent: int) -> None:
+    """flow_kernel._reduce(frame=True) evaluates enclosure_module._reduce_in_frame's formulas (bit for bit here),
+    the leading ``persistent`` columns copied and the others reduced to ``order - persistent`` (``with_box``'s)."""
     from intervalobs.systems import flow_kernel
 
     for seed in range(20):
-        size, order = 3 + seed % 4, 8 + seed % 5
+        size, order = 3 + seed % 4, 8 + seed % 5 + persistent
         g = _generators(seed, size, order + 7, degenerate)
         out = np.empty((size, order))
-        flow_kernel._reduce(g, order, True, out)
-        scale = np.abs(enclosure_module._reduce(g, order, "box")).max()
-        np.testing.assert_allclose(out, enclosure_module._reduce(g, order, "frame"), rtol=1e-12, atol=1e-12 * scale)
+        flow_kernel._reduce(g, order, True, persistent, out)
+        kept, rest = g[:, :persistent], g[:, persistent:]
+        scale = np.abs(enclosure_module._reduce(rest, order - persistent, "box")).max()
+        expected = np.concatenate([kept, enclosure_module._reduce(rest, order - persistent, "frame")], axis=1)
+        np.testing.assert_array_equal(out[:, :persistent], kept)
+        np.testing.assert_allclose(out, expected, rtol=1e-12, atol=1e-12 * scale)
 
 
 def test_the_kernel_uses_the_frame_constants() -> None:
@@ -220,19 +226,24 @@ def test_a_refused_frame_falls_back_to_the_axis_box(monkeypatch: pytest.MonkeyPa
     np.testing.assert_array_equal(enclosure_module._reduce(g, 8, "frame"), enclosure_module._reduce(g, 8, "box"))
 
 
-@pytest.mark.parametrize("make", [pendulum, cstr], ids=["pendulum", "cstr"])
-def test_persistent_symbols_keep_their_meaning_over_many_steps(make) -> None:
+@pytest.mark.parametrize("path", ["numpy", "compiled", "taped"])
+@pytest.mark.parametrize("make", [pendulum, cstr, chemostat_bundle], ids=["pendulum", "cstr", "chemostat"])
+def test_persistent_symbols_keep_their_meaning_over_many_steps(make, path: str) -> None:
     """With ``persistent=N`` the start's symbols stay the same: ``z(t_k) ∈ c_k + G_k ξ ± r_k`` for the start's ``ξ``.
 
     Starts at the vertices and inside the box (each with its ``ξ``), ``w`` switching inside the intervals; the
-    residual ``z(t_k) - c_k - G_k ξ`` must lie in the hull of the other generators at every sample.
+    residual ``z(t_k) - c_k - G_k ξ`` must lie in the hull of the other generators at every sample. On the NumPy
+    step, the compiled one (field in Python) and the compiled one with the field's tape.
     """
     case: Case = make()
     b = case.bounds.resolve(case.system)
     size = case.system.n + case.system.n_params
     low, high = np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]])
+    if case.name == "chemostat-bundle":  # one small part, as the bundle's (the whole box loses the enclosure)
+        low, high = low + (high - low) * [0.45, 0.45, 0.5, 0.5], low + (high - low) * [0.5, 0.5, 0.75, 0.75]
     centre, radius = 0.5 * (low + high), 0.5 * (high - low)
     zset = StateZonotope(centre, np.concatenate([np.diag(radius), np.zeros((size, 8))], axis=1))
+    tape = trace_field(case.system, low, high)[0] if path == "taped" else None
     t = np.arange(0.0, 6 * case.h + 1e-12, case.h)
     u = np.full((t.size, case.system.m), 0.3)
     rng = np.random.default_rng(3)
@@ -241,8 +252,11 @@ def test_persistent_symbols_keep_their_meaning_over_many_steps(make) -> None:
         simulate_truth(case, (centre + radius * xi)[: case.system.n], (centre + radius * xi)[case.system.n :], t, u, s)
         for s, xi in enumerate(symbols)
     ]
+    w = Interval._raw(*b.w)
     for k in range(1, t.size):
-        zset = propagate(case.system, u[k - 1], Interval._raw(*b.w), zset, case.h, 4, size + 8, persistent=size)[0]
+        zset = propagate(
+            case.system, u[k - 1], w, zset, case.h, 4, size + 8, path != "numpy", tape=tape, persistent=size
+        )[0]
         persistent, rest = zset.generators[:, :size], zset.generators[:, size:]
         reach = np.abs(rest).sum(axis=1) * (1 + 1e-12)
         assert np.all(reach[: case.system.n] < 0.5 * np.abs(persistent[: case.system.n]).sum(axis=1))  # not all rest
@@ -251,9 +265,41 @@ def test_persistent_symbols_keep_their_meaning_over_many_steps(make) -> None:
             assert np.all(np.abs(residual) <= reach[: case.system.n] + 1e-12), (k, xi, residual, reach)
 
 
-def test_persistent_generators_refuse_the_compiled_path() -> None:
+@pytest.mark.parametrize("reduction", ["box", "frame"], ids=str)
+@pytest.mark.parametrize("make", [pendulum, cstr, chemostat_bundle], ids=["pendulum", "cstr", "chemostat"])
+def test_persistent_generators_on_the_compiled_paths_give_the_numpy_sets(make, reduction: str) -> None:
+    """With ``persistent=N`` both compiled paths (the field in Python, and by its tape) keep the leading columns and
+    reduce the others as ``StateZonotope.with_box``: the same sets up to the order of a few sums (12 random starts
+    with 3 generators beyond the box's, 4 steps, so that the reduction runs at each)."""
+    case: Case = make()
+    b = case.bounds.resolve(case.system)
+    rng = np.random.default_rng(11)
+    size = case.system.n + case.system.n_params
+    low = np.concatenate([b.x0[0], b.p[0]])
+    high = np.concatenate([b.x0[1], b.p[1]])
+    centre = low + (high - low) * rng.uniform(0.3, 0.7, (12, size))
+    generators = 0.01 * (high - low)[:, None] * rng.uniform(-1.0, 1.0, (12, size, 4 * size))
+    start = StateZonotope(centre, generators)
+    u, w = np.full((12, case.system.m), 0.3), Interval._raw(*b.w)
+    tape = trace_field(case.system, low, high)[0]
+    numpy_set, *compiled_sets = (
+        propagate(case.system, u, w, start, case.h, 4, 3 * size, c, tape=t, reduction=reduction, persistent=size)[0]
+        for c, t in ((False, None), (True, None), (True, tape))
+    )
+    numpy_box = numpy_set.box()
+    scale = numpy_box.upper - numpy_box.lower
+    for compiled_set in compiled_sets:
+        compiled_box = compiled_set.box()
+        assert np.all(np.abs(compiled_box.lower - numpy_box.lower) <= 1e-12 * scale)
+        assert np.all(np.abs(compiled_box.upper - numpy_box.upper) <= 1e-12 * scale)
+        np.testing.assert_allclose(compiled_set.generators, numpy_set.generators, rtol=1e-12, atol=1e-12 * scale.max())
+
+
+def test_persistent_columns_are_checked() -> None:
+    """More persistent columns than ``order - N`` (or than the start has) would leave the reduction no room."""
     case = pendulum()
     b = case.bounds.resolve(case.system)
     zset = StateZonotope.from_box(np.concatenate([b.x0[0], b.p[0]]), np.concatenate([b.x0[1], b.p[1]]))
-    with pytest.raises(ArgumentError, match="NumPy path only"):
-        propagate(case.system, [0.3], Interval._raw(*b.w), zset, case.h, compiled=True, persistent=2)
+    for persistent, order in ((-1, None), (4, None), (2, 4)):
+        with pytest.raises(ArgumentError, match="persistent"):
+            propagate(case.system, [0.3], Interval._raw(*b.w), zset, case.h, order=order, persistent=persistent)

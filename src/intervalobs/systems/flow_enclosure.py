@@ -583,7 +583,7 @@ def _step(
     half_square = 0.5 * tau * tau
     centre_end = point + rates[1] * tau + (jac_hat @ rates[0]) * half_square
     if flow.compiled:
-        return _compiled_rest(flow, zset, (centre_end, jac), tau, order), tilde
+        return _compiled_rest(flow, zset, (centre_end, jac), tau, (order, persistent)), tilde
     spread = _fundamental_a_priori(jac, flow.n, tau)
     phi = jac * tau + interval_product(jac, interval_product(jac, spread)) * half_square + np.eye(size)
     mid = phi.centre
@@ -596,12 +596,14 @@ def _step(
 
 
 def _compiled_rest(
-    flow: _Flow, zset: StateZonotope, boxes: tuple[Interval, Interval], tau: float, order: int
+    flow: _Flow, zset: StateZonotope, boxes: tuple[Interval, Interval], tau: float, kept: tuple[int, int]
 ) -> StateZonotope:
-    """Steps 3-4 by :func:`intervalobs.systems.flow_kernel.advance` (the same formulas compiled), all sets flattened."""
+    """Steps 3-4 by :func:`intervalobs.systems.flow_kernel.advance` (the same formulas compiled), all sets flattened;
+    ``kept``: ``(order, persistent)``."""
     from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
 
     centre_end, jac = boxes
+    order, persistent = kept
     lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
     vector, matrix = (size,), (size, size)
     centre, generators = flow_kernel.advance(
@@ -609,7 +611,7 @@ def _compiled_rest(
         kernel_batch(zset.generators, lead, zset.generators.shape[-2:]),
         (kernel_batch(centre_end.lower, lead, vector), kernel_batch(centre_end.upper, lead, vector)),
         (kernel_batch(jac.lower, lead, matrix), kernel_batch(jac.upper, lead, matrix)),
-        (float(tau), int(flow.n), int(order), int(flow.reduction == "frame")),
+        (float(tau), int(flow.n), int(order), int(persistent), int(flow.reduction == "frame")),
     )
     return StateZonotope(centre.reshape(*lead, size), generators.reshape(*lead, size, order))
 
@@ -660,7 +662,8 @@ def propagate(
         Leading generator columns never reduced: the set stays :math:`c + G_p\\xi + G_r\\eta` with the *same*
         symbols :math:`\\xi` as at the start (step 4 maps :math:`G_p` by :math:`M` and puts all the rest in
         :math:`G_r`), so the states at several times are affine in one :math:`\\xi` up to a box each
-        (:mod:`intervalobs.observers.set_inversion`). NumPy path only (``compiled`` must be False).
+        (:mod:`intervalobs.observers.set_inversion`). At most ``order`` minus the augmented dimension, and at most
+        the start's generator columns.
     halvings : int
         Most halvings of a step where no a priori enclosure is found (then :class:`AssumptionError`).
 
@@ -674,16 +677,22 @@ def propagate(
 
     Raises
     ------
+    ArgumentError
+        ``persistent`` is negative, leaves fewer than N other generators in ``order`` or exceeds the start's columns.
     AssumptionError
         When no a priori enclosure is found even for steps ``2**halvings`` times shorter (the
         set is too large or the vector field blows up on it).
     """
-    if persistent and compiled:
-        raise ArgumentError("propagate: persistent generators are kept on the NumPy path only (compiled=False)")
+    size = zset.centre.shape[-1]
+    kept = ORDER_FACTOR * size + persistent if order is None else int(order)
+    limit = min(kept - size, zset.generators.shape[-1])
+    if not 0 <= persistent <= limit:
+        raise ArgumentError(
+            f"propagate: expected 0 <= persistent <= min(order - N, start's generators) = {limit}, got {persistent}"
+        )
     flow = _Flow.build(system, np.asarray(u, dtype=float), w, zset.centre.ndim, (compiled, tape), reduction)
-    kept = ORDER_FACTOR * zset.centre.shape[-1] + persistent if order is None else int(order)
     if compiled and tape is not None:
-        return _propagate_taped(flow, zset, (float(h), int(substeps)), kept)
+        return _propagate_taped(flow, zset, (float(h), int(substeps)), (kept, int(persistent)))
     remaining, tau, halved = float(h), float(h) / substeps, 0
     hull: Interval | None = None
     while remaining > 0.0:
@@ -707,12 +716,14 @@ def propagate(
 
 
 def _propagate_taped(
-    flow: _Flow, zset: StateZonotope, interval: tuple[float, int], order: int
+    flow: _Flow, zset: StateZonotope, interval: tuple[float, int], kept: tuple[int, int]
 ) -> tuple[StateZonotope, Interval]:
-    """:func:`propagate` in one call of :func:`intervalobs.systems.flow_kernel.propagate` (the field by its tape)."""
+    """:func:`propagate` in one call of :func:`intervalobs.systems.flow_kernel.propagate` (the field by its tape);
+    ``kept``: ``(order, persistent)``."""
     from . import flow_kernel  # Numba is imported only where a record is long enough to pay for it
 
     assert flow.tape is not None
+    order, persistent = kept
     lead, size = zset.centre.shape[:-1], zset.centre.shape[-1]
     sets = (
         kernel_batch(zset.centre, lead, (size,)),
@@ -723,7 +734,11 @@ def _propagate_taped(
     box = np.zeros((2, size)) if no_box else np.stack([flow.disturbance.lower, flow.disturbance.upper])  # type: ignore[union-attr]
     domain = np.stack([flow.low.reshape(2, size), flow.high.reshape(2, size)])
     centre, generators, hull, status = flow_kernel.propagate(
-        flow.tape.arrays, sets, ((box, not no_box), domain), interval, (flow.n, order, int(flow.reduction == "frame"))
+        flow.tape.arrays,
+        sets,
+        ((box, not no_box), domain),
+        interval,
+        (flow.n, order, persistent, int(flow.reduction == "frame")),
     )
     if status == 1:
         raise AssumptionError(_LOST)

@@ -3,8 +3,9 @@ r"""The compiled array part of one validated flow step (:mod:`intervalobs.system
 :func:`advance` takes what the user's vector field gave (the interval Jacobian over the a priori boxes and the
 box of the centre's trajectory) and does the rest of the step in one Numba loop per set: the box of the
 fundamental matrix, :math:`[\Phi]`, the new generators :math:`\mathrm{mid}[\Phi]G`, the remainder box and the
-reduction to ``order`` generators. :func:`strip_update` is the observer's contraction of a zonotope by a
-strip (:func:`intervalobs.observers.continuous_nonlinear._strip_update`, with its hull-keeping gain). Both
+reduction to ``order`` generators (the leading ``persistent`` kept as they are). :func:`strip_update` is the
+observer's contraction of a zonotope by a strip (:func:`intervalobs.observers.continuous_nonlinear._strip_update`,
+with its hull-keeping gain). Both
 evaluate the same formulas, in the same order, as the NumPy paths of
 :func:`intervalobs.systems.flow_enclosure._step` and of the observer (which stay the reference and are used
 for short records), so the two agree up to the order of a few sums.
@@ -123,42 +124,46 @@ def _fundamental(j_lo: FloatArray, j_hi: FloatArray, n: int, tau: float, out: Fl
 
 
 @numba.njit(cache=True, nogil=True)
-def _reduce(generators: FloatArray, order: int, frame: bool, out: FloatArray) -> None:
-    """``order`` generators: the ``order - N`` of largest Euclidean norm, then the box of the others (rounded up),
-    in the axes or (``frame``) in the frame of the largest (:func:`_box_in_frame`)."""
-    size, count = generators.shape
+def _reduce(generators: FloatArray, order: int, frame: bool, persistent: int, out: FloatArray) -> None:
+    """``order`` generators (``flow_enclosure.StateZonotope.with_box``'s reduction): the first ``persistent`` as
+    they are, then, of the others, the ``order - persistent - N`` of largest Euclidean norm and the box of the rest
+    (rounded up), in the axes or (``frame``) in the frame of the largest (:func:`_box_in_frame`)."""
+    size = generators.shape[0]
     out[:] = 0.0
-    if count <= order:
-        out[:, :count] = generators
+    out[:, :persistent] = generators[:, :persistent]
+    rest, slots, reduced = generators[:, persistent:], order - persistent, out[:, persistent:]
+    count = rest.shape[1]
+    if count <= slots:
+        reduced[:, :count] = rest
         return
-    keep = order - size
+    keep = slots - size
     norms = np.empty(count)
     for j in range(count):
         total = 0.0
         for i in range(size):
-            total += generators[i, j] * generators[i, j]
+            total += rest[i, j] * rest[i, j]
         norms[j] = -math.sqrt(total)
     ranked = np.argsort(norms, kind="mergesort")
     for c in range(keep):
-        out[:, c] = generators[:, ranked[c]]
+        reduced[:, c] = rest[:, ranked[c]]
     if frame:
         ordered = np.empty((size, count))
         for c in range(count):
-            ordered[:, c] = generators[:, ranked[c]]
+            ordered[:, c] = rest[:, ranked[c]]
         columns = min(2 * size, count)
         leading = np.empty((size, size + columns))
-        turn = np.argsort(norms[order - size : order], kind="mergesort")
+        turn = np.argsort(norms[slots - size : slots], kind="mergesort")
         for c in range(size):  # the previous reduction's box, as the step left it, then the largest
-            leading[:, c] = generators[:, order - size + turn[c]]
+            leading[:, c] = rest[:, slots - size + turn[c]]
         leading[:, size:] = ordered[:, :columns]
-        if _box_in_frame(ordered, keep, leading, out[:, keep:]):
+        if _box_in_frame(ordered, keep, leading, reduced[:, keep:]):
             return
     for i in range(size):
         box = 0.0
         for c in range(keep, count):
-            box += abs(generators[i, ranked[c]])
-        out[i, keep:] = 0.0
-        out[i, keep + i] = _up(box * (1.0 + 2 * count * _EPS))
+            box += abs(rest[i, ranked[c]])
+        reduced[i, keep:] = 0.0
+        reduced[i, keep + i] = _up(box * (1.0 + 2 * count * _EPS))
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -284,12 +289,12 @@ def _advance_one(
     generators: FloatArray,
     centre_end: tuple[FloatArray, FloatArray],
     jacobian: tuple[FloatArray, FloatArray],
-    step: tuple[float, int, int, int],
+    step: tuple[float, int, int, int, int],
     new_centre: FloatArray,
     new_generators: FloatArray,
 ) -> None:
     """Steps 3-4 of the flow enclosure for one set (see :func:`advance`)."""
-    tau, n, order, frame = step
+    tau, n, order, persistent, frame = step
     j_lo, j_hi = jacobian
     size, count = generators.shape
     half_square = 0.5 * tau * tau
@@ -344,7 +349,7 @@ def _advance_one(
         middle = 0.5 * (low + high)
         new_centre[i] = middle
         all_generators[i, count + i] = _up(max(high - middle, middle - low))
-    _reduce(all_generators, order, frame == 1, new_generators)
+    _reduce(all_generators, order, frame == 1, persistent, new_generators)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -353,7 +358,7 @@ def advance(
     generators: FloatArray,
     centre_end: tuple[FloatArray, FloatArray],
     jacobian: tuple[FloatArray, FloatArray],
-    step: tuple[float, int, int, int],
+    step: tuple[float, int, int, int, int],
 ) -> tuple[FloatArray, FloatArray]:
     """Steps 3-4 of :mod:`intervalobs.systems.flow_enclosure` for a batch of sets.
 
@@ -368,8 +373,9 @@ def advance(
     jacobian : tuple of numpy.ndarray, shape (B, N, N) each
         The interval Jacobian over both a priori boxes.
     step : tuple
-        ``(tau, n, order, frame)``: step length, number of states (the rest are parameters), generators kept, and
-        1 to box the small generators in the frame of the largest (``reduction="frame"``), 0 in the axes.
+        ``(tau, n, order, persistent, frame)``: step length, number of states (the rest are parameters), generators
+        kept, leading generators never reduced (mapped like the others, then copied as they are), and 1 to box the
+        small generators in the frame of the largest (``reduction="frame"``), 0 in the axes.
 
     Returns
     -------
@@ -476,7 +482,7 @@ def _strip_one(
         middle = 0.5 * (box[0, i] + box[1, i])
         out[0][i] = middle
         new[i, count + 1 + i] = _up(max(box[1, i] - middle, middle - box[0, i]))
-    _reduce(new, out[1].shape[1], frame, out[1])
+    _reduce(new, out[1].shape[1], frame, 0, out[1])
     return empty
 
 
@@ -642,7 +648,7 @@ def _taped_step(
     tape: Tape,
     zset: tuple[FloatArray, FloatArray, FloatArray],
     field: tuple[tuple[FloatArray, bool], FloatArray, float],
-    step: tuple[float, int, int, int],
+    step: tuple[float, int, int, int, int],
     out: tuple[FloatArray, FloatArray, FloatArray],
 ) -> int:
     """``flow_enclosure._step`` with the field's tape: 0, or 1 (no a priori box), 2 (a Jacobian undefined)."""
@@ -686,7 +692,7 @@ def propagate(
     zset: tuple[FloatArray, FloatArray, FloatArray],
     field: tuple[tuple[FloatArray, bool], FloatArray],
     interval: tuple[float, int],
-    step: tuple[int, int, int],
+    step: tuple[int, int, int, int],
 ) -> tuple[FloatArray, FloatArray, FloatArray, int]:
     """:func:`intervalobs.systems.flow_enclosure.propagate` with the field's tape: every step in one call.
 
@@ -702,8 +708,8 @@ def propagate(
     interval : tuple
         ``(h, substeps)``.
     step : tuple
-        ``(n, order, frame)``: number of states, generators kept, and 1 to reduce in the frame of the largest
-        generators (``reduction="frame"``), 0 in the axes.
+        ``(n, order, persistent, frame)``: number of states, generators kept, leading generators never reduced, and
+        1 to reduce in the frame of the largest generators (``reduction="frame"``), 0 in the axes.
 
     Returns
     -------
@@ -717,7 +723,7 @@ def propagate(
     centre, generators, inputs = zset
     disturbance, domain = field
     h, substeps = interval
-    n, order, frame = step
+    n, order, persistent, frame = step
     batch, size = centre.shape
     hull = np.empty((2, batch, size))
     out = (np.empty((batch, size)), np.empty((batch, size, order)), np.empty((2, batch, size)))
@@ -725,7 +731,7 @@ def propagate(
     while remaining > 0.0:
         tau = min(tau, remaining)
         status = _taped_step(
-            tape, (centre, generators, inputs), (disturbance, domain, tau), (tau, n, order, frame), out
+            tape, (centre, generators, inputs), (disturbance, domain, tau), (tau, n, order, persistent, frame), out
         )
         if status == 2:
             return centre, generators, hull, 2
