@@ -5,10 +5,9 @@ box of the centre's trajectory) and does the rest of the step in one Numba loop 
 fundamental matrix, :math:`[\Phi]`, the new generators :math:`\mathrm{mid}[\Phi]G`, the remainder box and the
 reduction to ``order`` generators (the leading ``persistent`` kept as they are). :func:`strip_update` is the
 observer's contraction of a zonotope by a strip (:func:`intervalobs.observers.continuous_nonlinear._strip_update`,
-with its hull-keeping gain). Both
-evaluate the same formulas, in the same order, as the NumPy paths of
-:func:`intervalobs.systems.flow_enclosure._step` and of the observer (which stay the reference and are used
-for short records), so the two agree up to the order of a few sums.
+with its hull-keeping gain). Both evaluate the same formulas, in the same order, as the NumPy paths of
+:func:`intervalobs.systems.flow_enclosure._step` and of the observer (which stay the reference and are used for
+short records), so the two agree up to the order of a few sums.
 
 :func:`propagate` is the whole of :func:`intervalobs.systems.flow_enclosure.propagate` in one call where the
 user's field is recorded as a tape (:mod:`intervalobs.systems.field_tape`, replayed by
