@@ -288,3 +288,29 @@ def test_the_pilot_does_not_charge_other_threads() -> None:
         stop.set()
         spinner.join()
     assert cost < 1.0
+
+
+def test_smoothed_rows_pick_the_set_inversion_smoother_and_are_sound() -> None:
+    """``smoothed=True`` on a disturbance-free continuous-time model: the smoother, offline, enclosing the truth;
+    with a disturbance it cannot be designed and the filter runs, with the reason."""
+    from intervalobs import ContinuousNonlinearSystem
+
+    system = ContinuousNonlinearSystem(
+        lambda x, u, p: (x[1], -p[0] * np.sin(x[0]) - 0.5 * x[1]), lambda x, u: (x[0],), n=2, n_params=1
+    )
+    t = np.arange(0.0, 2.0 + 1e-9, 0.05)
+    truth = _damped_pendulum_record(t)
+    y = truth[:, :1] + 0.01 * np.where(np.arange(t.size) % 3 == 0, 1.0, -1.0)[:, None]
+    bounds = Bounds(x0=([0.3, -0.3], [0.5, -0.1]), v=(-0.01, 0.01), p=(0.95, 1.05))
+    estimate = observe(system, bounds, t, y, smoothed=True)
+    assert estimate.meta["estimator"] == "SetInversionSmoother" and estimate.meta["rows"] == "smoothed"
+    assert "offline" in estimate.meta["why"] and estimate.meta["ms_per_sample"] > 0
+    assert estimate.enclosure(truth).fraction == 1.0
+    assert "SetInversionSmoother" not in [row["estimator"] for row in suggest(system, bounds, h=0.05)]
+    assert "SetInversionSmoother" in [row["estimator"] for row in suggest(system, bounds, h=0.05, smoothed=True)]
+    noisy = ContinuousNonlinearSystem(
+        lambda x, u, p: (x[1], -p[0] * np.sin(x[0]) - 0.5 * x[1]), lambda x, u: (x[0],), n=2, n_params=1, E=[[0], [1]]
+    )
+    filtered = observe(noisy, Bounds(x0=bounds.x0, v=bounds.v, p=bounds.p, w=(-0.01, 0.01)), t, y, smoothed=True)
+    assert filtered.meta["estimator"].startswith("ContinuousNonlinearObserver")
+    assert "disturbance" in filtered.meta["considered"][0]

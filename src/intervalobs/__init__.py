@@ -37,6 +37,7 @@ from .observers import (
     ReactionInvariantObserver,
     RobustFiniteMemoryObserver,
     RobustHullEstimator,
+    SetInversionSmoother,
     UnknownInputIntervalObserver,
     ZonotopicObserver,
 )
@@ -83,6 +84,7 @@ __all__ = [
     "RobustFiniteMemoryObserver",
     "RobustHullEstimator",
     "SampledSystem",
+    "SetInversionSmoother",
     "Simulation",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",

@@ -296,7 +296,8 @@ class DenseLP(RecordsPath):
     ``A`` is dense, or sparse (CSC) for a model with few nonzeros.
 
     A new model is passed with :meth:`load` (the last basis is kept when the sizes agree); :meth:`minima`
-    solves several objectives in turn.
+    solves several objectives in turn, each from the previous basis, again from scratch where that ends without an
+    optimum.
     """
 
     def __init__(self) -> None:
@@ -360,11 +361,17 @@ class DenseLP(RecordsPath):
             self.solver.changeColsCost(self.ncol, self._cols, cost)
             run_highs(self.solver)
             self.path.pivots += int(self.solver.getInfo().simplex_iteration_count)
-            solution = self.solver.getSolution()
-            dual = np.asarray(solution.row_dual)
             optimal = self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal
             self.path.highs_warm += optimal
+            if not optimal:  # a warm start that stalls (badly scaled objectives) is solved again from scratch
+                self.solver.clearSolver()
+                run_highs(self.solver)
+                self.path.pivots += int(self.solver.getInfo().simplex_iteration_count)
+                optimal = self.solver.getModelStatus() == _core.HighsModelStatus.kOptimal
+                self.path.scratch += optimal
             self.path.failed += not optimal
+            solution = self.solver.getSolution()
+            dual = np.asarray(solution.row_dual)
             if dual.shape != (self.nrow,) or not np.all(np.isfinite(dual)):
                 usable[r] = False
                 continue

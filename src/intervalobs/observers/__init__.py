@@ -14,6 +14,7 @@ from .null_space_gsisio import NullSpaceGSISIO
 from .reaction_invariant import ReactionInvariantObserver
 from .robust_fir import RobustFiniteMemoryObserver
 from .robust_hull import RobustHullEstimator
+from .set_inversion import SetInversionSmoother
 from .unknown_input import UnknownInputIntervalObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
@@ -35,6 +36,7 @@ __all__ = [
     "ReactionInvariantObserver",
     "RobustFiniteMemoryObserver",
     "RobustHullEstimator",
+    "SetInversionSmoother",
     "UnknownInputIntervalObserver",
     "ZonotopicObserver",
     "output_contraction",

@@ -80,6 +80,19 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+def check_model(system: Any, h: Any) -> None:
+    """Refuse anything but a :class:`ContinuousNonlinearSystem` and a positive sampling period.
+
+    Raises
+    ------
+    BoundsError
+    """
+    if not isinstance(system, ContinuousNonlinearSystem):
+        raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")
+    if not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
+        raise BoundsError(f"h: expected a positive sampling period, got {h!r}")
+
+
 def prior_splits(splits: int | tuple[int, ...], n: int, size: int) -> tuple[int, ...]:
     """Parts along each state and parameter from ``splits`` (an int: along every state; n of them: states only).
 
@@ -288,10 +301,7 @@ class ContinuousNonlinearObserver(Observer):
         compiled: bool | None = None,
         reduction: str = "frame",
     ) -> None:
-        if not isinstance(system, ContinuousNonlinearSystem):
-            raise BoundsError(f"system: expected a ContinuousNonlinearSystem, got {type(system).__name__}")
-        if not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
-            raise BoundsError(f"h: expected a positive sampling period, got {h!r}")
+        check_model(system, h)
         if not (isinstance(substeps, int) and substeps >= 1):
             raise BoundsError(f"substeps: expected a positive integer, got {substeps!r}")
         self.system, self.bounds = system, bounds.resolve(system)
