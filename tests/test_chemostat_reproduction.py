@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from intervalobs.front_door import ESTIMATORS
 from intervalobs.reproduce import registry
 from intervalobs.reproduce.contract import check_reproduction
 
@@ -29,6 +30,9 @@ def test_chemostat_reproduction(tmp_path) -> None:
     assert bundle["enclosure"] == 1.0
     assert tight["bundle_biomass_ratio"] >= 1.0
     assert bundle["biomass_mean_width_second_half"] < design["biomass_mean_width_second_half"]
+    smoother = design["smoother"]
+    assert smoother["enclosure"] == 1.0
+    assert 1.0 <= tight["smoother_biomass_ratio"] < tight["bundle_biomass_ratio"]
 
 
 @pytest.mark.slow
@@ -56,6 +60,10 @@ def test_design_notes_quote_the_long_benchmark() -> None:
         f"256 parts {design['bundle']['biomass_mean_width_second_half']:.3g} g/L "
         f"({tight['bundle_biomass_ratio']:.0f}×)",
         *(f"{parts} parts {ratio(sweep[parts]):.3g}×" for parts in (64, 128, 1024, 4096)),
+        f"smoother {design['smoother']['biomass_mean_width_second_half']:.3g} g/L "
+        f"({tight['smoother_biomass_ratio']:.3g}×)",
     ]
     missing = [text for text in quoted if text not in notes]
     assert missing == []
+    smoother_row = next(row for row in ESTIMATORS if row.name == "SetInversionSmoother")
+    assert f"{tight['smoother_biomass_ratio']:.3g}x the consistent set" in smoother_row.width

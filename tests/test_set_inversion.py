@@ -175,3 +175,26 @@ def test_a_lost_flow_warns_and_leaves_the_rows_after_it_unbounded() -> None:
     assert lost_from is not None and lost_from < 0.95
     assert np.all(np.isinf(estimate.upper[t >= lost_from - 1e-9]))
     assert np.all(estimate.lower[t < lost_from - 1e-9, 0] <= y[t < lost_from - 1e-9, 0])
+
+
+def test_the_halves_of_a_part_cover_it() -> None:
+    """Vertices of a parallelotope (and its centre) lie in one of its two halves, up to the halves' boxes."""
+    from intervalobs.observers.set_inversion import _Parts
+
+    rng = np.random.default_rng(8)
+    centre = rng.uniform(-1e3, 1e3, (5, 3))
+    generators = rng.normal(size=(5, 3, 3)) * rng.uniform(1e-6, 1.0, (5, 1, 3))
+    parts = _Parts(centre, generators, np.zeros((5, 3)))
+    column = rng.integers(0, 3, 5)
+    halves = parts.bisect(column)
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)) + [(0.0, 0.0, 0.0)])
+    for p in range(5):
+        for sign in signs:
+            point = centre[p] + generators[p] @ sign
+            covered = False
+            for half in (p, p + 5):
+                xi = np.linalg.solve(halves.generators[half], point - halves.centre[half])
+                slack = np.abs(halves.generators[half]) @ np.full(3, 1e-9)
+                residual = point - halves.centre[half] - halves.generators[half] @ np.clip(xi, -1, 1)
+                covered |= bool(np.all(np.abs(residual) <= halves.radius[half] + slack))
+            assert covered, (p, sign)

@@ -98,15 +98,17 @@ class _Parts:
         return _Parts(self.centre[index], self.generators[index], self.radius[index])
 
     def bisect(self, column: NDArray[np.int64]) -> _Parts:
-        """Each part halved along its generator ``column[p]``: the two halves cover it."""
+        """Each part halved along its generator ``column[p]``: the two halves cover it (the rounding of their
+        centres joins their boxes)."""
         rows = np.arange(self.centre.shape[0])
         half = 0.5 * self.generators[rows, :, column]  # halving is exact
         generators = self.generators.copy()
         generators[rows, :, column] = half
+        centres = [Interval._wrap(self.centre) + Interval._wrap(side * half) for side in (-1.0, 1.0)]
         return _Parts(
-            np.concatenate([self.centre - half, self.centre + half]),
+            np.concatenate([centre.centre for centre in centres]),
             np.concatenate([generators, generators]),
-            np.concatenate([self.radius, self.radius]),
+            np.concatenate([np.nextafter(self.radius + _radius(centre), np.inf) for centre in centres]),
         )
 
 

@@ -93,7 +93,7 @@ BUNDLE_PARTS = 256
 """Most parts of the bundle run (``ContinuousNonlinearObserver(refine=...)``)."""
 DIFFERENCE = 1e-6
 """Forward-difference step of the sensitivities, per unit of each box width."""
-SMOOTHER_OPTIONS: dict[str, Any] = {"splits": (23, 13, 4, 4), "max_parts": 64, "max_rounds": 8}
+SMOOTHER_OPTIONS: dict[str, Any] = {"splits": (23, 13, 4, 4), "max_parts": 128, "max_rounds": 10}
 """The smoother's prior grid (Z0, S0, μmax, Ks: parts small enough for an 8-substep validated step over the
 record), most parts and rounds."""
 
