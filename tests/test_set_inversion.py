@@ -187,7 +187,7 @@ def test_the_halves_of_a_part_cover_it() -> None:
     parts = _Parts(centre, generators, np.zeros((5, 3)))
     column = rng.integers(0, 3, 5)
     halves = parts.bisect(column)
-    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)) + [(0.0, 0.0, 0.0)])
+    signs = np.array([*itertools.product((-1.0, 1.0), repeat=3), (0.0, 0.0, 0.0)])
     for p in range(5):
         for sign in signs:
             point = centre[p] + generators[p] @ sign

@@ -290,7 +290,7 @@ ESTIMATORS: tuple[Suitable, ...] = (
     Suitable(
         "SetInversionSmoother",
         "nonlinear-continuous",
-        "smoothed rows (smoothed=True; no disturbance): the starts and parameters the whole record allows, 1.49x "
+        "smoothed rows (smoothed=True; no disturbance): the starts and parameters the whole record allows, 1.38x "
         "the consistent set on the 60 h chemostat",
         "whole-record validated passes and LPs, offline",
         _set_inversion,

@@ -255,7 +255,7 @@ class SetInversionSmoother(Observer):
                 "so there is no set of them to invert; use ContinuousNonlinearObserver (filtered rows)"
             )
         self.n, self.p, self.m, self.h = system.n, system.p, system.m, float(h)
-        self.period = float(h)
+        self._period = float(h)
         self.size = system.n + system.n_params
         self._low = np.concatenate([self.bounds.x0[0], self.bounds.p[0]])
         self._high = np.concatenate([self.bounds.x0[1], self.bounds.p[1]])
@@ -387,16 +387,8 @@ class SetInversionSmoother(Observer):
                 lower, upper = self._bounds(record, np.asarray(kept), y, u)
                 lost = record.lost[kept]
                 lost_from = float(t[record.last[kept][lost].min() + 1]) if lost.any() else None
-                return (
-                    lower,
-                    upper,
-                    np.ones(t.size, dtype=bool),
-                    {
-                        "rounds": history,
-                        "parts": len(kept),
-                        "lost_from": lost_from,
-                    },
-                )
+                facts = {"rounds": history, "parts": len(kept), "lost_from": lost_from}
+                return lower, upper, np.ones(t.size, dtype=bool), facts
             parts = self._split(refits, record.lost[kept])
             previous = width
         raise AssertionError("unreachable: the last round returns")
@@ -411,12 +403,10 @@ class SetInversionSmoother(Observer):
         )
         column = np.argmax(np.linalg.norm(parts.generators / self._scale[:, None], axis=1), axis=1)
         count = parts.centre.shape[0]
-        chosen = lost.copy()
-        room = self.max_parts - count - int(lost.sum())
-        if room >= count - int(lost.sum()):
-            chosen[:] = True
-        elif int(lost.sum()) + count > self.max_parts:
-            chosen &= np.cumsum(chosen) <= max(self.max_parts - count, 0)
+        if 2 * count <= self.max_parts:
+            chosen = np.ones(count, dtype=bool)
+        else:  # the lost ones first, as many as fit
+            chosen = lost & (np.cumsum(lost) <= self.max_parts - count)
         if not chosen.any():
             return parts
         halves = parts.take(chosen).bisect(column[chosen])
@@ -466,7 +456,7 @@ class SetInversionSmoother(Observer):
                 held,
                 self._w,
                 sets,
-                self.period,
+                self._period,
                 self.substeps,
                 order,
                 self.compiled,
