@@ -362,6 +362,28 @@ def campaign_section() -> list[str]:
     return [*lines, f"Note: {data['note']}.", ""]
 
 
+def nonlinear_section() -> list[str]:
+    """Width ratios of the continuous-time nonlinear estimators to a consistent-set inner hull
+    (nonlinear_tightness.py)."""
+    results = HERE / "nonlinear_tightness.json"
+    lines = ["## Continuous-time nonlinear cases", "", *_docstring(HERE / "nonlinear_tightness.py").splitlines(), ""]
+    if not results.exists():
+        return [*lines, "No results yet: run `python benchmarks/nonlinear_tightness.py`.", ""]
+    data = json.loads(results.read_text())
+    rows = [
+        {
+            "case": name,
+            "estimator": estimator,
+            "ratio per state": " / ".join(f"{value:.3g}" for value in facts["ratio"]),
+            "enclosure": facts["enclosure"],
+            "CPU ms per sample": round(facts["ms_per_sample"], 3),
+        }
+        for name, case in data["cases"].items()
+        for estimator, facts in case["estimators"].items()
+    ]
+    return [*lines, *_table(rows), ""]
+
+
 def render() -> str:
     """The whole page.
 
@@ -380,6 +402,7 @@ def render() -> str:
                 *scale_section(),
                 *shapes_section(),
                 *campaign_section(),
+                *nonlinear_section(),
             ]
         ).rstrip("\n")
         + "\n"

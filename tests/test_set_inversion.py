@@ -161,6 +161,8 @@ def test_refuses_a_disturbance_and_infinite_boxes() -> None:
     decay = ContinuousNonlinearSystem(lambda x, u, p: (-p[0] * x[0],), lambda x, u: (x[0],), n=1, n_params=1)
     with pytest.raises(BoundsError, match="finite"):
         SetInversionSmoother(decay, Bounds(x0=(0.0, np.inf), v=(-0.1, 0.1), p=(0.9, 1.1)), 0.1)
+    with pytest.raises(BoundsError, match="reduction"):
+        SetInversionSmoother(decay, Bounds(x0=(0.0, 1.0), v=(-0.1, 0.1), p=(0.9, 1.1)), 0.1, reduction="axes")
 
 
 def test_a_lost_flow_warns_and_leaves_the_rows_after_it_unbounded() -> None:

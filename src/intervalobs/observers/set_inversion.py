@@ -61,7 +61,7 @@ from ..lp.certified import DenseLP
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
 from ..systems.field_tape import trace_field
-from ..systems.flow_enclosure import StateZonotope, interval_product, propagate
+from ..systems.flow_enclosure import REDUCTIONS, StateZonotope, interval_product, propagate
 from .base import Observer, ObserverState, record_consistency
 from .continuous_nonlinear import check_model, prior_parts, prior_splits
 
@@ -191,6 +191,10 @@ class SetInversionSmoother(Observer):
         Carry the parts in the compiled kernels (:mod:`intervalobs.systems.flow_kernel`, the field by its tape where
         it can be recorded: the same sets as the NumPy path up to the order of a few sums, about 7× faster); False
         keeps Numba unimported.
+    reduction : {"frame", "box"}
+        How the generators beyond the persistent ones and ``order`` are reduced after every step (as
+        :class:`~intervalobs.observers.continuous_nonlinear.ContinuousNonlinearObserver`'s): in the frame the flow
+        carried (the default; a rotating flow, such as a pendulum's, wraps far less) or in the axes.
 
     Attributes
     ----------
@@ -241,6 +245,7 @@ class SetInversionSmoother(Observer):
         report_names: Sequence[str] | None = None,
         order: int | None = None,
         compiled: bool = True,
+        reduction: str = "frame",
     ) -> None:
         check_model(system, h)
         for name, value in (("substeps", substeps), ("max_parts", max_parts), ("max_rounds", max_rounds)):
@@ -274,6 +279,9 @@ class SetInversionSmoother(Observer):
         self._w = Interval._raw(*self.bounds.w)
         self._scale = np.maximum(self._high - self._low, np.finfo(float).tiny)
         self.compiled = bool(compiled)
+        if reduction not in REDUCTIONS:
+            raise BoundsError(f"reduction: expected one of {', '.join(map(repr, REDUCTIONS))}, got {reduction!r}")
+        self.reduction = reduction
         self._tape = trace_field(system, self._low, self._high)[0] if self.compiled else None
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
@@ -461,6 +469,7 @@ class SetInversionSmoother(Observer):
                 order,
                 self.compiled,
                 tape=self._tape,
+                reduction=self.reduction,
                 persistent=size,
                 halvings=_HALVINGS,
             )[0]
