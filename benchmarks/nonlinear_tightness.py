@@ -80,7 +80,7 @@ CASES: dict[str, dict[str, Any]] = {
         "x0": [0.6, -0.2],
         "p": [0.45],
         "input": 0.3,
-        "smoother": {"substeps": 32, "order": 24},
+        "smoother": {"substeps": 32, "order": 24, "reduction": "frame"},
     },
     "compartments": {
         "make": compartments,
