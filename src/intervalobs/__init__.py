@@ -24,6 +24,7 @@ from .interval import Interval
 from .observers import (
     GSISIO,
     ContinuousNonlinearObserver,
+    ContinuousWindowObserver,
     FiniteMemoryObserver,
     HighGainIntervalObserver,
     HullEstimator,
@@ -59,6 +60,7 @@ __all__ = [
     "GSISIO",
     "Bounds",
     "ContinuousNonlinearObserver",
+    "ContinuousWindowObserver",
     "ContinuousNonlinearSystem",
     "DesignError",
     "DivergenceWarning",
