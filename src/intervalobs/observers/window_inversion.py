@@ -67,10 +67,10 @@ from ..interval_dual import value_and_jacobian
 from ..lp.certified import DenseLP
 from ..systems.bounds import Bounds
 from ..systems.continuous_nonlinear import ContinuousNonlinearSystem
-from ..systems.field_tape import trace_field
+from ..systems.field_tape import FieldTape, trace_field
 from ..systems.flow_enclosure import StateZonotope, interval_product, propagate
 from .base import Observer, ObserverState, record_consistency
-from .continuous_nonlinear import check_model
+from .continuous_nonlinear import COMPILED_MIN_STEPS, check_model
 from .set_inversion import _feasible, _magnitude_sum, _radius, _unit_image
 
 __all__ = ["ContinuousWindowObserver"]
@@ -80,6 +80,9 @@ BoolArray = NDArray[np.bool_]
 
 _EPS = float(np.finfo(float).eps)
 _HALVINGS = 3
+_NEGLIGIBLE = 1e-10
+"""States whose hull's radius is below this, relative to their magnitude, take the hull without linear programmes (a
+clock state, a state the output equals)."""
 
 
 class ContinuousWindowObserver(Observer):
@@ -103,9 +106,11 @@ class ContinuousWindowObserver(Observer):
         Samples in a window after its start (``H``; fewer at the start of a record).
     substeps : int
         Validated steps per sampling period (the columns appended inside a period are merged).
-    compiled : bool
-        Carry the windows in the compiled kernels (:mod:`intervalobs.systems.flow_kernel`, the field by its tape);
-        False keeps Numba unimported.
+    compiled : bool, optional
+        Carry the windows in the compiled kernels (:mod:`intervalobs.systems.flow_kernel`, the field by its tape
+        where it can be recorded: the same sets up to the order of a few sums, about 10x faster here); False keeps
+        Numba unimported; None (default): where a record takes at least ``COMPILED_MIN_STEPS`` set-steps
+        (samples times runs times ``window``).
 
     Attributes
     ----------
@@ -144,7 +149,7 @@ class ContinuousWindowObserver(Observer):
         *,
         window: int = 30,
         substeps: int = 1,
-        compiled: bool = False,
+        compiled: bool | None = None,
     ) -> None:
         check_model(system, h)
         for name, value in (("window", window), ("substeps", substeps)):
@@ -159,10 +164,12 @@ class ContinuousWindowObserver(Observer):
             raise BoundsError("bounds: the window observer needs finite boxes of x0 and of the parameters")
         self._w = Interval._raw(*self.bounds.w)
         self._v = Interval._raw(*self.bounds.v)
-        self.compiled = bool(compiled)
-        low = np.concatenate([self.bounds.x0[0], self.bounds.p[0]])
-        high = np.concatenate([self.bounds.x0[1], self.bounds.p[1]])
-        self._tape = trace_field(system, low, high)[0] if self.compiled else None
+        if compiled not in (None, True, False):
+            raise BoundsError(f"compiled: expected None, True or False, got {compiled!r}")
+        self.compiled = compiled
+        self._low = np.concatenate([self.bounds.x0[0], self.bounds.p[0]])
+        self._high = np.concatenate([self.bounds.x0[1], self.bounds.p[1]])
+        self._tape: FieldTape | None = None
 
     def init(self, x0_lower: ArrayLike | None = None, x0_upper: ArrayLike | None = None) -> ObserverState:
         """The prior box of the states (the observer has no step: :meth:`run` takes the whole record).
@@ -211,6 +218,10 @@ class ContinuousWindowObserver(Observer):
         clock = time.process_time()
         lead = ys.shape[:-2]
         count = int(np.prod(lead))
+        kernels = self.compiled if self.compiled is not None else times.size * count * self.window >= COMPILED_MIN_STEPS
+        self._kernels = bool(kernels)
+        if self._kernels and self._tape is None:
+            self._tape = trace_field(self.system, self._low, self._high)[0]
         runs = [
             self._one_run(times, yr, ur)
             for yr, ur in zip(ys.reshape(count, *ys.shape[-2:]), us.reshape(count, *us.shape[-2:]))
@@ -225,6 +236,7 @@ class ContinuousWindowObserver(Observer):
         lost = [r[3] for r in runs if r[3] is not None]
         estimate.meta["lost_from"] = min(lost) if lost else None
         estimate.meta["diverging"] = bool(lost)
+        estimate.meta["compiled"] = self._kernels
         estimate.meta["ms_per_sample"] = 1000.0 * (time.process_time() - clock) / (times.size * len(runs))
         if lost:
             warnings.warn(
@@ -321,8 +333,8 @@ class ContinuousWindowObserver(Observer):
                 self._period,
                 self.substeps,
                 cols + self.size,
-                self.compiled,
-                tape=self._tape,
+                self._kernels,
+                tape=self._tape if self._kernels else None,
                 reduction="box",
                 persistent=cols,
                 halvings=_HALVINGS,
@@ -370,7 +382,7 @@ class ContinuousWindowObserver(Observer):
         last_c, last_g = centres[-1, : self.n], generators[-1, : self.n]
         reach = _magnitude_sum(last_g)
         lp_lo, lp_hi = -reach, reach
-        active = np.flatnonzero(np.any(last_g != 0.0, axis=1))
+        active = np.flatnonzero(reach > _NEGLIGIBLE * (1.0 + np.abs(last_c)))  # others: the hull is tight enough
         if a.shape[0] and active.size:
             solver = DenseLP()
             solver.load(a, -np.ones(used), np.ones(used), low, high)
