@@ -246,7 +246,10 @@ def test_the_reproduction_reports_general_estimators_next_to_the_hgio(monkeypatc
     assert wide["intersected_enclosure"]["fraction"] == 1.0
 
 
-@pytest.mark.parametrize("name", ["continuous_nonlinear_observer", "continuous_nonlinear_observer_phi_as_disturbance"])
+@pytest.mark.parametrize(
+    "name",
+    ["continuous_nonlinear_observer", "continuous_nonlinear_observer_phi_as_disturbance", "continuous_window_observer"],
+)
 def test_general_estimators_enclose_the_example_under_bang_bang_disturbances(name: str) -> None:
     """Seed 004's example through the general path: sound at every sample against a truth integrated 4x finer.
 

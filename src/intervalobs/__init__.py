@@ -24,6 +24,7 @@ from .interval import Interval
 from .observers import (
     GSISIO,
     ContinuousNonlinearObserver,
+    ContinuousWindowObserver,
     FiniteMemoryObserver,
     HighGainIntervalObserver,
     HullEstimator,
@@ -60,6 +61,7 @@ __all__ = [
     "Bounds",
     "ContinuousNonlinearObserver",
     "ContinuousNonlinearSystem",
+    "ContinuousWindowObserver",
     "DesignError",
     "DivergenceWarning",
     "Estimate",

@@ -16,12 +16,14 @@ from .robust_fir import RobustFiniteMemoryObserver
 from .robust_hull import RobustHullEstimator
 from .set_inversion import SetInversionSmoother
 from .unknown_input import UnknownInputIntervalObserver
+from .window_inversion import ContinuousWindowObserver
 from .zonotopic import IntegratedObserver, ZonotopicObserver
 
 __all__ = [
     "GSISIO",
     "AnglesOnlyObserver",
     "ContinuousNonlinearObserver",
+    "ContinuousWindowObserver",
     "FiniteMemoryObserver",
     "HighGainIntervalObserver",
     "HullEstimator",

@@ -32,6 +32,7 @@ from ..estimate import Estimate, enclosure_report
 from ..examples import hgio as example
 from ..observers.continuous_nonlinear import ContinuousNonlinearObserver
 from ..observers.hgio import HighGainIntervalObserver
+from ..observers.window_inversion import ContinuousWindowObserver
 from ..plotting import plot_widths, save_figure
 from ..simulate import SampledSimulation, simulate_sampled
 from ..systems.bounds import Bounds
@@ -131,9 +132,30 @@ def _continuous_observer(phi_in_field: bool) -> GeneralEstimator:
     return estimate
 
 
+GENERAL_WINDOW = 60
+"""Samples in the window of :class:`ContinuousWindowObserver` here (after its start box)."""
+
+
+def _window_observer() -> GeneralEstimator:
+    """The :class:`ContinuousWindowObserver` on ``continuous_model(phi_in_field=False)``, samples up to
+    ``GENERAL_HORIZON``."""
+
+    def estimate(t: NDArray[np.float64], y: NDArray[np.float64], u: NDArray[np.float64]) -> Estimate:
+        system, bounds = continuous_model(phi_in_field=False)
+        rows = np.flatnonzero(~np.isnan(y[0, :, 0]) & (t <= GENERAL_HORIZON + 1e-9))
+        observer = ContinuousWindowObserver(system, bounds, example.SAMPLE_PERIOD, window=GENERAL_WINDOW)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # recorded in meta["diverging"]
+            full = observer.run(t[rows], y[:, rows])
+        return Estimate(t[rows], full.lower[..., :3], full.upper[..., :3], meta={"diverging": full.meta["diverging"]})
+
+    return estimate
+
+
 GENERAL_ESTIMATORS: dict[str, GeneralEstimator] = {
     "continuous_nonlinear_observer": _continuous_observer(phi_in_field=True),
     "continuous_nonlinear_observer_phi_as_disturbance": _continuous_observer(phi_in_field=False),
+    "continuous_window_observer": _window_observer(),
 }
 """The general path (issue 32) on the same record as the HGIO, reported with ``--full`` in
 ``summary["design"]["general_path"]`` (width over the same window, its ratio to the recommended HGIO's, enclosure,
