@@ -7,6 +7,7 @@ switches sign inside every sampling interval (bang-bang at the box's ends) and t
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -54,6 +55,23 @@ def simulate_truth(
             x = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         out.append(x.copy())
     return np.array(out)
+
+
+def truths(case: Case, count: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Starts and parameters at vertices of their boxes and inside them."""
+    rng = np.random.default_rng(seed)
+    b = case.bounds.resolve(case.system)
+    corners = list(itertools.product(*zip(*b.x0)))
+    picks = []
+    for j in range(count):
+        if j % 2 == 0:
+            x0 = np.array(corners[rng.integers(len(corners))])
+            p = np.where(rng.random(case.system.n_params) < 0.5, b.p[0], b.p[1])
+        else:
+            x0 = rng.uniform(*b.x0)
+            p = rng.uniform(*b.p)
+        picks.append((x0, p))
+    return picks
 
 
 def measure(case: Case, x: np.ndarray, seed: int) -> np.ndarray:

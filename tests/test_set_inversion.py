@@ -11,7 +11,7 @@ import pytest
 from intervalobs import Bounds, ContinuousNonlinearObserver, ContinuousNonlinearSystem
 from intervalobs.errors import AssumptionError, BoundsError
 from intervalobs.observers.set_inversion import SetInversionSmoother
-from nonlinear_cases import Case, chemostat_bundle, compartments, cstr, measure, pendulum, simulate_truth
+from nonlinear_cases import Case, chemostat_bundle, compartments, cstr, measure, pendulum, simulate_truth, truths
 
 
 def _still(case: Case) -> Case:
@@ -19,23 +19,6 @@ def _still(case: Case) -> Case:
     b = case.bounds.resolve(case.system)
     bounds = Bounds(x0=b.x0, v=b.v, p=b.p, w=(np.zeros(case.system.nw), np.zeros(case.system.nw)))
     return dataclasses.replace(case, bounds=bounds)
-
-
-def _truths(case: Case, count: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Starts and parameters at vertices of their boxes and inside them."""
-    rng = np.random.default_rng(seed)
-    b = case.bounds.resolve(case.system)
-    corners = list(itertools.product(*zip(*b.x0)))
-    picks = []
-    for j in range(count):
-        if j % 2 == 0:
-            x0 = np.array(corners[rng.integers(len(corners))])
-            p = np.where(rng.random(case.system.n_params) < 0.5, b.p[0], b.p[1])
-        else:
-            x0 = rng.uniform(*b.x0)
-            p = rng.uniform(*b.p)
-        picks.append((x0, p))
-    return picks
 
 
 CASES = {
@@ -54,7 +37,7 @@ def test_encloses_truths_from_vertices_and_interior_points(name: str) -> None:
     u = np.full((t.size, case.system.m), 0.3)
     options = {"max_parts": 8, "max_rounds": 3, **options}
     smoother = SetInversionSmoother(case.system, case.bounds, case.h, **options)
-    for seed, (x0, p) in enumerate(_truths(case, 2, seed=len(name))):
+    for seed, (x0, p) in enumerate(truths(case, 2, seed=len(name))):
         x = simulate_truth(case, x0, p, t, u, seed=seed)
         estimate = smoother.run(t, measure(case, x, seed), u)
         assert estimate.meta["consistent"] and estimate.meta["rows"] == "smoothed"
@@ -65,7 +48,7 @@ def test_encloses_truths_from_vertices_and_interior_points(name: str) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
-def test_encloses_many_truths(name: str) -> None:
+def test_encloses_manytruths(name: str) -> None:
     """Six truths per case (vertices and interior points, bang-bang noise of other seeds), a longer record."""
     make, hours, options = CASES[name]
     case = _still(make())
@@ -73,7 +56,7 @@ def test_encloses_many_truths(name: str) -> None:
     u = np.full((t.size, case.system.m), 0.3)
     options = {"max_parts": 16, "max_rounds": 4, **options}
     smoother = SetInversionSmoother(case.system, case.bounds, case.h, **options)
-    for seed, (x0, p) in enumerate(_truths(case, 6, seed=100 + len(name))):
+    for seed, (x0, p) in enumerate(truths(case, 6, seed=100 + len(name))):
         x = simulate_truth(case, x0, p, t, u, seed=seed + 10)
         estimate = smoother.run(t, measure(case, x, seed + 10), u)
         assert estimate.meta["consistent"]
@@ -143,7 +126,7 @@ def test_monte_carlo_axis_runs_each_record() -> None:
     case = _still(cstr())
     t = np.arange(0.0, 1.0 + 1e-9, case.h)
     u = np.zeros((t.size, 0))
-    runs = [simulate_truth(case, x0, p, t, u, seed=s) for s, (x0, p) in enumerate(_truths(case, 2, seed=5))]
+    runs = [simulate_truth(case, x0, p, t, u, seed=s) for s, (x0, p) in enumerate(truths(case, 2, seed=5))]
     ys = np.stack([measure(case, x, s) for s, x in enumerate(runs)])
     smoother = SetInversionSmoother(case.system, case.bounds, case.h, max_parts=4, max_rounds=2)
     batch = smoother.run(t, ys)

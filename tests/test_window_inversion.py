@@ -2,32 +2,12 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 
 from intervalobs import Bounds, ContinuousNonlinearObserver, ContinuousNonlinearSystem, ContinuousWindowObserver
 from intervalobs.errors import BoundsError
-from nonlinear_cases import Case, cstr, measure, pendulum, rotation, simulate_truth
-
-
-def _truths(case: Case, count: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Starts and parameters at vertices of their boxes and inside them."""
-    rng = np.random.default_rng(seed)
-    b = case.bounds.resolve(case.system)
-    corners = list(itertools.product(*zip(*b.x0)))
-    picks = []
-    for j in range(count):
-        if j % 2 == 0:
-            x0 = np.array(corners[rng.integers(len(corners))])
-            p = np.where(rng.random(case.system.n_params) < 0.5, b.p[0], b.p[1])
-        else:
-            x0 = rng.uniform(*b.x0)
-            p = rng.uniform(*b.p)
-        picks.append((x0, p))
-    return picks
-
+from nonlinear_cases import Case, cstr, measure, pendulum, rotation, simulate_truth, truths
 
 CASES = {"pendulum": (pendulum, 2.0), "cstr": (cstr, 4.0), "rotation": (rotation, 2.0)}
 
@@ -39,7 +19,7 @@ def test_encloses_truths_from_vertices_and_interior_points(name: str) -> None:
     t = np.arange(0.0, seconds + 1e-9, case.h)
     u = np.full((t.size, case.system.m), 0.3)
     observer = ContinuousWindowObserver(case.system, case.bounds, case.h, window=8)
-    for seed, (x0, p) in enumerate(_truths(case, 4, seed=len(name))):
+    for seed, (x0, p) in enumerate(truths(case, 4, seed=len(name))):
         x = simulate_truth(case, x0, p, t, u, seed=seed)
         estimate = observer.run(t, measure(case, x, seed), u)
         assert estimate.meta["consistent"] and estimate.meta["rows"] == "filtered"
@@ -53,7 +33,7 @@ def test_runs_of_a_leading_axis_and_the_start_of_a_record() -> None:
     t = np.arange(0.0, 0.6 + 1e-9, case.h)
     u = np.full((t.size, 1), 0.3)
     b = case.bounds.resolve(case.system)
-    xs = np.stack([simulate_truth(case, x0, p, t, u, seed=s) for s, (x0, p) in enumerate(_truths(case, 2, 3))])
+    xs = np.stack([simulate_truth(case, x0, p, t, u, seed=s) for s, (x0, p) in enumerate(truths(case, 2, 3))])
     ys = np.stack([measure(case, x, s) for s, x in enumerate(xs)])
     observer = ContinuousWindowObserver(case.system, case.bounds, case.h, window=5)
     estimate = observer.run(t, ys, np.broadcast_to(u, (2, *u.shape)))
